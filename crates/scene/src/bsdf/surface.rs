@@ -1,0 +1,239 @@
+//! World-space BSDF: sides, shading normals and the adjoint correction around the local
+//! [`Mixture`].
+
+use super::mixture::Mixture;
+use super::{BsdfEval, BsdfParams, BsdfSample, LobeKind, TransportMode};
+use crate::frame::Frame;
+use glam::{Vec2, Vec3};
+
+/// Cosines (with n_g or n_s) below this are treated as grazing: no scattering.
+pub const GRAZING_COS: f32 = 1e-6;
+
+/// The scattering function at one surface point (see the [module docs](super)).
+#[derive(Clone, Debug)]
+pub struct Bsdf {
+    /// Shading frame, z = n_s (front orientation).
+    frame: Frame,
+    /// Geometric normal (front orientation).
+    n_g: Vec3,
+    double_sided: bool,
+    /// IOR of the dielectric interface (relative IOR `ior` from the front, `1/ior` behind).
+    ior: f32,
+    mixture: Mixture,
+}
+
+/// Which side of the surface a direction is on, and what follows from it.
+#[derive(Clone, Copy)]
+struct Side {
+    /// The direction is behind n_g: the local frame is mirrored (z → −z).
+    back: bool,
+    /// Relative IOR η(other side) / η(this side) of the refracting interface.
+    eta: f32,
+}
+
+impl Bsdf {
+    /// BSDF of `params` at a point with geometric normal `n_g` (the front side, from the
+    /// winding order) and shading normal `n_s` (interpolated or normal-mapped, flipped into
+    /// n_g's hemisphere by the caller; it is flipped here too if it is not; a zero or
+    /// non-finite n_s is replaced by n_g). Both unit.
+    /// `double_sided`: a non-transmissive material also scatters from the back side (glTF
+    /// `doubleSided`); materials with transmission always scatter from both sides.
+    pub fn new(params: &BsdfParams, n_g: Vec3, n_s: Vec3, double_sided: bool) -> Bsdf {
+        let n_s = if !n_s.is_finite() || n_s.length_squared() < 0.25 {
+            n_g
+        } else if n_s.dot(n_g) < 0.0 {
+            -n_s
+        } else {
+            n_s
+        };
+        let mixture = Mixture::new(params);
+        Bsdf {
+            frame: Frame::from_z(n_s),
+            n_g,
+            double_sided,
+            ior: mixture.ior(),
+            mixture,
+        }
+    }
+
+    /// Side of `w`, or `None` when `w` is grazing/NaN, or behind a one-sided opaque material.
+    fn side(&self, w: Vec3) -> Option<Side> {
+        let cos_g = w.dot(self.n_g);
+        if cos_g.is_nan() || cos_g.abs() <= GRAZING_COS {
+            return None;
+        }
+        let back = cos_g < 0.0;
+        if back && !(self.double_sided || self.mixture.transmits()) {
+            return None;
+        }
+        Some(Side {
+            back,
+            eta: if back { 1.0 / self.ior } else { self.ior },
+        })
+    }
+
+    /// `w` in the shading frame of `side` (mirrored for the back side).
+    fn to_local(&self, side: Side, w: Vec3) -> Vec3 {
+        let l = self.frame.to_local(w);
+        if side.back {
+            Vec3::new(l.x, l.y, -l.z)
+        } else {
+            l
+        }
+    }
+
+    fn to_world(&self, side: Side, l: Vec3) -> Vec3 {
+        self.frame.to_world(if side.back {
+            Vec3::new(l.x, l.y, -l.z)
+        } else {
+            l
+        })
+    }
+
+    /// Local `wo` for `side`, if it is in the upper shading hemisphere (not grazing).
+    fn local_wo(&self, side: Side, wo: Vec3) -> Option<Vec3> {
+        let l = self.to_local(side, wo);
+        (l.z >= GRAZING_COS).then_some(l)
+    }
+
+    /// Whether (wo, wi_local) is a consistent pair: `wi` not grazing, and reflection vs
+    /// transmission the same by n_g and by n_s. Returns |wi·n_g| when consistent.
+    fn consistent(&self, side: Side, wi: Vec3, wi_local: Vec3) -> Option<f32> {
+        let cos_gi = if side.back {
+            -wi.dot(self.n_g)
+        } else {
+            wi.dot(self.n_g)
+        };
+        let ok = cos_gi.abs() >= GRAZING_COS
+            && wi_local.z.abs() >= GRAZING_COS
+            && (cos_gi > 0.0) == (wi_local.z > 0.0);
+        ok.then_some(cos_gi.abs())
+    }
+
+    /// Multiplies by Veach's shading-normal correction in importance mode (Veach 1997,
+    /// §5.3): f·|wi·n_s| becomes f·|wo·n_s||wi·n_g| / |wo·n_g|.
+    fn adjoint(
+        &self,
+        f_cos: Vec3,
+        mode: TransportMode,
+        wo: Vec3,
+        wo_local: Vec3,
+        wi_local: Vec3,
+        cos_gi: f32,
+    ) -> Vec3 {
+        match mode {
+            TransportMode::Radiance => f_cos,
+            TransportMode::Importance => {
+                f_cos * (wo_local.z * cos_gi / (wo.dot(self.n_g).abs() * wi_local.z.abs()))
+            }
+        }
+    }
+
+    /// Value and pdfs of the non-delta lobes for the pair (`wo`, `wi`) (world, unit; `wo`
+    /// toward the previous path vertex, `wi` toward the next). `f_cos` is f·|wi·n_s| in
+    /// radiance mode and f·|wo·n_s||wi·n_g|/|wo·n_g| in importance mode; `pdf_fwd` is the
+    /// solid-angle pdf of sampling `wi` from `wo`, `pdf_rev` that of `wo` from `wi`.
+    /// All zero for delta-only materials, inconsistent or degenerate pairs.
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> BsdfEval {
+        let Some((f_cos, pdf_fwd)) = self.eval_local(wo, wi, mode) else {
+            return BsdfEval::default();
+        };
+        BsdfEval {
+            f_cos,
+            pdf_fwd,
+            pdf_rev: self.pdf(wi, wo),
+        }
+    }
+
+    fn eval_local(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Option<(Vec3, f32)> {
+        let side = self.side(wo)?;
+        let wo_l = self.local_wo(side, wo)?;
+        let wi_l = self.to_local(side, wi);
+        let cos_gi = self.consistent(side, wi, wi_l)?;
+        let (f_cos, pdf) = self.mixture.eval(wo_l, wi_l, side.eta, mode);
+        let f_cos = self.adjoint(f_cos, mode, wo, wo_l, wi_l, cos_gi);
+        (f_cos.is_finite() && pdf.is_finite() && pdf > 0.0).then_some((f_cos, pdf))
+    }
+
+    /// Samples `wi` given `wo` with `u_lobe` (lobe choice) and `u` (direction), both in
+    /// [0, 1). `None` when nothing is scattered (black side, degenerate input, or a sampled
+    /// direction that is below the surface or inconsistent between n_g and n_s).
+    pub fn sample(
+        &self,
+        wo: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+        mode: TransportMode,
+    ) -> Option<BsdfSample> {
+        let side = self.side(wo)?;
+        let wo_l = self.local_wo(side, wo)?;
+        let s = self.mixture.sample(wo_l, side.eta, u_lobe, u, mode)?;
+        let wi = self.to_world(side, s.wi).normalize();
+        let (f_cos, pdf_fwd, pdf_rev) = match s.delta {
+            Some(delta) => {
+                let cos_gi = self.consistent(side, wi, s.wi)?;
+                let f_cos = self.adjoint(delta.f_cos, mode, wo, wo_l, s.wi, cos_gi);
+                (
+                    f_cos,
+                    delta.prob,
+                    self.delta_pdf_rev(wo, wi, delta.lobe, s.transmitted),
+                )
+            }
+            // Evaluated at the final world direction, so that the sample agrees with eval().
+            None => {
+                let (f_cos, pdf_fwd) = self.eval_local(wo, wi, mode)?;
+                (f_cos, pdf_fwd, self.pdf(wi, wo))
+            }
+        };
+        let transmitted = wi.dot(self.n_g) * wo.dot(self.n_g) < 0.0;
+        let valid = f_cos.is_finite() && pdf_fwd.is_finite() && pdf_fwd > 0.0 && wi.is_finite();
+        (valid && transmitted == s.transmitted).then_some(BsdfSample {
+            wi,
+            f_cos,
+            pdf_fwd,
+            pdf_rev,
+            lobe: s.kind,
+            transmitted,
+            eta: s.eta,
+        })
+    }
+
+    /// Probability of sampling the same delta of lobe slot `lobe` back from `wi` to `wo`.
+    fn delta_pdf_rev(&self, wo: Vec3, wi: Vec3, lobe: usize, transmitted: bool) -> f32 {
+        let Some(side) = self.side(wi) else {
+            return 0.0;
+        };
+        // The reverse sample starts at wi and must reach wo.
+        let (wo_rev, wi_rev) = (self.to_local(side, wi), self.to_local(side, wo));
+        if wo_rev.z < GRAZING_COS || wi_rev.z.abs() < GRAZING_COS {
+            return 0.0;
+        }
+        self.mixture.delta_pdf(wo_rev, side.eta, lobe, transmitted)
+    }
+
+    /// Solid-angle pdf of sampling `wi` from `wo` (the `pdf_fwd` of [`Bsdf::eval`], without
+    /// the reverse pdf); it does not depend on the transport mode.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.eval_local(wo, wi, TransportMode::Radiance)
+            .map_or(0.0, |(_, pdf)| pdf)
+    }
+
+    /// Whether every lobe is a Dirac delta (also true for a black material): no connection
+    /// or merge is possible at this vertex.
+    pub fn is_delta(&self) -> bool {
+        !self.mixture.has_non_delta()
+    }
+
+    /// Whether some lobe is not a delta (the negation of [`Bsdf::is_delta`]).
+    pub fn has_non_delta(&self) -> bool {
+        self.mixture.has_non_delta()
+    }
+
+    /// Vertex class for integrators: [`LobeKind::Specular`] iff [`Bsdf::is_delta`];
+    /// otherwise the most specular class among the non-delta lobes ([`LobeKind::Glossy`] if
+    /// any rough GGX lobe exists, else [`LobeKind::Diffuse`]). Delta lobes of a mixed
+    /// material (a smooth coat over diffuse) are ignored: connections use the rest.
+    pub fn classify(&self) -> LobeKind {
+        self.mixture.classify()
+    }
+}

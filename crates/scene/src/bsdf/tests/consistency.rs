@@ -1,0 +1,131 @@
+//! sample() agrees with eval(): the same value and pdfs for non-delta samples, exact reverse
+//! pdfs, and the adjoint shading-normal correction.
+
+use super::*;
+use crate::bsdf::LobeKind;
+use crate::sampling::Rng;
+use std::f32::consts::TAU;
+
+#[test]
+fn sample_matches_eval() {
+    let mut rng = Rng::new(21, 4);
+    for &roughness in &ROUGHNESS_SWEEP {
+        for (name, params) in material_classes(roughness) {
+            for tilt in [0.0, 0.25] {
+                let b = Bsdf::new(&params, n_g(), tilted_normal(tilt), false);
+                for &c in &COS_SWEEP {
+                    for side in [n_g(), -n_g()] {
+                        let wo = direction(side, c, 0.9);
+                        for mode in MODES {
+                            for _ in 0..200 {
+                                let (u_lobe, u) = (rng.uniform(), rng.uniform2());
+                                let Some(s) = b.sample(wo, u_lobe, u, mode) else {
+                                    continue;
+                                };
+                                assert!(
+                                    s.f_cos.is_finite() && s.pdf_fwd > 0.0 && s.pdf_rev.is_finite()
+                                );
+                                assert_eq!(s.transmitted, s.wi.dot(n_g()) * wo.dot(n_g()) < 0.0);
+                                if s.lobe == LobeKind::Specular {
+                                    continue;
+                                }
+                                let e = b.eval(wo, s.wi, mode);
+                                let ctx =
+                                    format!("{name} tilt {tilt} cos {c} {mode:?}: {s:?} vs {e:?}");
+                                assert!(close(s.f_cos, e.f_cos, 1e-4), "{ctx}");
+                                assert!((s.pdf_fwd - e.pdf_fwd).abs() <= 1e-4 * e.pdf_fwd, "{ctx}");
+                                assert!(
+                                    (s.pdf_rev - e.pdf_rev).abs() <= 1e-4 * e.pdf_rev.max(1e-30),
+                                    "{ctx}"
+                                );
+                                let rev = b.eval(s.wi, wo, mode).pdf_fwd;
+                                assert!((s.pdf_rev - rev).abs() <= 1e-4 * rev.max(1e-30), "{ctx}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn delta_reverse_pdfs_of_pure_interfaces() {
+    // For a single smooth interface the reverse choice has the same probability: R(θo) =
+    // R(θi) for the mirror, and T is the same on both sides of a refraction.
+    for params in [glass(0.0, 1.5), thin_glass(0.0), conductor(0.0)] {
+        let b = bsdf(&params);
+        let mut rng = Rng::new(22, 0);
+        for &c in &COS_SWEEP {
+            let wo = direction(n_g(), c, 0.1);
+            for _ in 0..50 {
+                let s = b
+                    .sample(wo, rng.uniform(), rng.uniform2(), TransportMode::Radiance)
+                    .unwrap();
+                assert_eq!(s.lobe, LobeKind::Specular);
+                assert!((s.pdf_rev - s.pdf_fwd).abs() < 1e-4, "{params:?}: {s:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn importance_mode_applies_the_shading_normal_correction() {
+    // Veach 1997 §5.3: f_cos_importance(wo, wi) = f(wo, wi)·|wo·n_s||wi·n_g|/|wo·n_g|, so with
+    // f(wo, wi) = f_radiance(wi, wo) (reciprocity / adjoint) it equals
+    // f_cos_radiance(wi, wo) · |wi·n_g| / |wo·n_g|.
+    let n_s = tilted_normal(0.35);
+    let mut rng = Rng::new(23, 0);
+    for (name, params) in material_classes(0.5) {
+        let b = Bsdf::new(&params, n_g(), n_s, false);
+        let mut checked = 0;
+        for _ in 0..4000 {
+            let wo = direction(n_g(), 0.05 + 0.95 * rng.uniform(), TAU * rng.uniform());
+            let side = if rng.uniform() < 0.5 { n_g() } else { -n_g() };
+            let wi = direction(side, 0.05 + 0.95 * rng.uniform(), TAU * rng.uniform());
+            if !well_conditioned(wo, wi, params.ior) {
+                continue;
+            }
+            let imp = b.eval(wo, wi, TransportMode::Importance).f_cos;
+            let rad = b.eval(wi, wo, TransportMode::Radiance).f_cos;
+            let expected = rad * (wi.dot(n_g()).abs() / wo.dot(n_g()).abs());
+            assert!(close(imp, expected, 2e-3), "{name}: {imp} vs {expected}");
+            checked += usize::from(imp.max_element() > 0.0);
+        }
+        assert!(checked > 500, "{name}: only {checked} non-zero pairs");
+    }
+}
+
+#[test]
+fn near_specular_roughness_becomes_delta() {
+    for roughness in [0.001f32, 0.01] {
+        for params in [
+            conductor(roughness),
+            glass(roughness, 1.5),
+            thin_glass(roughness),
+        ] {
+            let b = bsdf(&params);
+            assert!(b.is_delta() && !b.has_non_delta());
+            assert_eq!(b.classify(), LobeKind::Specular);
+            let wo = direction(n_g(), 0.6, 0.0);
+            let s = b
+                .sample(wo, 0.3, glam::Vec2::new(0.2, 0.7), TransportMode::Radiance)
+                .unwrap();
+            assert_eq!(s.lobe, LobeKind::Specular);
+            assert_eq!(
+                b.eval(wo, s.wi, TransportMode::Radiance),
+                crate::bsdf::BsdfEval::default()
+            );
+        }
+        // A smooth coat over diffuse is not delta: the diffuse part can be connected.
+        let b = bsdf(&dielectric_base(roughness));
+        assert!(!b.is_delta());
+        assert_eq!(b.classify(), LobeKind::Diffuse);
+    }
+    // Just above the threshold (α = 0.0011) the lobes are GGX.
+    let b = bsdf(&conductor(0.0332));
+    assert!(!b.is_delta());
+    assert_eq!(b.classify(), LobeKind::Glossy);
+    assert_eq!(bsdf(&lambert(Vec3::ONE)).classify(), LobeKind::Diffuse);
+    assert_eq!(bsdf(&mixture(0.5)).classify(), LobeKind::Glossy);
+}

@@ -1,0 +1,152 @@
+//! The pinhole camera: glTF perspective cameras look down their local -Z axis with +Y up.
+
+use glam::{Mat4, Vec2, Vec3};
+
+use crate::mesh::Bounds;
+
+/// A pinhole perspective camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position (world space).
+    pub position: Vec3,
+    /// Unit vector to the right of the image.
+    pub right: Vec3,
+    /// Unit vector to the top of the image.
+    pub up: Vec3,
+    /// Unit viewing direction (the camera's local -Z).
+    pub forward: Vec3,
+    /// Full vertical field of view in radians.
+    pub yfov: f32,
+    /// Width / height from the file, if it gives one (the output size may override it).
+    pub aspect_ratio: Option<f32>,
+}
+
+impl Camera {
+    /// A camera from its node's world transform (scale and shear are removed).
+    pub fn from_transform(world: Mat4, yfov: f32, aspect_ratio: Option<f32>) -> Option<Camera> {
+        let right = world.x_axis.truncate().try_normalize()?;
+        let up_raw = world.y_axis.truncate();
+        let forward = (-world.z_axis.truncate()).try_normalize()?;
+        let up = (up_raw - forward * forward.dot(up_raw)).try_normalize()?;
+        let valid = yfov.is_finite() && yfov > 0.0 && yfov < std::f32::consts::PI;
+        valid.then_some(Camera {
+            position: world.w_axis.truncate(),
+            right: forward.cross(up).try_normalize().unwrap_or(right),
+            up,
+            forward,
+            yfov,
+            aspect_ratio: aspect_ratio.filter(|a| a.is_finite() && *a > 0.0),
+        })
+    }
+
+    /// The default camera: frames `bounds` from +Z with a 45° vertical field of view.
+    pub fn framing(bounds: &Bounds) -> Camera {
+        let yfov = 45f32.to_radians();
+        let (center, radius) = if bounds.is_empty() {
+            (Vec3::ZERO, 1.0)
+        } else {
+            (bounds.center(), bounds.radius().max(f32::MIN_POSITIVE))
+        };
+        let distance = radius / (0.5 * yfov).sin();
+        Camera {
+            position: center + Vec3::Z * distance,
+            right: Vec3::X,
+            up: Vec3::Y,
+            forward: -Vec3::Z,
+            yfov,
+            aspect_ratio: None,
+        }
+    }
+
+    /// Half extents of the image plane at unit distance: (tan(xfov/2), tan(yfov/2)).
+    fn half_extent(&self, width: u32, height: u32) -> Vec2 {
+        let tan_y = (0.5 * self.yfov).tan();
+        Vec2::new(tan_y * width as f32 / height as f32, tan_y)
+    }
+
+    /// The unit direction through the raster position `raster` (pixels; (0,0) is the top-left
+    /// corner of the image, (width, height) the bottom-right).
+    pub fn direction(&self, width: u32, height: u32, raster: Vec2) -> Vec3 {
+        let h = self.half_extent(width, height);
+        let ndc = Vec2::new(
+            2.0 * raster.x / width as f32 - 1.0,
+            1.0 - 2.0 * raster.y / height as f32,
+        );
+        (self.forward + self.right * (ndc.x * h.x) + self.up * (ndc.y * h.y)).normalize()
+    }
+
+    /// The raster position where `point` appears, or `None` when it is behind the camera or
+    /// outside the image.
+    pub fn raster_of(&self, width: u32, height: u32, point: Vec3) -> Option<Vec2> {
+        let d = point - self.position;
+        let z = d.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let h = self.half_extent(width, height);
+        let ndc = Vec2::new(d.dot(self.right) / (z * h.x), d.dot(self.up) / (z * h.y));
+        let raster = Vec2::new(
+            (ndc.x + 1.0) * 0.5 * width as f32,
+            (1.0 - ndc.y) * 0.5 * height as f32,
+        );
+        let inside = raster.x >= 0.0
+            && raster.y >= 0.0
+            && raster.x < width as f32
+            && raster.y < height as f32;
+        inside.then_some(raster)
+    }
+
+    /// Area of one pixel on the image plane at unit distance from the eye. The camera's
+    /// directional pdf per pixel sample is `distance² / (pixel_area · cos³θ)` in solid angle.
+    pub fn pixel_area(&self, width: u32, height: u32) -> f32 {
+        let h = self.half_extent(width, height);
+        4.0 * h.x * h.y / (width as f32 * height as f32)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ray_and_projection_are_inverse() {
+        let cam = Camera::from_transform(
+            Mat4::from_translation(Vec3::new(0.0, 1.0, 5.0)),
+            0.8,
+            Some(1.5),
+        )
+        .unwrap();
+        for raster in [
+            Vec2::new(10.5, 20.25),
+            Vec2::new(299.0, 0.5),
+            Vec2::new(150.0, 100.0),
+        ] {
+            let dir = cam.direction(300, 200, raster);
+            let back = cam.raster_of(300, 200, cam.position + dir * 7.0).unwrap();
+            assert!((back - raster).length() < 1e-3, "{raster} -> {back}");
+        }
+        let center = cam.direction(300, 200, Vec2::new(150.0, 100.0));
+        assert!((center - -Vec3::Z).length() < 1e-6);
+        assert!(cam.raster_of(300, 200, Vec3::new(0.0, 1.0, 9.0)).is_none());
+    }
+
+    #[test]
+    fn vertical_field_of_view_spans_the_image_height() {
+        let cam = Camera::from_transform(Mat4::IDENTITY, 1.0, None).unwrap();
+        let top = cam.direction(100, 100, Vec2::new(50.0, 0.0));
+        let angle = top.angle_between(-Vec3::Z);
+        assert!((angle - 0.5).abs() < 1e-5);
+    }
+
+    #[test]
+    fn framing_sees_the_whole_box() {
+        let bounds = Bounds {
+            min: Vec3::splat(-2.0),
+            max: Vec3::splat(2.0),
+        };
+        let cam = Camera::framing(&bounds);
+        for corner in [bounds.min, bounds.max, Vec3::new(2.0, -2.0, 2.0)] {
+            assert!(cam.raster_of(64, 64, corner).is_some(), "{corner}");
+        }
+    }
+}

@@ -1,0 +1,79 @@
+//! Typed errors for scene loading. Every variant names the file and the problem.
+
+use std::path::PathBuf;
+
+/// Why a scene could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file (or one it references) could not be read.
+    #[error("{path}: cannot read file: {source}")]
+    Io {
+        /// The file that could not be read.
+        path: PathBuf,
+        /// The underlying I/O error.
+        source: std::io::Error,
+    },
+    /// The extension is neither glTF (`.gltf`, `.glb`) nor OBJ (`.obj`).
+    #[error("{path}: unknown scene format (expected .gltf, .glb or .obj)")]
+    UnknownFormat {
+        /// The offending file.
+        path: PathBuf,
+    },
+    /// The glTF document is malformed (broken JSON, invalid indices, bad buffers ...).
+    #[error("{path}: invalid glTF: {reason}")]
+    Gltf {
+        /// The glTF file.
+        path: PathBuf,
+        /// What is wrong, in words.
+        reason: String,
+    },
+    /// The OBJ or MTL file is malformed.
+    #[error("{path}: invalid OBJ: {reason}")]
+    Obj {
+        /// The OBJ file.
+        path: PathBuf,
+        /// What is wrong, in words.
+        reason: String,
+    },
+    /// A texture image is missing or cannot be decoded.
+    #[error("{path}: texture {texture}: {reason}")]
+    Texture {
+        /// The scene file that references the texture.
+        path: PathBuf,
+        /// The texture's URI or name.
+        texture: String,
+        /// What is wrong, in words.
+        reason: String,
+    },
+    /// Geometry data is unusable (non-finite positions, indices out of range ...).
+    #[error("{path}: {mesh}: {reason}")]
+    Geometry {
+        /// The scene file.
+        path: PathBuf,
+        /// Which mesh and primitive (e.g. `mesh 'Bottle' primitive 0`).
+        mesh: String,
+        /// What is wrong, in words.
+        reason: String,
+    },
+}
+
+impl SceneError {
+    pub(crate) fn gltf(path: &std::path::Path, reason: impl Into<String>) -> Self {
+        SceneError::Gltf {
+            path: path.to_path_buf(),
+            reason: reason.into(),
+        }
+    }
+
+    pub(crate) fn geometry(
+        path: &std::path::Path,
+        mesh: impl Into<String>,
+        reason: impl Into<String>,
+    ) -> Self {
+        SceneError::Geometry {
+            path: path.to_path_buf(),
+            mesh: mesh.into(),
+            reason: reason.into(),
+        }
+    }
+}

@@ -1,0 +1,164 @@
+//! `SceneFeatures`: what a scene contains, so integrators and pipelines can leave out the rest.
+
+use std::fmt;
+
+use crate::bsdf::SMOOTH_ALPHA;
+use crate::light::Light;
+use crate::material::{AlphaMode, Material};
+use crate::mesh::{Bounds, Mesh};
+use crate::texture::{Texture, TextureRef};
+
+/// BSDF classes present in the scene's materials (only materials some triangle uses count).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MaterialClasses {
+    /// Some material has a Lambertian diffuse lobe.
+    pub diffuse: bool,
+    /// Some material has a glossy (rough microfacet) lobe.
+    pub glossy: bool,
+    /// Some material has a delta (perfectly specular) lobe: mirrors, smooth glass or coats.
+    pub specular: bool,
+    /// Some material transmits light (transmission > 0).
+    pub transmission: bool,
+}
+
+/// Counts of each light type.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LightCounts {
+    /// Emissive triangles.
+    pub area: usize,
+    /// Point lights.
+    pub point: usize,
+    /// Spot lights.
+    pub spot: usize,
+    /// Directional lights.
+    pub directional: usize,
+}
+
+impl LightCounts {
+    /// True when every light is a delta light (no path can hit a light).
+    pub fn only_delta(&self) -> bool {
+        self.area == 0 && (self.point + self.spot + self.directional) > 0
+    }
+}
+
+/// What a scene contains and needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneFeatures {
+    /// Number of triangles.
+    pub triangles: usize,
+    /// Bounding box of the geometry.
+    pub bounds: Bounds,
+    /// BSDF classes in use.
+    pub materials: MaterialClasses,
+    /// Light counts.
+    pub lights: LightCounts,
+    /// Some used material samples a texture.
+    pub textures: bool,
+    /// Some used material is alpha-masked (cut-out).
+    pub alpha_masks: bool,
+    /// Some used material has a normal map.
+    pub normal_maps: bool,
+}
+
+/// The range of a texture channel's values (0..=1), or the full range without a texture.
+fn channel_range(textures: &[Texture], texture: Option<TextureRef>, channel: usize) -> (f32, f32) {
+    let Some(t) = texture else { return (1.0, 1.0) };
+    let tex = &textures[t.index];
+    let mut range = (f32::INFINITY, f32::NEG_INFINITY);
+    for y in 0..tex.height() {
+        for x in 0..tex.width() {
+            let v = tex.texel(x, y)[channel];
+            range = (range.0.min(v), range.1.max(v));
+        }
+    }
+    range
+}
+
+impl MaterialClasses {
+    fn add(&mut self, m: &Material, textures: &[Texture]) {
+        let (metal_lo, metal_hi) = channel_range(textures, m.metallic_roughness_texture, 2);
+        let (rough_lo, rough_hi) = channel_range(textures, m.metallic_roughness_texture, 1);
+        let metallic = (m.metallic * metal_lo, m.metallic * metal_hi);
+        let roughness = (m.roughness * rough_lo, m.roughness * rough_hi);
+        let dielectric_weight = 1.0 - metallic.0;
+        let transmission = dielectric_weight * m.transmission;
+        let diffuse = dielectric_weight * (1.0 - m.transmission);
+        // Specular-type lobes: the conductor, the dielectric interface, the coat over diffuse.
+        let has_specular_lobe = metallic.1 > 0.0 || transmission > 0.0 || m.specular > 0.0;
+        self.diffuse |= diffuse > 0.0;
+        self.transmission |= transmission > 0.0;
+        if has_specular_lobe {
+            let alpha = (roughness.0 * roughness.0, roughness.1 * roughness.1);
+            // Lobes with α below the BSDF's threshold are perfect (delta) reflectors.
+            self.specular |= alpha.0 < SMOOTH_ALPHA;
+            self.glossy |= alpha.1 >= SMOOTH_ALPHA;
+        }
+    }
+}
+
+impl SceneFeatures {
+    /// Inspects the used materials, the textures and the lights.
+    pub fn of(mesh: &Mesh, materials: &[Material], textures: &[Texture], lights: &[Light]) -> Self {
+        let mut used = vec![false; materials.len()];
+        for &m in &mesh.material_ids {
+            used[m as usize] = true;
+        }
+        let mut features = SceneFeatures {
+            triangles: mesh.triangle_count(),
+            bounds: mesh.bounds(),
+            materials: MaterialClasses::default(),
+            lights: LightCounts::default(),
+            textures: false,
+            alpha_masks: false,
+            normal_maps: false,
+        };
+        for material in materials
+            .iter()
+            .zip(&used)
+            .filter(|(_, u)| **u)
+            .map(|(m, _)| m)
+        {
+            features.materials.add(material, textures);
+            features.textures |= material.base_color_texture.is_some()
+                || material.metallic_roughness_texture.is_some()
+                || material.normal_texture.is_some()
+                || material.emissive_texture.is_some();
+            features.alpha_masks |= matches!(material.alpha_mode, AlphaMode::Mask { .. });
+            features.normal_maps |= material.normal_texture.is_some();
+        }
+        for light in lights {
+            let counts = &mut features.lights;
+            match light {
+                Light::Area(_) => counts.area += 1,
+                Light::Point(_) => counts.point += 1,
+                Light::Spot(_) => counts.spot += 1,
+                Light::Directional(_) => counts.directional += 1,
+            }
+        }
+        features
+    }
+}
+
+impl fmt::Display for SceneFeatures {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = &self.materials;
+        let l = &self.lights;
+        writeln!(f, "triangles: {}", self.triangles)?;
+        writeln!(f, "bounds: {} .. {}", self.bounds.min, self.bounds.max)?;
+        writeln!(
+            f,
+            "materials: diffuse {}, glossy {}, specular {}, transmission {}",
+            m.diffuse, m.glossy, m.specular, m.transmission
+        )?;
+        writeln!(
+            f,
+            "lights: {} area, {} point, {} spot, {} directional",
+            l.area, l.point, l.spot, l.directional
+        )?;
+        write!(
+            f,
+            "textures {}, alpha masks {}, normal maps {}",
+            self.textures, self.alpha_masks, self.normal_maps
+        )
+    }
+}

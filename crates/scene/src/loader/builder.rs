@@ -1,0 +1,197 @@
+//! Collects what a loader reads, validates geometry, and assembles the [`Scene`].
+
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3, Vec4};
+
+use crate::camera::Camera;
+use crate::error::SceneError;
+use crate::light::{DirectionalLight, Light};
+use crate::material::Material;
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+use crate::texture::Texture;
+
+/// One triangle primitive as read from a file, already in world space.
+pub(crate) struct Primitive {
+    /// For messages: e.g. `mesh 'Bottle' primitive 0`.
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    pub tangents: Option<Vec<Vec4>>,
+    /// Indices into `positions`, counter-clockwise seen from the front.
+    pub triangles: Vec<[u32; 3]>,
+    pub material: u32,
+}
+
+/// A directional light waiting for the scene bounds (its emission disk covers the scene).
+struct PendingDirectional {
+    direction: Vec3,
+    irradiance: Vec3,
+}
+
+/// Accumulates a scene while a loader reads a file.
+pub(crate) struct SceneBuilder {
+    path: PathBuf,
+    mesh: Mesh,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    lights: Vec<Light>,
+    directional: Vec<PendingDirectional>,
+    pub camera: Option<Camera>,
+    warnings: Vec<String>,
+    degenerate_triangles: usize,
+}
+
+impl SceneBuilder {
+    pub fn new(path: &Path) -> Self {
+        SceneBuilder {
+            path: path.to_path_buf(),
+            mesh: Mesh::default(),
+            materials: Vec::new(),
+            textures: Vec::new(),
+            lights: Vec::new(),
+            directional: Vec::new(),
+            camera: None,
+            warnings: Vec::new(),
+            degenerate_triangles: 0,
+        }
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Records a warning once (repeated identical warnings are dropped).
+    pub fn warn(&mut self, message: impl Into<String>) {
+        let message = message.into();
+        if !self.warnings.contains(&message) {
+            self.warnings.push(message);
+        }
+    }
+
+    /// Adds a point or spot light.
+    pub fn add_light(&mut self, light: Light) {
+        self.lights.push(light);
+    }
+
+    /// Adds a directional light travelling along `direction` with irradiance `irradiance`.
+    pub fn add_directional(&mut self, direction: Vec3, irradiance: Vec3) {
+        self.directional.push(PendingDirectional {
+            direction,
+            irradiance,
+        });
+    }
+
+    fn geometry_error(&self, name: &str, reason: String) -> SceneError {
+        SceneError::geometry(&self.path, name, reason)
+    }
+
+    /// Validates a primitive and appends it; zero-area triangles are dropped and counted.
+    pub fn add_primitive(&mut self, p: Primitive) -> Result<(), SceneError> {
+        let n = p.positions.len();
+        if let Some(i) = p.positions.iter().position(|v| !v.is_finite()) {
+            return Err(self.geometry_error(
+                &p.name,
+                format!("vertex {i} has a non-finite position {}", p.positions[i]),
+            ));
+        }
+        let lengths = [
+            ("normals", p.normals.as_ref().map(Vec::len)),
+            ("texture coordinates", p.uvs.as_ref().map(Vec::len)),
+            ("tangents", p.tangents.as_ref().map(Vec::len)),
+        ];
+        for (what, len) in lengths {
+            if let Some(len) = len.filter(|&len| len != n) {
+                let reason = format!("{len} {what} for {n} positions");
+                return Err(self.geometry_error(&p.name, reason));
+            }
+        }
+        let finite_attributes = p.normals.iter().flatten().all(|v| v.is_finite())
+            && p.uvs.iter().flatten().all(|v| v.is_finite())
+            && p.tangents.iter().flatten().all(|v| v.is_finite());
+        if !finite_attributes {
+            let reason = "non-finite normal, texture coordinate or tangent".to_string();
+            return Err(self.geometry_error(&p.name, reason));
+        }
+        if let Some(tri) = p
+            .triangles
+            .iter()
+            .find(|t| t.iter().any(|&i| i as usize >= n))
+        {
+            let reason = format!("triangle {tri:?} indexes past the {n} vertices");
+            return Err(self.geometry_error(&p.name, reason));
+        }
+        let material = p.material;
+        if material as usize >= self.materials.len() {
+            let reason = format!("material {material} does not exist");
+            return Err(self.geometry_error(&p.name, reason));
+        }
+
+        let base = self.mesh.positions.len() as u32;
+        let first_triangle = self.mesh.triangles.len();
+        self.mesh.normals.extend(match p.normals {
+            Some(normals) => normals.iter().map(|v| v.normalize_or_zero()).collect(),
+            None => vec![Vec3::ZERO; n],
+        });
+        self.mesh
+            .uvs
+            .extend(p.uvs.unwrap_or_else(|| vec![Vec2::ZERO; n]));
+        let has_tangents = p.tangents.is_some();
+        self.mesh
+            .tangents
+            .extend(p.tangents.unwrap_or_else(|| vec![Vec4::ZERO; n]));
+        for tri in &p.triangles {
+            let [a, b, c] = tri.map(|i| p.positions[i as usize]);
+            let area = 0.5 * (b - a).cross(c - a).length();
+            if area > 0.0 && area.is_finite() {
+                self.mesh.triangles.push(tri.map(|i| i + base));
+                self.mesh.material_ids.push(material);
+            } else {
+                self.degenerate_triangles += 1;
+            }
+        }
+        self.mesh.positions.extend(p.positions);
+        let needs_tangents = self.materials[material as usize].normal_texture.is_some();
+        if needs_tangents && !has_tangents {
+            self.mesh
+                .generate_tangents(first_triangle..self.mesh.triangles.len());
+        }
+        Ok(())
+    }
+
+    /// Finishes the scene: builds area lights, directional lights, the default camera.
+    pub fn finish(mut self) -> Scene {
+        if self.degenerate_triangles > 0 {
+            let count = self.degenerate_triangles;
+            self.warn(format!("dropped {count} degenerate (zero-area) triangles"));
+        }
+        let bounds = self.mesh.bounds();
+        for pending in std::mem::take(&mut self.directional) {
+            let (scene_center, scene_radius) = if bounds.is_empty() {
+                (Vec3::ZERO, 1.0)
+            } else {
+                (bounds.center(), bounds.radius().max(f32::MIN_POSITIVE))
+            };
+            self.lights.push(Light::Directional(DirectionalLight {
+                direction: pending.direction,
+                irradiance: pending.irradiance,
+                scene_center,
+                scene_radius,
+            }));
+        }
+        let camera = self.camera.unwrap_or_else(|| Camera::framing(&bounds));
+        let mut scene = Scene::new(
+            self.path,
+            self.mesh,
+            self.materials,
+            self.textures,
+            self.lights,
+            camera,
+            self.warnings,
+        );
+        scene.dropped_triangles = self.degenerate_triangles;
+        scene
+    }
+}

@@ -1,0 +1,232 @@
+//! glTF materials and textures → [`Material`] and [`Texture`].
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{Vec3, Vec4};
+use gltf::texture::WrappingMode;
+
+use super::accessors::check_view;
+use crate::error::SceneError;
+use crate::loader::builder::SceneBuilder;
+use crate::loader::uri::read_uri;
+use crate::material::{AlphaMode, Material};
+use crate::texture::{ColorEncoding, Texture, TextureRef, WrapMode};
+
+/// Loads each (texture, encoding) pair once and hands out [`TextureRef`]s.
+pub(super) struct TextureLoader<'a> {
+    base: &'a Path,
+    buffers: &'a [Vec<u8>],
+    loaded: HashMap<(usize, bool), usize>,
+}
+
+fn wrap_mode(mode: WrappingMode) -> WrapMode {
+    match mode {
+        WrappingMode::Repeat => WrapMode::Repeat,
+        WrappingMode::MirroredRepeat => WrapMode::MirroredRepeat,
+        WrappingMode::ClampToEdge => WrapMode::ClampToEdge,
+    }
+}
+
+impl<'a> TextureLoader<'a> {
+    pub fn new(base: &'a Path, buffers: &'a [Vec<u8>]) -> Self {
+        TextureLoader {
+            base,
+            buffers,
+            loaded: HashMap::new(),
+        }
+    }
+
+    /// The encoded bytes of an image and a name for messages.
+    fn image_bytes(&self, image: &gltf::Image) -> (String, Result<Vec<u8>, String>) {
+        match image.source() {
+            gltf::image::Source::Uri { uri, .. } => {
+                let name = if uri.starts_with("data:") {
+                    format!("image {} (data URI)", image.index())
+                } else {
+                    format!("'{uri}'")
+                };
+                (name, read_uri(self.base, uri))
+            }
+            gltf::image::Source::View { view, .. } => {
+                let name = format!("image {} (buffer view {})", image.index(), view.index());
+                let bytes = check_view(&view, self.buffers).map(|()| {
+                    let start = view.offset();
+                    self.buffers[view.buffer().index()][start..start + view.length()].to_vec()
+                });
+                (name, bytes)
+            }
+        }
+    }
+
+    /// Loads (once) the texture `info` refers to; warns about unsupported UV sets.
+    fn load(
+        &mut self,
+        builder: &mut SceneBuilder,
+        texture: gltf::Texture,
+        tex_coord: u32,
+        encoding: ColorEncoding,
+    ) -> Result<Option<TextureRef>, SceneError> {
+        if tex_coord != 0 {
+            builder.warn(format!(
+                "{}: texture coordinate set {tex_coord} is not supported; the texture is ignored",
+                builder.path().display()
+            ));
+            return Ok(None);
+        }
+        let key = (texture.index(), encoding == ColorEncoding::Srgb);
+        if let Some(&index) = self.loaded.get(&key) {
+            return Ok(Some(TextureRef { index, tex_coord }));
+        }
+        let (name, bytes) = self.image_bytes(&texture.source());
+        let texture_error = |reason: String| SceneError::Texture {
+            path: builder.path().to_path_buf(),
+            texture: name.clone(),
+            reason,
+        };
+        let decoded = bytes
+            .and_then(|b| image::load_from_memory(&b).map_err(|e| format!("cannot decode: {e}")))
+            .map_err(texture_error)?;
+        let mut tex = Texture::from_image(name.clone(), decoded, encoding);
+        let sampler = texture.sampler();
+        tex.wrap_u = wrap_mode(sampler.wrap_s());
+        tex.wrap_v = wrap_mode(sampler.wrap_t());
+        let index = builder.textures.len();
+        builder.textures.push(tex);
+        self.loaded.insert(key, index);
+        Ok(Some(TextureRef { index, tex_coord }))
+    }
+
+    fn load_info(
+        &mut self,
+        builder: &mut SceneBuilder,
+        info: Option<gltf::texture::Info>,
+        encoding: ColorEncoding,
+    ) -> Result<Option<TextureRef>, SceneError> {
+        match info {
+            Some(info) => self.load(builder, info.texture(), info.tex_coord(), encoding),
+            None => Ok(None),
+        }
+    }
+}
+
+/// Warns about a material feature that is ignored.
+fn unsupported(builder: &mut SceneBuilder, feature: &str) {
+    let message = format!(
+        "{}: {feature} is not supported and is ignored",
+        builder.path().display()
+    );
+    builder.warn(message);
+}
+
+/// Converts one glTF material (loading its textures).
+pub(super) fn read_material(
+    builder: &mut SceneBuilder,
+    textures: &mut TextureLoader,
+    m: &gltf::Material,
+) -> Result<Material, SceneError> {
+    let pbr = m.pbr_metallic_roughness();
+    let srgb = ColorEncoding::Srgb;
+    let linear = ColorEncoding::Linear;
+    let base_color_texture = textures.load_info(builder, pbr.base_color_texture(), srgb)?;
+    let metallic_roughness_texture =
+        textures.load_info(builder, pbr.metallic_roughness_texture(), linear)?;
+    let emissive_texture = textures.load_info(builder, m.emissive_texture(), srgb)?;
+    let (normal_texture, normal_scale) = match m.normal_texture() {
+        Some(n) => (
+            textures.load(builder, n.texture(), n.tex_coord(), linear)?,
+            n.scale(),
+        ),
+        None => (None, 1.0),
+    };
+    if m.occlusion_texture().is_some() {
+        unsupported(
+            builder,
+            "occlusionTexture (baked ambient occlusion; light transport computes it)",
+        );
+    }
+    let alpha_mode = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Mask => AlphaMode::Mask {
+            cutoff: m.alpha_cutoff().unwrap_or(0.5),
+        },
+        gltf::material::AlphaMode::Blend => {
+            unsupported(builder, "alphaMode BLEND (rendered as OPAQUE)");
+            AlphaMode::Opaque
+        }
+    };
+    let (specular, specular_color) = match m.specular() {
+        Some(s) => {
+            if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
+                unsupported(builder, "KHR_materials_specular textures");
+            }
+            (s.specular_factor(), Vec3::from(s.specular_color_factor()))
+        }
+        None => (1.0, Vec3::ONE),
+    };
+    let transmission = m.transmission().map_or(0.0, |t| {
+        if t.transmission_texture().is_some() {
+            unsupported(builder, "KHR_materials_transmission textures");
+        }
+        t.transmission_factor()
+    });
+    let thin_walled = m.volume().is_none_or(|v| {
+        if v.attenuation_distance().is_finite() {
+            unsupported(builder, "KHR_materials_volume attenuation");
+        }
+        v.thickness_factor() <= 0.0
+    });
+    let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+    let material = Material {
+        name: m.name().unwrap_or("unnamed").to_string(),
+        base_color: Vec4::from(pbr.base_color_factor()),
+        base_color_texture,
+        metallic: pbr.metallic_factor(),
+        roughness: pbr.roughness_factor(),
+        metallic_roughness_texture,
+        normal_texture,
+        normal_scale,
+        emission,
+        emissive_texture,
+        specular,
+        specular_color,
+        transmission,
+        ior: m.ior().unwrap_or(1.5),
+        thin_walled,
+        alpha_mode,
+        double_sided: m.double_sided(),
+    };
+    validate(builder, material)
+}
+
+/// Rejects non-finite or out-of-range factors, naming the material.
+fn validate(builder: &SceneBuilder, m: Material) -> Result<Material, SceneError> {
+    let finite = m.base_color.is_finite()
+        && m.emission.is_finite()
+        && m.specular_color.is_finite()
+        && [
+            m.metallic,
+            m.roughness,
+            m.specular,
+            m.transmission,
+            m.normal_scale,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
+    let reason = if !finite {
+        Some("has a non-finite factor".to_string())
+    } else if !(m.ior.is_finite() && m.ior >= 1.0) {
+        Some(format!("has ior {} (must be ≥ 1)", m.ior))
+    } else if m.emission.min_element() < 0.0 || m.base_color.min_element() < 0.0 {
+        Some("has a negative color or emission".to_string())
+    } else {
+        None
+    };
+    match reason {
+        Some(reason) => Err(SceneError::gltf(
+            builder.path(),
+            format!("material '{}' {reason}", m.name),
+        )),
+        None => Ok(m),
+    }
+}

@@ -1,0 +1,293 @@
+//! The glTF 2.0 loader (`.gltf` with external or embedded buffers, and `.glb`).
+
+mod accessors;
+mod geometry;
+mod materials;
+
+use std::path::Path;
+
+use glam::{Mat4, Vec3};
+use gltf::khr_lights_punctual::Kind as LightKind;
+
+use crate::camera::Camera;
+use crate::error::SceneError;
+use crate::light::{Light, PointLight, SpotLight};
+use crate::loader::builder::SceneBuilder;
+use crate::loader::uri::read_uri;
+use crate::material::Material;
+use crate::scene::Scene;
+use materials::{TextureLoader, read_material};
+
+/// Extensions whose meaning the loader implements (see the scene conventions).
+const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_transmission",
+    "KHR_materials_volume",
+];
+
+/// Parses a glTF document from `bytes`; `path` names it in messages and locates external files.
+pub(super) fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene, SceneError> {
+    let (document, blob) = parse_document(bytes).map_err(|e| SceneError::gltf(path, e))?;
+    let document = &document;
+    let mut builder = SceneBuilder::new(path);
+    for extension in document.extensions_required() {
+        if !SUPPORTED_EXTENSIONS.contains(&extension) {
+            let reason = format!("requires the unsupported extension {extension}");
+            return Err(SceneError::gltf(path, reason));
+        }
+    }
+    for extension in document.extensions_used() {
+        if !SUPPORTED_EXTENSIONS.contains(&extension) {
+            builder.warn(format!(
+                "{}: extension {extension} is not supported and is ignored",
+                path.display()
+            ));
+        }
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = load_buffers(path, base, document, blob.as_deref())?;
+
+    let mut textures = TextureLoader::new(base, &buffers);
+    for material in document.materials() {
+        let m = read_material(&mut builder, &mut textures, &material)?;
+        builder.materials.push(m);
+    }
+    // Primitives without a material use the glTF default material, appended last.
+    let default_material = builder.materials.len() as u32;
+    builder.materials.push(Material::default());
+
+    let roots: Vec<gltf::Node> = match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(scene) => scene.nodes().collect(),
+        None => root_nodes(document),
+    };
+    let mut reader = NodeReader {
+        builder: &mut builder,
+        buffers: &buffers,
+        default_material,
+        max_depth: document.nodes().count(),
+    };
+    for node in roots {
+        reader.visit(&node, Mat4::IDENTITY, 0)?;
+    }
+    Ok(builder.finish())
+}
+
+/// Parses and validates a glTF document (JSON or GLB), returning it with the GLB binary chunk.
+///
+/// `gltf-json` 1.4.1's validation indexes a primitive's POSITION accessor without a bounds check
+/// (found by fuzzing), so that reference is checked here before validation runs.
+fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), String> {
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| e.to_string())?;
+    let root = gltf.document.into_json();
+    let accessor_count = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position)
+                && index.value() >= accessor_count
+            {
+                return Err(format!(
+                    "mesh {m} primitive {p}: POSITION refers to missing accessor {}",
+                    index.value()
+                ));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(root).map_err(|e| e.to_string())?;
+    Ok((document, gltf.blob))
+}
+
+/// Nodes that are nobody's child (used when the file has no scene).
+fn root_nodes(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
+    let mut is_child = vec![false; document.nodes().count()];
+    for node in document.nodes() {
+        for child in node.children() {
+            is_child[child.index()] = true;
+        }
+    }
+    document.nodes().filter(|n| !is_child[n.index()]).collect()
+}
+
+/// Loads every buffer: external files, data URIs, or the GLB binary chunk.
+fn load_buffers(
+    path: &Path,
+    base: &Path,
+    document: &gltf::Document,
+    blob: Option<&[u8]>,
+) -> Result<Vec<Vec<u8>>, SceneError> {
+    document
+        .buffers()
+        .map(|buffer| {
+            let data = match buffer.source() {
+                gltf::buffer::Source::Bin => blob
+                    .map(<[u8]>::to_vec)
+                    .ok_or_else(|| "refers to a missing GLB binary chunk".to_string()),
+                gltf::buffer::Source::Uri(uri) => read_uri(base, uri),
+            };
+            let data = data.map_err(|reason| {
+                SceneError::gltf(path, format!("buffer {}: {reason}", buffer.index()))
+            })?;
+            if data.len() < buffer.length() {
+                let reason = format!(
+                    "buffer {} holds {} bytes but declares {}",
+                    buffer.index(),
+                    data.len(),
+                    buffer.length()
+                );
+                return Err(SceneError::gltf(path, reason));
+            }
+            Ok(data)
+        })
+        .collect()
+}
+
+/// Walks the node hierarchy, reading meshes, the first camera and punctual lights.
+struct NodeReader<'a> {
+    builder: &'a mut SceneBuilder,
+    buffers: &'a [Vec<u8>],
+    default_material: u32,
+    /// A tree cannot be deeper than its node count; deeper means a cycle.
+    max_depth: usize,
+}
+
+impl NodeReader<'_> {
+    fn visit(&mut self, node: &gltf::Node, parent: Mat4, depth: usize) -> Result<(), SceneError> {
+        let path = self.builder.path().to_path_buf();
+        if depth > self.max_depth {
+            return Err(SceneError::gltf(&path, "the node hierarchy has a cycle"));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !world.is_finite() {
+            let reason = format!("node {} has a non-finite transform", node.index());
+            return Err(SceneError::gltf(&path, reason));
+        }
+        if let Some(mesh) = node.mesh() {
+            self.read_mesh(&mesh, world)?;
+        }
+        if let Some(camera) = node.camera() {
+            self.read_camera(&camera, world);
+        }
+        if let Some(light) = node.light() {
+            self.read_light(&light, world)?;
+        }
+        for child in node.children() {
+            self.visit(&child, world, depth + 1)?;
+        }
+        Ok(())
+    }
+
+    fn read_mesh(&mut self, mesh: &gltf::Mesh, world: Mat4) -> Result<(), SceneError> {
+        let mesh_name = mesh
+            .name()
+            .map_or(format!("mesh {}", mesh.index()), |n| format!("mesh '{n}'"));
+        for primitive in mesh.primitives() {
+            let name = format!("{mesh_name} primitive {}", primitive.index());
+            let material = primitive
+                .material()
+                .index()
+                .map_or(self.default_material, |i| i as u32);
+            let read =
+                geometry::read_primitive(&primitive, name.clone(), world, self.buffers, material)
+                    .map_err(|reason| SceneError::geometry(self.builder.path(), &name, reason))?;
+            match read {
+                Some(p) => self.builder.add_primitive(p)?,
+                None => {
+                    let message = format!(
+                        "{}: {name}: {:?} primitives are not supported and are skipped",
+                        self.builder.path().display(),
+                        primitive.mode()
+                    );
+                    self.builder.warn(message);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn read_camera(&mut self, camera: &gltf::Camera, world: Mat4) {
+        if self.builder.camera.is_some() {
+            return;
+        }
+        match camera.projection() {
+            gltf::camera::Projection::Perspective(p) => {
+                self.builder.camera = Camera::from_transform(world, p.yfov(), p.aspect_ratio());
+                if self.builder.camera.is_none() {
+                    let message = format!(
+                        "{}: camera {} has a degenerate transform or field of view; it is ignored",
+                        self.builder.path().display(),
+                        camera.index()
+                    );
+                    self.builder.warn(message);
+                }
+            }
+            gltf::camera::Projection::Orthographic(_) => {
+                let message = format!(
+                    "{}: orthographic cameras are not supported; camera {} is ignored",
+                    self.builder.path().display(),
+                    camera.index()
+                );
+                self.builder.warn(message);
+            }
+        }
+    }
+
+    fn read_light(
+        &mut self,
+        light: &gltf::khr_lights_punctual::Light,
+        world: Mat4,
+    ) -> Result<(), SceneError> {
+        let value = Vec3::from(light.color()) * light.intensity();
+        let position = world.w_axis.truncate();
+        let direction = (-world.z_axis.truncate()).normalize_or_zero();
+        let path = self.builder.path().to_path_buf();
+        let invalid =
+            |reason: &str| SceneError::gltf(&path, format!("light {} {reason}", light.index()));
+        if !value.is_finite() || value.min_element() < 0.0 {
+            return Err(invalid("has a negative or non-finite intensity"));
+        }
+        if light.range().is_some() {
+            let message = format!(
+                "{}: light range cut-offs are ignored (lights follow the inverse square law)",
+                self.builder.path().display()
+            );
+            self.builder.warn(message);
+        }
+        match light.kind() {
+            LightKind::Point => self.builder.add_light(Light::Point(PointLight {
+                position,
+                intensity: value,
+            })),
+            LightKind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } => {
+                let valid = direction != Vec3::ZERO
+                    && (0.0..=std::f32::consts::FRAC_PI_2).contains(&outer_cone_angle)
+                    && (0.0..=outer_cone_angle).contains(&inner_cone_angle);
+                if !valid {
+                    return Err(invalid("has an invalid direction or cone angles"));
+                }
+                self.builder.add_light(Light::Spot(SpotLight {
+                    position,
+                    direction,
+                    intensity: value,
+                    cos_inner: inner_cone_angle.cos(),
+                    cos_outer: outer_cone_angle.cos(),
+                }));
+            }
+            LightKind::Directional => {
+                if direction == Vec3::ZERO {
+                    return Err(invalid("has a degenerate direction"));
+                }
+                self.builder.add_directional(direction, value);
+            }
+        }
+        Ok(())
+    }
+}

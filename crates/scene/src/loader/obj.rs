@@ -1,0 +1,233 @@
+//! The Wavefront OBJ/MTL loader (through `tobj`), mapped onto the glTF material model:
+//!
+//! | MTL | material |
+//! | --- | --- |
+//! | `Kd`, `map_Kd` | base color and base color texture (sRGB); default grey 0.8 |
+//! | `Ks` = 0 or absent | pure Lambertian diffuse (metallic 0, specular 0) |
+//! | `Ks` > 0, `Kd` = 0 | conductor: metallic 1, base color = `Ks` |
+//! | `Ks` > 0, `Kd` > 0 | dielectric base: specular = max(`Ks`), specular color = `Ks` / max(`Ks`) |
+//! | `Ns` | roughness = α^½ with GGX α = (2 / (`Ns` + 2))^½ (Blinn-Phong to microfacet); absent: 1 |
+//! | `Ke` | emitted radiance |
+//! | `Ni` | index of refraction (values below 1 are ignored: 1.5) |
+//! | `illum` 4, 6, 7 or 9 | solid glass: transmission 1, base color white |
+//! | `d` < 1 (other illum) | thin-walled transmission 1 − `d` |
+//!
+//! OBJ has no sidedness: all OBJ materials are double-sided (emission still leaves the front
+//! face, from the winding order). Texture coordinates have v flipped to glTF's top-left origin.
+//! Files without materials use the grey diffuse default; OBJ files have no cameras or lights
+//! other than emissive materials, so the default camera frames the scene.
+
+use std::io::BufRead;
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+
+use crate::error::SceneError;
+use crate::loader::builder::{Primitive, SceneBuilder};
+use crate::material::Material;
+use crate::scene::Scene;
+use crate::texture::{ColorEncoding, Texture, TextureRef};
+
+/// Loads an OBJ file and the MTL files it references (relative to its folder).
+pub fn load_obj(path: &Path) -> Result<Scene, SceneError> {
+    let file = std::fs::File::open(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    load_obj_from_reader(path, &mut std::io::BufReader::new(file))
+}
+
+fn obj_error(path: &Path, reason: impl Into<String>) -> SceneError {
+    SceneError::Obj {
+        path: path.to_path_buf(),
+        reason: reason.into(),
+    }
+}
+
+/// Loads OBJ text from `reader`; `path` names it in messages and locates MTL and texture files.
+pub fn load_obj_from_reader(path: &Path, reader: &mut impl BufRead) -> Result<Scene, SceneError> {
+    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let (models, materials) =
+        tobj::load_obj_buf(reader, &options, |mtl| tobj::load_mtl(base.join(mtl)))
+            .map_err(|e| obj_error(path, e.to_string()))?;
+
+    let mut builder = SceneBuilder::new(path);
+    match materials {
+        Ok(materials) => {
+            for m in &materials {
+                let material = convert_material(&mut builder, &base, m)?;
+                builder.materials.push(material);
+            }
+        }
+        Err(e) => builder.warn(format!(
+            "{}: material library not loaded ({e}); using the default material",
+            path.display()
+        )),
+    }
+    let default_material = builder.materials.len() as u32;
+    builder
+        .materials
+        .push(Material::diffuse("default", Vec3::splat(0.8)));
+
+    for (i, model) in models.iter().enumerate() {
+        let mesh = &model.mesh;
+        let material = match mesh.material_id {
+            Some(id) if id < default_material as usize => id as u32,
+            _ => default_material,
+        };
+        let triples = |v: &[f32]| -> Vec<Vec3> {
+            v.chunks_exact(3)
+                .map(|c| Vec3::new(c[0], c[1], c[2]))
+                .collect()
+        };
+        let positions = triples(&mesh.positions);
+        // Objects whose faces mix vertices with and without `vn`/`vt` get partial attribute
+        // arrays from tobj: such an attribute is dropped for the object, with a warning.
+        let vertex_count = positions.len();
+        let mut complete = |what: &str, len: usize, per_vertex: usize| {
+            let ok = len == vertex_count * per_vertex;
+            if len > 0 && !ok {
+                builder.warn(format!(
+                    "{}: object '{}' has {what} on only some faces; they are ignored",
+                    path.display(),
+                    model.name
+                ));
+            }
+            ok && len > 0
+        };
+        let normals = complete("normals", mesh.normals.len(), 3).then(|| triples(&mesh.normals));
+        let uvs = complete("texture coordinates", mesh.texcoords.len(), 2).then(|| {
+            mesh.texcoords
+                .chunks_exact(2)
+                .map(|c| Vec2::new(c[0], 1.0 - c[1]))
+                .collect()
+        });
+        let triangles = mesh
+            .indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
+        builder.add_primitive(Primitive {
+            name: format!("object '{}' ({i})", model.name),
+            positions,
+            normals,
+            uvs,
+            tangents: None,
+            triangles,
+            material,
+        })?;
+    }
+    Ok(builder.finish())
+}
+
+/// Maps one MTL material (see the module documentation for the table).
+fn convert_material(
+    builder: &mut SceneBuilder,
+    base: &Path,
+    m: &tobj::Material,
+) -> Result<Material, SceneError> {
+    let path = builder.path().to_path_buf();
+    let kd = Vec3::from(m.diffuse.unwrap_or([0.8; 3]));
+    let ks = Vec3::from(m.specular.unwrap_or([0.0; 3]));
+    let ke = Vec3::from(m.emissive.unwrap_or([0.0; 3]));
+    let values = [kd, ks, ke];
+    if values
+        .iter()
+        .any(|v| !v.is_finite() || v.min_element() < 0.0)
+    {
+        let reason = format!("material '{}' has a negative or non-finite color", m.name);
+        return Err(obj_error(&path, reason));
+    }
+    let roughness = m
+        .shininess
+        .filter(|n| n.is_finite() && *n >= 0.0)
+        .map_or(1.0, |ns| {
+            let alpha = (2.0 / (ns + 2.0)).sqrt();
+            alpha.sqrt()
+        });
+    let ior = match m.optical_density {
+        Some(ni) if ni.is_finite() && ni >= 1.0 => ni,
+        _ => 1.5,
+    };
+    let glass = matches!(m.illumination_model, Some(4 | 6 | 7 | 9));
+    let dissolve = m
+        .dissolve
+        .filter(|d| d.is_finite())
+        .unwrap_or(1.0)
+        .clamp(0.0, 1.0);
+    let mut material = Material {
+        name: m.name.clone(),
+        emission: ke,
+        roughness,
+        ior,
+        double_sided: true,
+        ..Material::diffuse(&m.name, kd)
+    };
+    if glass {
+        material.base_color = glam::Vec4::ONE;
+        material.transmission = 1.0;
+        material.thin_walled = false;
+        material.specular = 1.0;
+    } else if ks.max_element() > 0.0 {
+        if kd.max_element() == 0.0 {
+            material.metallic = 1.0;
+            material.base_color = ks.extend(1.0);
+        } else {
+            let strength = ks.max_element();
+            material.specular = strength.min(1.0);
+            material.specular_color = ks / strength;
+        }
+    }
+    if dissolve < 1.0 && !glass {
+        material.transmission = 1.0 - dissolve;
+        material.specular = material.specular.max(1.0);
+    }
+    if let Some(texture) = &m.diffuse_texture {
+        material.base_color_texture = Some(load_texture(builder, base, texture)?);
+    }
+    let ignored = [
+        ("map_Ks", &m.specular_texture),
+        ("map_Bump / norm", &m.normal_texture),
+        ("map_Ns", &m.shininess_texture),
+        ("map_d", &m.dissolve_texture),
+    ];
+    for (name, texture) in ignored {
+        if texture.is_some() {
+            builder.warn(format!(
+                "{}: {name} textures are not supported and are ignored",
+                path.display()
+            ));
+        }
+    }
+    Ok(material)
+}
+
+/// Loads `map_Kd` (sRGB) relative to the OBJ's folder.
+fn load_texture(
+    builder: &mut SceneBuilder,
+    base: &Path,
+    name: &str,
+) -> Result<TextureRef, SceneError> {
+    let file = base.join(name);
+    let image = image::open(&file).map_err(|e| SceneError::Texture {
+        path: builder.path().to_path_buf(),
+        texture: file.display().to_string(),
+        reason: e.to_string(),
+    })?;
+    let index = builder.textures.len();
+    builder.textures.push(Texture::from_image(
+        name.to_string(),
+        image,
+        ColorEncoding::Srgb,
+    ));
+    Ok(TextureRef {
+        index,
+        tex_coord: 0,
+    })
+}

@@ -1,0 +1,150 @@
+//! Materials: the glTF metallic-roughness model with the extensions listed in the scene
+//! conventions (specular, transmission, ior, volume, emissive_strength), plus texture lookups.
+
+use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
+
+use crate::bsdf::BsdfParams;
+use crate::texture::{Texture, TextureRef};
+
+/// How a material's alpha is used (glTF `alphaMode`).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    #[default]
+    Opaque,
+    /// Cut-out: the surface is absent where alpha < cutoff.
+    Mask {
+        /// `alphaCutoff` (glTF default 0.5).
+        cutoff: f32,
+    },
+}
+
+/// A surface material. Factors are linear; textures multiply them (glTF semantics).
+#[derive(Clone, Debug)]
+pub struct Material {
+    /// Name from the file, for messages.
+    pub name: String,
+    /// `baseColorFactor` (linear RGBA).
+    pub base_color: Vec4,
+    /// Base color texture (sRGB), multiplies `base_color`.
+    pub base_color_texture: Option<TextureRef>,
+    /// `metallicFactor`.
+    pub metallic: f32,
+    /// `roughnessFactor` (perceptual; GGX alpha = roughness²).
+    pub roughness: f32,
+    /// Metallic-roughness texture: green = roughness, blue = metallic.
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// Tangent-space normal map.
+    pub normal_texture: Option<TextureRef>,
+    /// Normal map `scale` (xy of the tangent-space normal are multiplied by it).
+    pub normal_scale: f32,
+    /// Emitted radiance: `emissiveFactor · emissiveStrength` (linear RGB, W·sr⁻¹·m⁻² in scene units).
+    pub emission: Vec3,
+    /// Emissive texture (sRGB), multiplies `emission`.
+    pub emissive_texture: Option<TextureRef>,
+    /// `KHR_materials_specular.specularFactor` (default 1).
+    pub specular: f32,
+    /// `KHR_materials_specular.specularColorFactor` (default white).
+    pub specular_color: Vec3,
+    /// `KHR_materials_transmission.transmissionFactor` (default 0).
+    pub transmission: f32,
+    /// `KHR_materials_ior.ior` (default 1.5).
+    pub ior: f32,
+    /// True unless `KHR_materials_volume.thicknessFactor` > 0 (then the mesh bounds a solid).
+    pub thin_walled: bool,
+    /// Alpha usage.
+    pub alpha_mode: AlphaMode,
+    /// glTF `doubleSided`: one-sided materials are black seen from the back.
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    /// The glTF default material: white, fully metallic, fully rough (glTF 2.0 §3.9.2).
+    fn default() -> Self {
+        Material {
+            name: "default".into(),
+            base_color: Vec4::ONE,
+            base_color_texture: None,
+            metallic: 1.0,
+            roughness: 1.0,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            emission: Vec3::ZERO,
+            emissive_texture: None,
+            specular: 1.0,
+            specular_color: Vec3::ONE,
+            transmission: 0.0,
+            ior: 1.5,
+            thin_walled: true,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+        }
+    }
+}
+
+/// Looks a texture up, or returns white where the material has none.
+fn lookup(textures: &[Texture], texture: Option<TextureRef>, uv: Vec2) -> Vec4 {
+    texture.map_or(Vec4::ONE, |t| textures[t.index].sample(uv))
+}
+
+impl Material {
+    /// A pure Lambertian diffuse material (metallic 0, roughness 1, specular 0).
+    pub fn diffuse(name: &str, albedo: Vec3) -> Self {
+        Material {
+            name: name.into(),
+            base_color: albedo.extend(1.0),
+            metallic: 0.0,
+            specular: 0.0,
+            double_sided: true,
+            ..Material::default()
+        }
+    }
+
+    /// BSDF parameters at texture coordinates `uv`.
+    pub fn bsdf_params(&self, textures: &[Texture], uv: Vec2) -> BsdfParams {
+        let base = self.base_color * lookup(textures, self.base_color_texture, uv);
+        let mr = lookup(textures, self.metallic_roughness_texture, uv);
+        BsdfParams {
+            base_color: base.xyz(),
+            metallic: (self.metallic * mr.z).clamp(0.0, 1.0),
+            roughness: (self.roughness * mr.y).clamp(0.0, 1.0),
+            specular: self.specular.clamp(0.0, 1.0),
+            specular_color: self.specular_color.max(Vec3::ZERO),
+            transmission: self.transmission.clamp(0.0, 1.0),
+            ior: self.ior,
+            thin_walled: self.thin_walled,
+        }
+    }
+
+    /// Emitted radiance at `uv` (zero for non-emitters).
+    pub fn emission_at(&self, textures: &[Texture], uv: Vec2) -> Vec3 {
+        self.emission * lookup(textures, self.emissive_texture, uv).xyz()
+    }
+
+    /// True when the material emits light anywhere.
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+
+    /// Coverage alpha at `uv`: base color alpha times the base color texture's alpha.
+    pub fn alpha_at(&self, textures: &[Texture], uv: Vec2) -> f32 {
+        self.base_color.w * lookup(textures, self.base_color_texture, uv).w
+    }
+
+    /// For alpha-masked materials: whether the surface is present at `uv`.
+    pub fn is_opaque_at(&self, textures: &[Texture], uv: Vec2) -> bool {
+        match self.alpha_mode {
+            AlphaMode::Opaque => true,
+            AlphaMode::Mask { cutoff } => self.alpha_at(textures, uv) >= cutoff,
+        }
+    }
+
+    /// The tangent-space normal from the normal map at `uv` (z up), or `None` without a map.
+    pub fn tangent_space_normal(&self, textures: &[Texture], uv: Vec2) -> Option<Vec3> {
+        let t = self.normal_texture?;
+        let c = textures[t.index].sample(uv).xyz() * 2.0 - Vec3::ONE;
+        let n = Vec3::new(c.x * self.normal_scale, c.y * self.normal_scale, c.z);
+        n.try_normalize()
+    }
+}

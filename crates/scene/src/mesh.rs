@@ -1,0 +1,250 @@
+//! Triangle geometry in world space: one flat vertex array for the whole scene.
+
+use glam::{Vec2, Vec3, Vec4};
+
+/// An axis-aligned bounding box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    /// Minimum corner.
+    pub min: Vec3,
+    /// Maximum corner.
+    pub max: Vec3,
+}
+
+impl Bounds {
+    /// The empty box (grows to anything).
+    pub const EMPTY: Bounds = Bounds {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+
+    /// Grows the box to contain `p`.
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// True when nothing was added.
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    /// Center of the box.
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Radius of the bounding sphere around [`Bounds::center`].
+    pub fn radius(&self) -> f32 {
+        (self.max - self.min).length() * 0.5
+    }
+}
+
+/// All triangles of a scene, flattened and transformed to world space.
+///
+/// Vertex attributes are always present: a zero normal or tangent means "absent" (the geometric
+/// normal or a generated frame is used instead).
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    /// Vertex positions (world space).
+    pub positions: Vec<Vec3>,
+    /// Vertex normals (world space, unit) or zero.
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates (set 0).
+    pub uvs: Vec<Vec2>,
+    /// Tangents (world space xyz, bitangent sign in w) or zero.
+    pub tangents: Vec<Vec4>,
+    /// Vertex indices of each triangle, counter-clockwise seen from the front.
+    pub triangles: Vec<[u32; 3]>,
+    /// Material index of each triangle.
+    pub material_ids: Vec<u32>,
+}
+
+/// A point on a surface, with everything shading needs.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    /// World-space position.
+    pub position: Vec3,
+    /// Unit geometric normal from the winding order (the front side).
+    pub geometric_normal: Vec3,
+    /// Unit shading normal (interpolated, normal-mapped), in the geometric normal's hemisphere.
+    pub shading_normal: Vec3,
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// Material index.
+    pub material: u32,
+    /// Triangle index.
+    pub triangle: u32,
+}
+
+impl Mesh {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The three corner positions of triangle `t`.
+    pub fn corners(&self, t: usize) -> [Vec3; 3] {
+        self.triangles[t].map(|i| self.positions[i as usize])
+    }
+
+    /// Surface area of triangle `t`.
+    pub fn area(&self, t: usize) -> f32 {
+        let [a, b, c] = self.corners(t);
+        0.5 * (b - a).cross(c - a).length()
+    }
+
+    /// Unit geometric normal of triangle `t` (counter-clockwise winding faces it).
+    pub fn geometric_normal(&self, t: usize) -> Vec3 {
+        let [a, b, c] = self.corners(t);
+        (b - a).cross(c - a).normalize_or_zero()
+    }
+
+    /// Texture coordinates at barycentrics (u, v) on triangle `t`.
+    pub fn uv_at(&self, t: usize, u: f32, v: f32) -> Vec2 {
+        let [i0, i1, i2] = self.triangles[t].map(|i| i as usize);
+        self.uvs[i0] * (1.0 - u - v) + self.uvs[i1] * u + self.uvs[i2] * v
+    }
+
+    /// The interpolated vertex normal and tangent at (u, v), without normal mapping.
+    fn interpolated_frame(&self, t: usize, u: f32, v: f32) -> (Vec3, Vec4) {
+        let [i0, i1, i2] = self.triangles[t].map(|i| i as usize);
+        let w = 1.0 - u - v;
+        let n = self.normals[i0] * w + self.normals[i1] * u + self.normals[i2] * v;
+        let tan = self.tangents[i0] * w + self.tangents[i1] * u + self.tangents[i2] * v;
+        (n, tan)
+    }
+
+    /// The surface point at barycentrics (u, v) on triangle `t`.
+    ///
+    /// `normal_map` is the tangent-space normal from the material's normal map, if any.
+    pub fn surface_point(
+        &self,
+        t: usize,
+        u: f32,
+        v: f32,
+        normal_map: Option<Vec3>,
+    ) -> SurfacePoint {
+        let [a, b, c] = self.corners(t);
+        let geometric_normal = self.geometric_normal(t);
+        let (interpolated, tangent) = self.interpolated_frame(t, u, v);
+        let mut shading = interpolated.try_normalize().unwrap_or(geometric_normal);
+        if let (Some(m), Some(tan)) = (normal_map, tangent.truncate().try_normalize()) {
+            let sign = if tangent.w < 0.0 { -1.0 } else { 1.0 };
+            let tan = (tan - shading * shading.dot(tan)).normalize_or_zero();
+            let bitangent = shading.cross(tan) * sign;
+            let mapped = tan * m.x + bitangent * m.y + shading * m.z;
+            shading = mapped.try_normalize().unwrap_or(shading);
+        }
+        if shading.dot(geometric_normal) < 0.0 {
+            shading = -shading;
+        }
+        SurfacePoint {
+            position: a * (1.0 - u - v) + b * u + c * v,
+            geometric_normal,
+            shading_normal: shading,
+            uv: self.uv_at(t, u, v),
+            material: self.material_ids[t],
+            triangle: t as u32,
+        }
+    }
+
+    /// Bounding box of all vertices that triangles use.
+    pub fn bounds(&self) -> Bounds {
+        let mut bounds = Bounds::EMPTY;
+        for tri in &self.triangles {
+            for &i in tri {
+                bounds.grow(self.positions[i as usize]);
+            }
+        }
+        bounds
+    }
+
+    /// Generates per-vertex tangents from texture coordinates for the triangles in `range`
+    /// (used where a normal map needs them and the file has none).
+    ///
+    /// Per-triangle tangents (from the UV parameterization) are accumulated on the vertices,
+    /// weighted by triangle area, then orthogonalized against the vertex normal (Lengyel's method).
+    pub fn generate_tangents(&mut self, range: std::ops::Range<usize>) {
+        let mut tangent = vec![Vec3::ZERO; self.positions.len()];
+        let mut bitangent = vec![Vec3::ZERO; self.positions.len()];
+        for tri in &self.triangles[range.clone()] {
+            let [i0, i1, i2] = tri.map(|i| i as usize);
+            let (e1, e2) = (
+                self.positions[i1] - self.positions[i0],
+                self.positions[i2] - self.positions[i0],
+            );
+            let (d1, d2) = (self.uvs[i1] - self.uvs[i0], self.uvs[i2] - self.uvs[i0]);
+            let det = d1.x * d2.y - d2.x * d1.y;
+            if det.abs() < 1e-20 || !det.is_finite() {
+                continue;
+            }
+            let t = (e1 * d2.y - e2 * d1.y) / det;
+            let b = (e2 * d1.x - e1 * d2.x) / det;
+            for i in [i0, i1, i2] {
+                tangent[i] += t;
+                bitangent[i] += b;
+            }
+        }
+        for tri in &self.triangles[range] {
+            for &i in tri {
+                let i = i as usize;
+                let n = self.normals[i].try_normalize().unwrap_or(Vec3::ZERO);
+                let t = (tangent[i] - n * n.dot(tangent[i])).normalize_or_zero();
+                let sign = if n.cross(t).dot(bitangent[i]) < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                };
+                self.tangents[i] = t.extend(sign);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> Mesh {
+        Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            normals: vec![Vec3::Z; 4],
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+            tangents: vec![Vec4::ZERO; 4],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            material_ids: vec![0, 0],
+        }
+    }
+
+    #[test]
+    fn geometry_queries() {
+        let m = quad();
+        assert_eq!(m.geometric_normal(0), Vec3::Z);
+        assert!((m.area(0) - 0.5).abs() < 1e-6);
+        let p = m.surface_point(0, 0.5, 0.25, None);
+        assert!((p.position - Vec3::new(0.75, 0.25, 0.0)).length() < 1e-6);
+        assert_eq!(m.bounds().max, Vec3::new(1.0, 1.0, 0.0));
+    }
+
+    #[test]
+    fn generated_tangents_follow_u_and_normal_map_tilts_shading_normal() {
+        let mut m = quad();
+        m.generate_tangents(0..2);
+        for t in &m.tangents {
+            assert!((t.truncate() - Vec3::X).length() < 1e-5, "{t}");
+            assert_eq!(t.w, 1.0);
+        }
+        let tilted = Vec3::new(0.6, 0.0, 0.8);
+        let p = m.surface_point(0, 0.3, 0.3, Some(tilted));
+        assert!((p.shading_normal - tilted).length() < 1e-5);
+    }
+
+    #[test]
+    fn shading_normal_is_flipped_into_the_geometric_hemisphere() {
+        let mut m = quad();
+        m.normals = vec![-Vec3::Z; 4];
+        let p = m.surface_point(1, 0.2, 0.2, None);
+        assert_eq!(p.shading_normal, Vec3::Z);
+    }
+}

@@ -1,0 +1,132 @@
+//! Piecewise-constant discrete distribution, e.g. for selecting lights proportionally to
+//! their power.
+
+/// Discrete distribution over `0..len()` with probabilities proportional to the weights.
+///
+/// The prefix sums are kept in `f64` so that millions of entries with widely varying
+/// weights keep their relative probabilities.
+#[derive(Clone, Debug)]
+pub struct Distribution1D {
+    /// `cdf[i]` = sum of the weights before entry `i`; `cdf[len]` = total.
+    cdf: Vec<f64>,
+}
+
+impl Distribution1D {
+    /// Builds the distribution. Negative and non-finite weights count as zero. Returns `None`
+    /// when there is no entry or no positive finite weight.
+    pub fn new(weights: &[f32]) -> Option<Distribution1D> {
+        let mut cdf = Vec::with_capacity(weights.len() + 1);
+        let mut sum = 0.0f64;
+        cdf.push(sum);
+        for &w in weights {
+            if w.is_finite() && w > 0.0 {
+                sum += w as f64;
+            }
+            cdf.push(sum);
+        }
+        (sum > 0.0).then_some(Distribution1D { cdf })
+    }
+
+    /// Number of entries (including zero-weight ones).
+    pub fn len(&self) -> usize {
+        self.cdf.len() - 1
+    }
+
+    /// Always false: an empty distribution cannot be built.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Sum of the (sanitized) weights.
+    pub fn total(&self) -> f64 {
+        self.cdf[self.len()]
+    }
+
+    /// Probability of selecting entry `i` (0 for zero weights and out-of-range indices).
+    pub fn pmf(&self, i: usize) -> f32 {
+        if i >= self.len() {
+            return 0.0;
+        }
+        ((self.cdf[i + 1] - self.cdf[i]) / self.total()) as f32
+    }
+
+    /// Selects an entry with `u` in [0, 1) (clamped into it) and returns it with its
+    /// probability. An entry with zero weight is never selected: the result is the first
+    /// entry whose cumulative sum exceeds `u · total`.
+    pub fn sample(&self, u: f32) -> (usize, f32) {
+        let target = (u as f64).clamp(0.0, 1.0) * self.total();
+        // First i with cdf[i + 1] > target; partition_point over cdf[1..].
+        let i = self.cdf[1..].partition_point(|&c| c <= target);
+        // target == total (u clamped to 1) would run past the end: use the last entry with
+        // positive weight instead.
+        let i = if i < self.len() {
+            i
+        } else {
+            (0..self.len())
+                .rev()
+                .find(|&j| self.cdf[j + 1] > self.cdf[j])
+                .unwrap_or(0)
+        };
+        (i, self.pmf(i))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    #[test]
+    fn rejects_empty_and_zero() {
+        assert!(Distribution1D::new(&[]).is_none());
+        assert!(Distribution1D::new(&[0.0, 0.0]).is_none());
+        assert!(Distribution1D::new(&[f32::NAN, f32::INFINITY, -1.0]).is_none());
+        let d = Distribution1D::new(&[0.0, f32::NAN, 2.0]).unwrap();
+        assert_eq!(d.len(), 3);
+        assert_eq!(d.total(), 2.0);
+        assert_eq!(d.pmf(2), 1.0);
+    }
+
+    #[test]
+    fn never_selects_zero_weight_entries() {
+        let d = Distribution1D::new(&[0.0, 1.0, 0.0, 0.0, 3.0, 0.0]).unwrap();
+        for u in [
+            0.0,
+            0.25 - 1e-7,
+            0.25,
+            0.5,
+            1.0 - f32::EPSILON / 2.0,
+            1.0,
+            2.0,
+            -1.0,
+        ] {
+            let (i, p) = d.sample(u);
+            assert!(i == 1 || i == 4, "u = {u} selected {i}");
+            assert_eq!(p, d.pmf(i));
+        }
+        assert_eq!(d.sample(0.0).0, 1);
+        assert_eq!(d.sample(0.25).0, 4);
+    }
+
+    #[test]
+    fn frequencies_match_pmf() {
+        let weights = [0.5, 0.0, 3.0, 1e-3, 2.0, 7.0, 0.25];
+        let d = Distribution1D::new(&weights).unwrap();
+        let sum: f32 = (0..d.len()).map(|i| d.pmf(i)).sum();
+        assert!((sum - 1.0).abs() < 1e-6);
+        let n = 1_000_000;
+        let mut counts = vec![0u32; d.len()];
+        let mut rng = Rng::new(5, 1);
+        for _ in 0..n {
+            counts[d.sample(rng.uniform()).0] += 1;
+        }
+        for (i, &c) in counts.iter().enumerate() {
+            let p = d.pmf(i) as f64;
+            let sigma = (n as f64 * p * (1.0 - p)).sqrt();
+            assert!(
+                (c as f64 - n as f64 * p).abs() <= 5.0 * sigma + 1.0,
+                "entry {i}: {c}"
+            );
+        }
+    }
+}

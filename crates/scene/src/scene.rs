@@ -1,0 +1,154 @@
+//! The loaded scene: geometry, materials, textures, lights, camera and what the scene contains.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+use crate::bsdf::Bsdf;
+use crate::camera::Camera;
+use crate::error::SceneError;
+use crate::features::SceneFeatures;
+use crate::light::{AreaLight, HitEmission, Light, LightSampler};
+use crate::material::{AlphaMode, Material};
+use crate::mesh::{Mesh, SurfacePoint};
+use crate::texture::Texture;
+
+/// A scene ready to render. Immutable once built; share it by reference across threads.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The file the scene was loaded from.
+    pub path: PathBuf,
+    /// All triangles in world space.
+    pub mesh: Mesh,
+    /// Materials, indexed by [`Mesh::material_ids`].
+    pub materials: Vec<Material>,
+    /// Textures, indexed by [`crate::TextureRef::index`].
+    pub textures: Vec<Texture>,
+    /// Lights: one area light per emissive triangle, then punctual lights.
+    pub lights: Vec<Light>,
+    /// Power-proportional light selection.
+    pub light_sampler: LightSampler,
+    /// The camera (from the file, or framing the scene).
+    pub camera: Camera,
+    /// What the scene contains, for integrators and pipelines to leave out what it does not need.
+    pub features: SceneFeatures,
+    /// Unsupported features and dropped data, each reported once, naming the file.
+    pub warnings: Vec<String>,
+    /// Zero-area triangles dropped while loading.
+    pub dropped_triangles: usize,
+}
+
+impl Scene {
+    /// Loads a glTF (`.gltf`, `.glb`) or OBJ (`.obj`) file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        crate::loader::load(path.as_ref())
+    }
+
+    /// Assembles a scene from parts: area lights are made for every emissive triangle and
+    /// placed before `punctual_lights`.
+    pub fn new(
+        path: PathBuf,
+        mesh: Mesh,
+        materials: Vec<Material>,
+        textures: Vec<Texture>,
+        punctual_lights: Vec<Light>,
+        camera: Camera,
+        warnings: Vec<String>,
+    ) -> Scene {
+        let mut lights: Vec<Light> = (0..mesh.triangle_count())
+            .filter_map(|t| {
+                let material = &materials[mesh.material_ids[t] as usize];
+                material.is_emissive().then(|| {
+                    Light::Area(AreaLight {
+                        triangle: t as u32,
+                        corners: mesh.corners(t),
+                        uvs: mesh.triangles[t].map(|i| mesh.uvs[i as usize]),
+                        normal: mesh.geometric_normal(t),
+                        area: mesh.area(t),
+                        emission: material.emission,
+                        texture: material.emissive_texture,
+                    })
+                })
+            })
+            .collect();
+        lights.extend(punctual_lights);
+        let light_sampler = LightSampler::new(&lights, &textures, mesh.triangle_count());
+        let features = SceneFeatures::of(&mesh, &materials, &textures, &lights);
+        Scene {
+            path,
+            mesh,
+            materials,
+            textures,
+            lights,
+            light_sampler,
+            camera,
+            features,
+            warnings,
+            dropped_triangles: 0,
+        }
+    }
+
+    /// The material of triangle `triangle`.
+    pub fn material_of(&self, triangle: u32) -> &Material {
+        &self.materials[self.mesh.material_ids[triangle as usize] as usize]
+    }
+
+    /// The surface point at barycentrics (u, v) of `triangle`, with the normal map applied.
+    pub fn surface_point(&self, triangle: u32, u: f32, v: f32) -> SurfacePoint {
+        let t = triangle as usize;
+        let material = self.material_of(triangle);
+        let normal_map = material
+            .normal_texture
+            .and_then(|_| material.tangent_space_normal(&self.textures, self.mesh.uv_at(t, u, v)));
+        self.mesh.surface_point(t, u, v, normal_map)
+    }
+
+    /// The BSDF at a surface point.
+    pub fn bsdf(&self, point: &SurfacePoint) -> Bsdf {
+        let material = &self.materials[point.material as usize];
+        let params = material.bsdf_params(&self.textures, point.uv);
+        Bsdf::new(
+            &params,
+            point.geometric_normal,
+            point.shading_normal,
+            material.double_sided,
+        )
+    }
+
+    /// Emission seen by a ray with unit direction `ray_dir` that hits `triangle` at (u, v), or
+    /// `None` when the triangle does not emit toward the ray.
+    pub fn emission_on_hit(
+        &self,
+        triangle: u32,
+        u: f32,
+        v: f32,
+        ray_dir: Vec3,
+    ) -> Option<HitEmission> {
+        let light = self.light_sampler.light_of_triangle(triangle)?;
+        match &self.lights[light] {
+            Light::Area(area) => area.radiance_on_hit(&self.textures, ray_dir, u, v),
+            _ => None,
+        }
+    }
+
+    /// True when triangle `triangle` has an alpha-masked material.
+    pub fn is_alpha_masked(&self, triangle: u32) -> bool {
+        matches!(
+            self.material_of(triangle).alpha_mode,
+            AlphaMode::Mask { .. }
+        )
+    }
+
+    /// For alpha-masked triangles: whether the surface is present at barycentrics (u, v).
+    pub fn is_opaque_at(&self, triangle: u32, u: f32, v: f32) -> bool {
+        let uv = self.mesh.uv_at(triangle as usize, u, v);
+        self.material_of(triangle).is_opaque_at(&self.textures, uv)
+    }
+
+    /// Triangle corner positions in mesh order, the input of a traversal backend.
+    pub fn triangle_corners(&self) -> Vec<[Vec3; 3]> {
+        (0..self.mesh.triangle_count())
+            .map(|t| self.mesh.corners(t))
+            .collect()
+    }
+}

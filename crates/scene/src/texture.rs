@@ -1,0 +1,261 @@
+//! Textures: 8-bit RGBA texels, decoded to linear on lookup, bilinear filtering and glTF wrap modes.
+
+use glam::{Vec2, Vec4};
+
+/// How texture coordinates outside [0, 1] are mapped (glTF sampler `wrapS` / `wrapT`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum WrapMode {
+    /// Tile the texture (glTF default).
+    #[default]
+    Repeat,
+    /// Tile the texture, mirroring every other copy.
+    MirroredRepeat,
+    /// Clamp to the edge texels.
+    ClampToEdge,
+}
+
+impl WrapMode {
+    /// Maps an integer texel coordinate onto `0..size`.
+    fn apply(self, i: i64, size: u32) -> u32 {
+        let n = i64::from(size);
+        let wrapped = match self {
+            WrapMode::Repeat => i.rem_euclid(n),
+            WrapMode::ClampToEdge => i.clamp(0, n - 1),
+            WrapMode::MirroredRepeat => {
+                let period = i.rem_euclid(2 * n);
+                if period < n {
+                    period
+                } else {
+                    2 * n - 1 - period
+                }
+            }
+        };
+        wrapped as u32
+    }
+}
+
+/// How the stored 8-bit values are interpreted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColorEncoding {
+    /// sRGB-encoded color (base color, emissive): decoded to linear on lookup; alpha stays linear.
+    Srgb,
+    /// Linear data (metallic-roughness, normal maps, masks).
+    Linear,
+}
+
+/// An RGBA image with a sampler. Lookups return linear values in [0, 1].
+#[derive(Clone, Debug)]
+pub struct Texture {
+    /// A name for messages (the image URI or the glTF image name).
+    pub name: String,
+    width: u32,
+    height: u32,
+    texels: Vec<[u8; 4]>,
+    encoding: ColorEncoding,
+    /// Mean linear RGBA over all texels, computed once.
+    average: std::sync::OnceLock<Vec4>,
+    /// Wrap mode along u.
+    pub wrap_u: WrapMode,
+    /// Wrap mode along v.
+    pub wrap_v: WrapMode,
+}
+
+/// Lookup table from an sRGB-encoded byte to linear intensity (IEC 61966-2-1).
+fn srgb_to_linear_table() -> &'static [f32; 256] {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        std::array::from_fn(|i| {
+            let c = i as f32 / 255.0;
+            if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            }
+        })
+    })
+}
+
+impl Texture {
+    /// Wraps decoded RGBA8 texels (row 0 is the top of the image, as glTF's UV origin is top-left).
+    ///
+    /// Returns `None` when the size does not match the texel count or is zero.
+    pub fn new(
+        name: String,
+        width: u32,
+        height: u32,
+        texels: Vec<[u8; 4]>,
+        encoding: ColorEncoding,
+    ) -> Option<Self> {
+        let valid = width > 0 && height > 0 && texels.len() == width as usize * height as usize;
+        valid.then_some(Texture {
+            name,
+            width,
+            height,
+            texels,
+            encoding,
+            average: std::sync::OnceLock::new(),
+            wrap_u: WrapMode::Repeat,
+            wrap_v: WrapMode::Repeat,
+        })
+    }
+
+    /// Converts a decoded image, choosing how its values are interpreted.
+    pub fn from_image(name: String, image: image::DynamicImage, encoding: ColorEncoding) -> Self {
+        let rgba = image.into_rgba8();
+        let (width, height) = rgba.dimensions();
+        let texels = rgba.pixels().map(|p| p.0).collect();
+        Texture::new(name, width, height, texels, encoding)
+            .expect("an RGBA8 image buffer always holds width*height texels")
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// How the texels are interpreted.
+    pub fn encoding(&self) -> ColorEncoding {
+        self.encoding
+    }
+
+    /// One texel as linear RGBA.
+    pub fn texel(&self, x: u32, y: u32) -> Vec4 {
+        let [r, g, b, a] = self.texels[(y * self.width + x) as usize];
+        let alpha = f32::from(a) / 255.0;
+        match self.encoding {
+            ColorEncoding::Linear => {
+                Vec4::new(f32::from(r), f32::from(g), f32::from(b), f32::from(a)) / 255.0
+            }
+            ColorEncoding::Srgb => {
+                let table = srgb_to_linear_table();
+                Vec4::new(
+                    table[r as usize],
+                    table[g as usize],
+                    table[b as usize],
+                    alpha,
+                )
+            }
+        }
+    }
+
+    /// Bilinearly filtered lookup at texture coordinates `uv` (glTF convention: (0,0) is the
+    /// top-left corner of the image), interpolating linear values.
+    pub fn sample(&self, uv: Vec2) -> Vec4 {
+        if !uv.is_finite() {
+            return self.texel(0, 0);
+        }
+        let x = f64::from(uv.x) * f64::from(self.width) - 0.5;
+        let y = f64::from(uv.y) * f64::from(self.height) - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+        // Coordinates far outside [0,1] saturate in the i64 cast; wrapping keeps them in range.
+        let (xi, yi) = (x0 as i64, y0 as i64);
+        let xs = [
+            self.wrap_u.apply(xi, self.width),
+            self.wrap_u.apply(xi.saturating_add(1), self.width),
+        ];
+        let ys = [
+            self.wrap_v.apply(yi, self.height),
+            self.wrap_v.apply(yi.saturating_add(1), self.height),
+        ];
+        let top = self.texel(xs[0], ys[0]).lerp(self.texel(xs[1], ys[0]), fx);
+        let bottom = self.texel(xs[0], ys[1]).lerp(self.texel(xs[1], ys[1]), fx);
+        top.lerp(bottom, fy)
+    }
+
+    /// Mean linear RGBA over all texels (used for light power estimates), computed on first use.
+    pub fn average(&self) -> Vec4 {
+        *self.average.get_or_init(|| self.compute_average())
+    }
+
+    fn compute_average(&self) -> Vec4 {
+        let mut sum = [0f64; 4];
+        for y in 0..self.height {
+            for x in 0..self.width {
+                let t = self.texel(x, y);
+                for (s, c) in sum.iter_mut().zip(t.to_array()) {
+                    *s += f64::from(c);
+                }
+            }
+        }
+        let n = f64::from(self.width) * f64::from(self.height);
+        Vec4::from_array(sum.map(|s| (s / n) as f32))
+    }
+}
+
+/// A material's reference to a texture: which texture and which UV set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TextureRef {
+    /// Index into [`crate::Scene::textures`].
+    pub index: usize,
+    /// Texture coordinate set (only set 0 is loaded; others are reported as unsupported).
+    pub tex_coord: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checker() -> Texture {
+        let texels = vec![
+            [0, 0, 0, 255],
+            [255, 255, 255, 255],
+            [255, 255, 255, 255],
+            [0, 0, 0, 0],
+        ];
+        Texture::new("checker".into(), 2, 2, texels, ColorEncoding::Linear).unwrap()
+    }
+
+    #[test]
+    fn texel_centers_return_exact_values() {
+        let t = checker();
+        assert_eq!(
+            t.sample(Vec2::new(0.25, 0.25)),
+            Vec4::new(0.0, 0.0, 0.0, 1.0)
+        );
+        assert_eq!(t.sample(Vec2::new(0.75, 0.25)), Vec4::ONE);
+    }
+
+    #[test]
+    fn bilinear_midpoint_averages_four_texels() {
+        let t = checker();
+        let mid = t.sample(Vec2::new(0.5, 0.5));
+        assert!((mid - Vec4::new(0.5, 0.5, 0.5, 0.75)).abs().max_element() < 1e-6);
+    }
+
+    #[test]
+    fn wrap_modes_map_into_range() {
+        assert_eq!(WrapMode::Repeat.apply(-1, 4), 3);
+        assert_eq!(WrapMode::Repeat.apply(9, 4), 1);
+        assert_eq!(WrapMode::ClampToEdge.apply(-5, 4), 0);
+        assert_eq!(WrapMode::ClampToEdge.apply(7, 4), 3);
+        assert_eq!(WrapMode::MirroredRepeat.apply(4, 4), 3);
+        assert_eq!(WrapMode::MirroredRepeat.apply(-1, 4), 0);
+        assert_eq!(WrapMode::MirroredRepeat.apply(8, 4), 0);
+        // Extreme coordinates do not panic.
+        let t = checker();
+        assert!(t.sample(Vec2::new(1e30, -1e30)).is_finite());
+        assert!(t.sample(Vec2::new(f32::NAN, 0.0)).is_finite());
+    }
+
+    #[test]
+    fn srgb_decoding_matches_the_standard_curve() {
+        let t = Texture::new(
+            "grey".into(),
+            1,
+            1,
+            vec![[188, 188, 188, 128]],
+            ColorEncoding::Srgb,
+        )
+        .unwrap();
+        let v = t.texel(0, 0);
+        // sRGB 188/255 ≈ 0.5029 linear; alpha is not decoded.
+        assert!((v.x - 0.5029).abs() < 1e-3, "{v}");
+        assert!((v.w - 128.0 / 255.0).abs() < 1e-6);
+    }
+}

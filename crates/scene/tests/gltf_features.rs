@@ -1,0 +1,174 @@
+//! Small hand-written glTF documents exercising the conventions: transforms and winding,
+//! cameras, punctual lights, material extensions and bad input.
+
+use std::path::Path;
+
+use base64::Engine;
+use glam::{Vec2, Vec3};
+use vcm_scene::light::Light;
+use vcm_scene::loader::load_gltf_from_bytes;
+use vcm_scene::{Scene, SceneError};
+
+/// One triangle in the z = 0 plane, counter-clockwise seen from +Z, as an embedded buffer.
+fn triangle_buffer() -> String {
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let bytes: Vec<u8> = positions.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let data = base64::engine::general_purpose::STANDARD.encode(bytes);
+    format!(
+        r#""buffers": [{{"byteLength": 36, "uri": "data:application/octet-stream;base64,{data}"}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+        "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                        "min": [0,0,0], "max": [1,1,0]}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 0}}]}}]"#
+    )
+}
+
+fn document(nodes: &str, materials: &str, extra: &str) -> String {
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+        "nodes": {nodes}, "materials": {materials}, {} {extra}}}"#,
+        triangle_buffer()
+    )
+}
+
+const MATTE: &str = r#"[{"pbrMetallicRoughness": {"metallicFactor": 0}}]"#;
+
+fn load(json: &str) -> Result<Scene, SceneError> {
+    load_gltf_from_bytes(Path::new("memory.gltf"), json.as_bytes())
+}
+
+#[test]
+fn node_transforms_place_geometry_and_mirroring_flips_the_winding() {
+    let moved = load(&document(
+        r#"[{"mesh": 0, "translation": [0, 0, 5]}]"#,
+        MATTE,
+        "",
+    ))
+    .unwrap();
+    assert_eq!(moved.mesh.geometric_normal(0), Vec3::Z);
+    assert_eq!(moved.mesh.corners(0)[1], Vec3::new(1.0, 0.0, 5.0));
+
+    let nested =
+        r#"[{"children": [1], "scale": [2, 2, 2]}, {"mesh": 0, "translation": [1, 0, 0]}]"#;
+    let scene = load(&document(nested, MATTE, "")).unwrap();
+    assert_eq!(scene.mesh.corners(0)[1], Vec3::new(4.0, 0.0, 0.0));
+
+    // Mirroring in x leaves the triangle facing +Z, but reverses its winding order as seen
+    // from +Z: the loader must swap it back (negative determinant rule).
+    let mirrored = load(&document(
+        r#"[{"mesh": 0, "scale": [-1, 1, 1]}]"#,
+        MATTE,
+        "",
+    ))
+    .unwrap();
+    assert_eq!(mirrored.mesh.geometric_normal(0), Vec3::Z);
+}
+
+#[test]
+fn the_first_camera_and_punctual_lights_are_read() {
+    let nodes = r#"[{"children": [1, 2, 3, 4]},
+        {"mesh": 0},
+        {"camera": 0, "translation": [0, 0, 3]},
+        {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 2, 0]},
+        {"extensions": {"KHR_lights_punctual": {"light": 1}}, "rotation": [-0.7071068, 0, 0, 0.7071068]}]"#;
+    let extra = r#", "cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "point", "intensity": 10, "color": [1, 0.5, 0.25]},
+            {"type": "directional", "intensity": 3}]}}"#;
+    let scene = load(&document(nodes, MATTE, extra)).unwrap();
+    assert_eq!(scene.camera.position, Vec3::new(0.0, 0.0, 3.0));
+    assert_eq!(scene.camera.yfov, 0.5);
+    assert!((scene.camera.forward - -Vec3::Z).length() < 1e-6);
+    assert_eq!(scene.lights.len(), 2);
+    let Light::Point(point) = &scene.lights[0] else {
+        panic!("not a point light")
+    };
+    assert_eq!(point.position, Vec3::new(0.0, 2.0, 0.0));
+    assert_eq!(point.intensity, Vec3::new(10.0, 5.0, 2.5));
+    let Light::Directional(sun) = &scene.lights[1] else {
+        panic!("not directional")
+    };
+    // Rotating -90° about x turns the node's -Z into -Y: the light shines downward.
+    assert!(
+        (sun.direction - -Vec3::Y).length() < 1e-5,
+        "{}",
+        sun.direction
+    );
+    assert_eq!(sun.irradiance, Vec3::splat(3.0));
+    let f = scene.features;
+    assert_eq!(
+        (f.lights.point, f.lights.directional, f.lights.area),
+        (1, 1, 0)
+    );
+}
+
+#[test]
+fn material_extensions_map_to_the_material_model() {
+    let materials = r#"[{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1],
+            "metallicFactor": 0, "roughnessFactor": 0},
+        "emissiveFactor": [1, 0.5, 0],
+        "extensions": {
+            "KHR_materials_emissive_strength": {"emissiveStrength": 4},
+            "KHR_materials_transmission": {"transmissionFactor": 1},
+            "KHR_materials_ior": {"ior": 1.33},
+            "KHR_materials_volume": {"thicknessFactor": 0.1},
+            "KHR_materials_specular": {"specularFactor": 0.5}}}]"#;
+    let scene = load(&document(r#"[{"mesh": 0}]"#, materials, "")).unwrap();
+    let m = &scene.materials[0];
+    assert_eq!(m.emission, Vec3::new(4.0, 2.0, 0.0));
+    assert_eq!((m.transmission, m.ior, m.specular), (1.0, 1.33, 0.5));
+    assert!(!m.thin_walled);
+    assert_eq!(scene.features.lights.area, 1);
+    assert!(scene.features.materials.transmission && scene.features.materials.specular);
+    let light = scene.emission_on_hit(0, 0.2, 0.2, -Vec3::Z).unwrap();
+    assert_eq!(light.radiance, Vec3::new(4.0, 2.0, 0.0));
+    // One-sided emission: nothing leaves the back face.
+    assert!(scene.emission_on_hit(0, 0.2, 0.2, Vec3::Z).is_none());
+    let point = scene.surface_point(0, 0.25, 0.25);
+    assert_eq!(point.uv, Vec2::ZERO);
+}
+
+#[test]
+fn bad_documents_are_errors_not_panics() {
+    let cases = [
+        ("not json", "{ this is not json"),
+        (
+            "cyclic nodes",
+            r#"[{"mesh": 0, "children": [1]}, {"children": [0]}]"#,
+        ),
+        (
+            "NaN transform",
+            r#"[{"mesh": 0, "translation": [0, 1e39, 0]}]"#,
+        ),
+    ];
+    for (what, nodes) in cases {
+        let json = if what == "not json" {
+            nodes.to_string()
+        } else {
+            document(nodes, MATTE, "")
+        };
+        let error = load(&json)
+            .err()
+            .unwrap_or_else(|| panic!("{what}: loaded"));
+        assert!(error.to_string().contains("memory.gltf"), "{what}: {error}");
+    }
+    let required = r#", "extensionsUsed": ["KHR_draco_mesh_compression"],
+        "extensionsRequired": ["KHR_draco_mesh_compression"]"#;
+    let error = load(&document(r#"[{"mesh": 0}]"#, MATTE, required)).unwrap_err();
+    assert!(
+        error.to_string().contains("KHR_draco_mesh_compression"),
+        "{error}"
+    );
+    let bad_ior = r#"[{"extensions": {"KHR_materials_ior": {"ior": 0.5}}}]"#;
+    assert!(load(&document(r#"[{"mesh": 0}]"#, bad_ior, "")).is_err());
+}
+
+#[test]
+fn a_scene_without_camera_is_framed_from_plus_z() {
+    let scene = load(&document(r#"[{"mesh": 0}]"#, MATTE, "")).unwrap();
+    assert_eq!(scene.camera.forward, -Vec3::Z);
+    assert!(scene.camera.position.z > 0.0);
+    assert!((scene.camera.yfov - 45f32.to_radians()).abs() < 1e-6);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+}
