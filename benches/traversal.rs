@@ -1,0 +1,109 @@
+//! Ray traversal throughput of the CPU backend: primary, diffuse-bounce and shadow rays on a
+//! Cornell box and on a ~1M-triangle procedural scene, plus BVH build time and memory.
+//!
+//! Run with `cargo bench --bench traversal`. Rays/s are reported by criterion as
+//! element throughput; the build statistics are printed before the measurements.
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use common::{Pcg, Scene, SurfacePoints, cornell_box, million_triangles};
+use criterion::{Criterion, Throughput};
+use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
+
+/// Image resolution of the primary rays (one ray per pixel).
+const RESOLUTION: usize = 512;
+
+/// Builds of the large scene timed for the build statistics.
+const BUILD_REPEATS: usize = 3;
+
+/// The three ray sets traced against one scene.
+struct Workload {
+    primary: RayBatch,
+    bounce: RayBatch,
+    shadow: RayBatch,
+}
+
+impl Workload {
+    /// Primary rays from the scene's camera; bounce and shadow rays from their hit points.
+    fn new(scene: &Scene, bvh: &CpuBvh) -> Self {
+        let primary = scene.camera.primary_rays(RESOLUTION);
+        let mut hits = HitBatch::default();
+        bvh.intersect(&primary, &mut hits);
+        let points = SurfacePoints::from_hits(&scene.triangles, &primary, &hits);
+        let mut rng = Pcg::new(1);
+        Self {
+            bounce: points.bounce_rays(&mut rng),
+            shadow: points.shadow_rays(&scene.light, &mut rng),
+            primary,
+        }
+    }
+}
+
+/// Builds `scene` `repeats` times, prints the fastest build and the memory per triangle, and
+/// returns the last BVH.
+fn build_and_report(scene: &Scene, repeats: usize) -> CpuBvh {
+    let mut fastest = Duration::MAX;
+    let mut bvh = None;
+    for _ in 0..repeats {
+        let built = CpuBvh::new(&scene.triangles, CpuBvhOptions::default()).expect("valid scene");
+        fastest = fastest.min(built.build_time());
+        bvh = Some(built);
+    }
+    let bvh = bvh.expect("at least one build");
+    println!(
+        "{}: {} triangles, BVH build {:.3} s (best of {repeats}), {:.1} bytes/triangle",
+        scene.name,
+        scene.triangles.len(),
+        fastest.as_secs_f64(),
+        bvh.memory_bytes() as f64 / scene.triangles.len() as f64,
+    );
+    bvh
+}
+
+fn bench_scene(criterion: &mut Criterion, scene: &Scene, build_repeats: usize) {
+    let started = Instant::now();
+    let bvh = build_and_report(scene, build_repeats);
+    let workload = Workload::new(scene, &bvh);
+    println!(
+        "{}: {} primary, {} bounce, {} shadow rays (set up in {:.1} s)",
+        scene.name,
+        workload.primary.len(),
+        workload.bounce.len(),
+        workload.shadow.len(),
+        started.elapsed().as_secs_f64(),
+    );
+    let mut hits = HitBatch::default();
+    let mut occluded = Vec::new();
+    let mut group = criterion.benchmark_group(scene.name);
+    group.throughput(Throughput::Elements(workload.primary.len() as u64));
+    group.bench_function("primary_closest_hit", |b| {
+        b.iter(|| bvh.intersect(&workload.primary, &mut hits))
+    });
+    group.throughput(Throughput::Elements(workload.bounce.len() as u64));
+    group.bench_function("diffuse_bounce_closest_hit", |b| {
+        b.iter(|| bvh.intersect(&workload.bounce, &mut hits))
+    });
+    group.throughput(Throughput::Elements(workload.shadow.len() as u64));
+    group.bench_function("shadow_occlusion", |b| {
+        b.iter(|| bvh.occluded(&workload.shadow, &mut occluded))
+    });
+    group.finish();
+}
+
+fn main() {
+    println!(
+        "rayon threads: {}, available parallelism: {}",
+        rayon::current_num_threads(),
+        std::thread::available_parallelism().map_or(0, |n| n.get()),
+    );
+    let mut criterion = Criterion::default()
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4))
+        .configure_from_args();
+    bench_scene(&mut criterion, &cornell_box(), 1);
+    bench_scene(&mut criterion, &million_triangles(), BUILD_REPEATS);
+    criterion.final_summary();
+}

@@ -1,0 +1,173 @@
+//! Structure-of-arrays ray and hit batches, reused across calls to avoid allocation.
+
+use glam::Vec3;
+
+/// Primitive id stored in [`HitBatch::prim`] for rays that hit nothing.
+pub const NO_HIT: u32 = u32::MAX;
+
+/// A batch of rays stored as a structure of arrays.
+///
+/// Ray `i` is `origin(i) + t · direction(i)` for `t` in the half-open interval
+/// `[tmin[i], tmax[i])`. Directions need not be normalised; hit distances are measured in
+/// units of the direction's length. Rays with a non-finite origin or direction, a zero
+/// direction, or a NaN bound miss everything. The arrays are public so they can be filled
+/// or uploaded directly, but must keep equal lengths: traversal panics otherwise.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RayBatch {
+    /// Origin x coordinates.
+    pub origin_x: Vec<f32>,
+    /// Origin y coordinates.
+    pub origin_y: Vec<f32>,
+    /// Origin z coordinates.
+    pub origin_z: Vec<f32>,
+    /// Direction x components.
+    pub dir_x: Vec<f32>,
+    /// Direction y components.
+    pub dir_y: Vec<f32>,
+    /// Direction z components.
+    pub dir_z: Vec<f32>,
+    /// Inclusive lower bounds of the ray parameter.
+    pub tmin: Vec<f32>,
+    /// Exclusive upper bounds of the ray parameter (may be `f32::INFINITY`).
+    pub tmax: Vec<f32>,
+}
+
+impl RayBatch {
+    /// Creates an empty batch with room for `capacity` rays in every array.
+    pub fn with_capacity(capacity: usize) -> Self {
+        Self {
+            origin_x: Vec::with_capacity(capacity),
+            origin_y: Vec::with_capacity(capacity),
+            origin_z: Vec::with_capacity(capacity),
+            dir_x: Vec::with_capacity(capacity),
+            dir_y: Vec::with_capacity(capacity),
+            dir_z: Vec::with_capacity(capacity),
+            tmin: Vec::with_capacity(capacity),
+            tmax: Vec::with_capacity(capacity),
+        }
+    }
+
+    /// Appends the ray `origin + t · direction`, `t ∈ [tmin, tmax)`.
+    pub fn push(&mut self, origin: Vec3, direction: Vec3, tmin: f32, tmax: f32) {
+        self.origin_x.push(origin.x);
+        self.origin_y.push(origin.y);
+        self.origin_z.push(origin.z);
+        self.dir_x.push(direction.x);
+        self.dir_y.push(direction.y);
+        self.dir_z.push(direction.z);
+        self.tmin.push(tmin);
+        self.tmax.push(tmax);
+    }
+
+    /// Number of rays in the batch.
+    pub fn len(&self) -> usize {
+        self.tmin.len()
+    }
+
+    /// Whether the batch holds no rays.
+    pub fn is_empty(&self) -> bool {
+        self.tmin.is_empty()
+    }
+
+    /// Removes all rays, keeping the allocations.
+    pub fn clear(&mut self) {
+        for array in self.arrays_mut() {
+            array.clear();
+        }
+    }
+
+    /// Origin of ray `i`. Panics if `i >= len()`.
+    pub fn origin(&self, i: usize) -> Vec3 {
+        Vec3::new(self.origin_x[i], self.origin_y[i], self.origin_z[i])
+    }
+
+    /// Direction of ray `i`. Panics if `i >= len()`.
+    pub fn direction(&self, i: usize) -> Vec3 {
+        Vec3::new(self.dir_x[i], self.dir_y[i], self.dir_z[i])
+    }
+
+    /// Panics unless all eight arrays have the same length.
+    pub(crate) fn assert_consistent(&self) {
+        let len = self.len();
+        let lengths = [
+            &self.origin_x,
+            &self.origin_y,
+            &self.origin_z,
+            &self.dir_x,
+            &self.dir_y,
+            &self.dir_z,
+            &self.tmax,
+        ]
+        .map(Vec::len);
+        assert!(
+            lengths.iter().all(|&l| l == len),
+            "RayBatch arrays differ in length: {lengths:?} vs {len} tmin values"
+        );
+    }
+
+    fn arrays_mut(&mut self) -> [&mut Vec<f32>; 8] {
+        [
+            &mut self.origin_x,
+            &mut self.origin_y,
+            &mut self.origin_z,
+            &mut self.dir_x,
+            &mut self.dir_y,
+            &mut self.dir_z,
+            &mut self.tmin,
+            &mut self.tmax,
+        ]
+    }
+}
+
+/// Closest-hit results, one entry per ray, stored as a structure of arrays.
+///
+/// For a hit on triangle `prim` with vertices `p0, p1, p2`, the hit point is
+/// `(1 − u − v)·p0 + u·p1 + v·p2` and `origin + t · direction`. For a miss, `prim` is
+/// [`NO_HIT`], `t` is `f32::INFINITY` and `u = v = 0`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HitBatch {
+    /// Ray parameter of the hit.
+    pub t: Vec<f32>,
+    /// The caller's triangle index, or [`NO_HIT`].
+    pub prim: Vec<u32>,
+    /// Barycentric weight of the triangle's second vertex.
+    pub u: Vec<f32>,
+    /// Barycentric weight of the triangle's third vertex.
+    pub v: Vec<f32>,
+}
+
+impl HitBatch {
+    /// Creates an empty batch with room for `capacity` hits in every array.
+    pub fn with_capacity(capacity: usize) -> Self {
+        Self {
+            t: Vec::with_capacity(capacity),
+            prim: Vec::with_capacity(capacity),
+            u: Vec::with_capacity(capacity),
+            v: Vec::with_capacity(capacity),
+        }
+    }
+
+    /// Resizes every array to `len` entries. Existing entries are kept, new ones are misses;
+    /// traversal overwrites all entries anyway.
+    pub fn resize(&mut self, len: usize) {
+        self.t.resize(len, f32::INFINITY);
+        self.prim.resize(len, NO_HIT);
+        self.u.resize(len, 0.0);
+        self.v.resize(len, 0.0);
+    }
+
+    /// Number of entries.
+    pub fn len(&self) -> usize {
+        self.prim.len()
+    }
+
+    /// Whether the batch holds no entries.
+    pub fn is_empty(&self) -> bool {
+        self.prim.is_empty()
+    }
+
+    /// Whether ray `i` hit something. Panics if `i >= len()`.
+    pub fn is_hit(&self, i: usize) -> bool {
+        self.prim[i] != NO_HIT
+    }
+}

@@ -1,0 +1,164 @@
+//! Running the single-ray kernels over ray batches: rayon over fixed-size chunks, with the
+//! node test chosen once per CPU and compiled into the chunk loops.
+
+use rayon::prelude::*;
+
+use super::filter::HitFilter;
+use super::geometry::LeafGeometry;
+use super::kernel::{TraversalState, any_hit, closest_hit};
+use super::node::{NodeTest, Portable};
+use super::ray::PreparedRay;
+use crate::batch::{HitBatch, NO_HIT, RayBatch};
+
+#[cfg(target_arch = "x86_64")]
+use super::node::Avx2;
+
+/// The widest node test this CPU supports.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Simd {
+    /// 4-wide, any target.
+    Portable,
+    /// 8-wide AVX2 + FMA.
+    #[cfg(target_arch = "x86_64")]
+    Avx2(Avx2),
+}
+
+impl Simd {
+    /// Picks the widest node test available at run time.
+    pub fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx2) = Avx2::detect() {
+            return Self::Avx2(avx2);
+        }
+        Self::Portable
+    }
+}
+
+/// Everything a chunk of rays is traced against.
+pub(crate) struct Kernel<'a, F> {
+    /// The hierarchy and leaf triangles.
+    pub geometry: &'a LeafGeometry,
+    /// Alpha handling.
+    pub filter: F,
+    /// Node test to run.
+    pub simd: Simd,
+    /// Rays per rayon task.
+    pub chunk_size: usize,
+}
+
+/// One chunk of a [`HitBatch`].
+struct HitsMut<'a> {
+    t: &'a mut [f32],
+    prim: &'a mut [u32],
+    u: &'a mut [f32],
+    v: &'a mut [f32],
+}
+
+impl<F: HitFilter> Kernel<'_, F> {
+    /// Closest hits of all rays, in parallel.
+    pub fn intersect(&self, rays: &RayBatch, hits: &mut HitBatch) {
+        rays.assert_consistent();
+        hits.resize(rays.len());
+        let size = self.chunk_size;
+        hits.t
+            .par_chunks_mut(size)
+            .zip(hits.prim.par_chunks_mut(size))
+            .zip(hits.u.par_chunks_mut(size))
+            .zip(hits.v.par_chunks_mut(size))
+            .enumerate()
+            .for_each(|(chunk, (((t, prim), u), v))| {
+                let out = HitsMut { t, prim, u, v };
+                let start = chunk * size;
+                match self.simd {
+                    Simd::Portable => self.closest_chunk(Portable, rays, start, out),
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `Avx2` exists only on CPUs with AVX2 and FMA.
+                    Simd::Avx2(avx2) => unsafe { self.closest_chunk_avx2(avx2, rays, start, out) },
+                }
+            });
+    }
+
+    /// Occlusion of all rays, in parallel.
+    pub fn occluded(&self, rays: &RayBatch, occluded: &mut Vec<bool>) {
+        rays.assert_consistent();
+        occluded.resize(rays.len(), false);
+        let size = self.chunk_size;
+        occluded
+            .par_chunks_mut(size)
+            .enumerate()
+            .for_each(|(chunk, out)| {
+                let start = chunk * size;
+                match self.simd {
+                    Simd::Portable => self.occluded_chunk(Portable, rays, start, out),
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `Avx2` exists only on CPUs with AVX2 and FMA.
+                    Simd::Avx2(avx2) => unsafe { self.occluded_chunk_avx2(avx2, rays, start, out) },
+                }
+            });
+    }
+
+    #[inline(always)]
+    fn closest_chunk<N: NodeTest>(
+        &self,
+        node_test: N,
+        rays: &RayBatch,
+        start: usize,
+        out: HitsMut<'_>,
+    ) {
+        let state = &mut TraversalState::new(self.geometry);
+        for j in 0..out.t.len() {
+            let hit = prepare(rays, start + j)
+                .and_then(|ray| closest_hit(self.geometry, node_test, &self.filter, state, &ray));
+            (out.t[j], out.prim[j], out.u[j], out.v[j]) = match hit {
+                Some((leaf, candidate)) => {
+                    let (u, v) = candidate.barycentrics();
+                    (candidate.t, self.geometry.ids[leaf], u, v)
+                }
+                None => (f32::INFINITY, NO_HIT, 0.0, 0.0),
+            };
+        }
+    }
+
+    #[inline(always)]
+    fn occluded_chunk<N: NodeTest>(
+        &self,
+        node_test: N,
+        rays: &RayBatch,
+        start: usize,
+        out: &mut [bool],
+    ) {
+        let state = &mut TraversalState::new(self.geometry);
+        for (j, occluded) in out.iter_mut().enumerate() {
+            *occluded = prepare(rays, start + j)
+                .is_some_and(|ray| any_hit(self.geometry, node_test, &self.filter, state, &ray));
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn closest_chunk_avx2(&self, node_test: Avx2, rays: &RayBatch, start: usize, out: HitsMut<'_>) {
+        self.closest_chunk(node_test, rays, start, out);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn occluded_chunk_avx2(
+        &self,
+        node_test: Avx2,
+        rays: &RayBatch,
+        start: usize,
+        out: &mut [bool],
+    ) {
+        self.occluded_chunk(node_test, rays, start, out);
+    }
+}
+
+#[inline(always)]
+fn prepare(rays: &RayBatch, i: usize) -> Option<PreparedRay> {
+    PreparedRay::new(
+        rays.origin(i),
+        rays.direction(i),
+        rays.tmin[i],
+        rays.tmax[i],
+    )
+}

@@ -1,0 +1,23 @@
+//! Ray traversal for vcm-rs: batched closest-hit and occlusion queries against triangles.
+//!
+//! - [`RayBatch`] / [`HitBatch`]: structure-of-arrays buffers reused across calls.
+//! - [`Traversal`]: the backend interface, synchronous or via [`Traversal::submit`] and
+//!   [`PendingTraversal::wait`] for backends that overlap work.
+//! - [`CpuBvh`]: the CPU backend (obvhs CWBVH, watertight triangle test, rayon).
+//!
+//! Backends are built from plain triangles (`&[[Vec3; 3]]`, index = primitive id) and an
+//! optional [`AlphaTest`], independent of any scene representation.
+
+#![warn(missing_docs)]
+
+mod alpha;
+mod batch;
+mod cpu;
+mod error;
+mod traversal;
+
+pub use alpha::AlphaTest;
+pub use batch::{HitBatch, NO_HIT, RayBatch};
+pub use cpu::{BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel};
+pub use error::BuildError;
+pub use traversal::{CompletedTraversal, PendingTraversal, Traversal, TraversalJob};

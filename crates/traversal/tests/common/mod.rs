@@ -1,0 +1,286 @@
+//! Shared test helpers: a seeded PCG, mesh generators and a brute-force f64 reference.
+#![allow(dead_code)] // Each test binary uses a different subset.
+
+use glam::{DVec3, Vec3};
+use vcm_traversal::{HitBatch, NO_HIT, RayBatch};
+
+/// PCG32 (O'Neill), enough randomness for fixed-seed tests.
+pub struct Pcg(u64);
+
+impl Pcg {
+    pub fn new(seed: u64) -> Self {
+        let mut rng = Self(seed.wrapping_add(0x853c_49e6_748f_ea9b));
+        rng.next_u32();
+        rng
+    }
+
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.0;
+        self.0 = old
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        xorshifted.rotate_right((old >> 59) as u32)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f32()
+    }
+
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u32() as usize) % n
+    }
+
+    pub fn point_in_box(&mut self, lo: f32, hi: f32) -> Vec3 {
+        Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+    }
+
+    pub fn unit_vector(&mut self) -> Vec3 {
+        let z = self.range(-1.0, 1.0);
+        let phi = self.range(0.0, std::f32::consts::TAU);
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    }
+}
+
+/// `count` random triangles with vertices in a cube of side `extent`, of varied sizes.
+pub fn triangle_soup(rng: &mut Pcg, count: usize, extent: f32) -> Vec<[Vec3; 3]> {
+    (0..count)
+        .map(|_| {
+            let center = rng.point_in_box(0.0, extent);
+            let size = extent * 0.2 * rng.f32().powi(2);
+            [0; 3].map(|_| center + rng.unit_vector() * size)
+        })
+        .collect()
+}
+
+/// A closed UV sphere (poles are fans), `rings × segments` quads, shared vertices exact.
+pub fn uv_sphere(center: Vec3, radius: f32, rings: usize, segments: usize) -> Vec<[Vec3; 3]> {
+    let vertex = |ring: usize, segment: usize| {
+        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
+        let phi = std::f32::consts::TAU * (segment % segments) as f32 / segments as f32;
+        if ring == 0 || ring == rings {
+            // Exact, shared poles.
+            center + Vec3::new(0.0, 0.0, radius * if ring == 0 { 1.0 } else { -1.0 })
+        } else {
+            center
+                + radius
+                    * Vec3::new(
+                        theta.sin() * phi.cos(),
+                        theta.sin() * phi.sin(),
+                        theta.cos(),
+                    )
+        }
+    };
+    let mut tris = Vec::new();
+    for ring in 0..rings {
+        for segment in 0..segments {
+            let (a, b) = (vertex(ring, segment), vertex(ring, segment + 1));
+            let (c, d) = (vertex(ring + 1, segment), vertex(ring + 1, segment + 1));
+            if ring != 0 {
+                tris.push([a, c, b]);
+            }
+            if ring != rings - 1 {
+                tris.push([b, c, d]);
+            }
+        }
+    }
+    tris
+}
+
+/// The 12 triangles of an axis-aligned box.
+pub fn cuboid(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
+    let corner = |i: usize| {
+        Vec3::new(
+            if i & 1 != 0 { hi.x } else { lo.x },
+            if i & 2 != 0 { hi.y } else { lo.y },
+            if i & 4 != 0 { hi.z } else { lo.z },
+        )
+    };
+    let faces = [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ];
+    faces
+        .iter()
+        .flat_map(|&[a, b, c, d]| {
+            [
+                [corner(a), corner(b), corner(c)],
+                [corner(a), corner(c), corner(d)],
+            ]
+        })
+        .collect()
+}
+
+/// A height field over the unit square with `n × n` quads, sharing all edges.
+pub fn height_field(rng: &mut Pcg, n: usize) -> Vec<[Vec3; 3]> {
+    let heights: Vec<f32> = (0..(n + 1) * (n + 1))
+        .map(|_| rng.range(0.0, 0.05))
+        .collect();
+    let p = |i: usize, j: usize| {
+        Vec3::new(
+            i as f32 / n as f32,
+            heights[i * (n + 1) + j],
+            j as f32 / n as f32,
+        )
+    };
+    let mut tris = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            tris.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+            tris.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+        }
+    }
+    tris
+}
+
+/// Relative tolerance on `t` when comparing with the reference.
+const REL_TOL: f64 = 1e-4;
+
+/// Barycentric margin below which a reference hit counts as grazing an edge.
+const EDGE_EPS: f64 = 1e-5;
+
+fn tolerance(t: f64) -> f64 {
+    REL_TOL * t.abs().max(1e-3)
+}
+
+/// An intersection found by the f64 reference.
+#[derive(Clone, Copy, Debug)]
+pub struct RefHit {
+    pub prim: u32,
+    pub t: f64,
+    /// Clearly inside the triangle and clearly inside `[tmin, tmax)`: the backend must not
+    /// miss it. Other hits graze an edge or a bound, where f32 and f64 may disagree.
+    pub definite: bool,
+}
+
+/// All intersections of a ray with `t` in `[tmin, tmax)` up to tolerance, found in f64
+/// (Möller–Trumbore), including near misses within `EDGE_EPS` of an edge.
+pub fn reference_hits(tris: &[[Vec3; 3]], o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Vec<RefHit> {
+    let (o, d) = (o.as_dvec3(), d.as_dvec3());
+    let (tmin, tmax) = (f64::from(tmin), f64::from(tmax));
+    let mut hits = Vec::new();
+    for (prim, tri) in tris.iter().enumerate() {
+        let [p0, p1, p2] = tri.map(|p| p.as_dvec3());
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let pv = d.cross(e2);
+        let det = e1.dot(pv);
+        if det == 0.0 {
+            continue;
+        }
+        let s = o - p0;
+        let u = s.dot(pv) / det;
+        let q = s.cross(e1);
+        let v = d.dot(q) / det;
+        let t = e2.dot(q) / det;
+        let margin = u.min(v).min(1.0 - u - v);
+        let tol = tolerance(t);
+        if margin >= -EDGE_EPS && t >= tmin - tol && t < tmax + tol {
+            hits.push(RefHit {
+                prim: prim as u32,
+                t,
+                definite: margin > EDGE_EPS && t >= tmin + tol && t < tmax - tol,
+            });
+        }
+    }
+    hits
+}
+
+/// Outcome of comparing one backend answer with the reference.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Agreement {
+    /// Same primitive (or both miss).
+    Exact,
+    /// A different primitive tied with the reference's closest within tolerance, or a
+    /// grazing hit or miss the reference cannot decide.
+    Tie,
+}
+
+/// Checks the backend's answer `(t, prim)` for ray `i` against the f64 reference.
+pub fn check_against_reference(
+    tris: &[[Vec3; 3]],
+    rays: &RayBatch,
+    i: usize,
+    t: f32,
+    prim: u32,
+) -> Result<Agreement, String> {
+    let refs = reference_hits(
+        tris,
+        rays.origin(i),
+        rays.direction(i),
+        rays.tmin[i],
+        rays.tmax[i],
+    );
+    let closest_definite = refs
+        .iter()
+        .filter(|h| h.definite)
+        .min_by(|a, b| a.t.total_cmp(&b.t));
+    if prim == NO_HIT {
+        return match closest_definite {
+            None if refs.is_empty() => Ok(Agreement::Exact),
+            None => Ok(Agreement::Tie),
+            Some(h) => Err(format!("ray {i}: backend missed, reference hit {h:?}")),
+        };
+    }
+    let t = f64::from(t);
+    let Some(reported) = refs.iter().find(|h| h.prim == prim) else {
+        return Err(format!(
+            "ray {i}: backend hit prim {prim} at {t}, reference has no such hit: {refs:?}"
+        ));
+    };
+    if (reported.t - t).abs() > tolerance(t) {
+        return Err(format!(
+            "ray {i}: prim {prim} at t {t}, reference t {}",
+            reported.t
+        ));
+    }
+    match closest_definite {
+        Some(h) if h.t < t - tolerance(t) => Err(format!(
+            "ray {i}: backend hit prim {prim} at {t}, reference has a closer hit {h:?}"
+        )),
+        Some(h) if h.prim == prim => Ok(Agreement::Exact),
+        None if refs.len() == 1 => Ok(Agreement::Exact),
+        _ => Ok(Agreement::Tie),
+    }
+}
+
+/// Checks a whole batch against the reference, returning the number of ties.
+pub fn assert_matches_reference(tris: &[[Vec3; 3]], rays: &RayBatch, hits: &HitBatch) -> usize {
+    let mut ties = 0;
+    for i in 0..rays.len() {
+        match check_against_reference(tris, rays, i, hits.t[i], hits.prim[i]) {
+            Ok(Agreement::Exact) => {}
+            Ok(Agreement::Tie) => ties += 1,
+            Err(message) => panic!("{message}"),
+        }
+    }
+    ties
+}
+
+/// Occlusion must report exactly the rays that have a closest hit.
+pub fn assert_occlusion_matches_hits(hits: &HitBatch, occluded: &[bool]) {
+    assert_eq!(hits.len(), occluded.len());
+    for (i, &occluded) in occluded.iter().enumerate() {
+        assert_eq!(
+            occluded,
+            hits.is_hit(i),
+            "ray {i}: occlusion disagrees with closest hit"
+        );
+    }
+}
+
+/// The point at barycentrics `(u, v)` of `tri`, in f64.
+pub fn point_at(tri: &[Vec3; 3], u: f32, v: f32) -> DVec3 {
+    let [p0, p1, p2] = tri.map(|p| p.as_dvec3());
+    p0 * f64::from(1.0 - u - v) + p1 * f64::from(u) + p2 * f64::from(v)
+}

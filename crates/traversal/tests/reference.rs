@@ -1,0 +1,107 @@
+//! Random rays against random meshes agree with a brute-force f64 reference.
+
+mod common;
+
+use common::{Pcg, assert_matches_reference, height_field, triangle_soup, uv_sphere};
+use glam::Vec3;
+use vcm_traversal::{BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, RayBatch, Traversal};
+
+/// Random rays: origins in the meshes' bounding box, random directions and lengths, a
+/// quarter with a bounded `[tmin, tmax)`.
+fn random_rays(rng: &mut Pcg, count: usize) -> RayBatch {
+    let mut rays = RayBatch::with_capacity(count);
+    for _ in 0..count {
+        let origin = rng.point_in_box(0.0, 1.0);
+        let direction = rng.unit_vector() * rng.range(0.5, 2.0);
+        if rng.below(4) == 0 {
+            let tmin = rng.range(0.0, 0.5);
+            rays.push(origin, direction, tmin, tmin + rng.range(0.0, 1.0));
+        } else {
+            rays.push(origin, direction, 0.0, f32::INFINITY);
+        }
+    }
+    rays
+}
+
+/// A soup, a closed sphere and a height field with shared edges, in one mesh.
+fn random_mesh(rng: &mut Pcg) -> Vec<[Vec3; 3]> {
+    let mut tris = triangle_soup(rng, 1500, 1.0);
+    tris.extend(uv_sphere(Vec3::splat(0.5), 0.3, 24, 48));
+    tris.extend(height_field(rng, 24));
+    tris
+}
+
+fn check_preset(preset: BuildPreset, kernel: CpuKernel, seed: u64) {
+    let mut rng = Pcg::new(seed);
+    let tris = random_mesh(&mut rng);
+    let rays = random_rays(&mut rng, 3000);
+    let options = CpuBvhOptions {
+        preset,
+        chunk_size: 64,
+        kernel,
+    };
+    let bvh = CpuBvh::new(&tris, options).unwrap();
+    let mut hits = HitBatch::default();
+    bvh.intersect(&rays, &mut hits);
+    let ties = assert_matches_reference(&tris, &rays, &hits);
+    let hit_count = hits
+        .prim
+        .iter()
+        .filter(|&&p| p != vcm_traversal::NO_HIT)
+        .count();
+    println!(
+        "{preset:?}: {hit_count} hits of {}, {ties} ties",
+        rays.len()
+    );
+    assert!(
+        hit_count > rays.len() / 3,
+        "too few hits to be a useful test"
+    );
+    assert!(ties * 100 < rays.len(), "{ties} ties is suspiciously many");
+
+    // Occlusion must agree with closest hit on the same rays.
+    let mut occluded = Vec::new();
+    bvh.occluded(&rays, &mut occluded);
+    common::assert_occlusion_matches_hits(&hits, &occluded);
+}
+
+#[test]
+fn fastest_preset_matches_reference() {
+    check_preset(BuildPreset::Fastest, CpuKernel::Auto, 1);
+}
+
+#[test]
+fn medium_preset_matches_reference() {
+    check_preset(BuildPreset::Medium, CpuKernel::Auto, 2);
+}
+
+#[test]
+fn spatial_split_preset_matches_reference() {
+    check_preset(BuildPreset::Slow, CpuKernel::Auto, 3);
+}
+
+#[test]
+fn portable_kernel_matches_reference() {
+    check_preset(BuildPreset::Medium, CpuKernel::Portable, 5);
+}
+
+#[test]
+fn barycentrics_reconstruct_hit_point() {
+    let mut rng = Pcg::new(4);
+    let tris = random_mesh(&mut rng);
+    let rays = random_rays(&mut rng, 2000);
+    let bvh = CpuBvh::new(&tris, CpuBvhOptions::default()).unwrap();
+    let mut hits = HitBatch::default();
+    bvh.intersect(&rays, &mut hits);
+    for i in (0..rays.len()).filter(|&i| hits.is_hit(i)) {
+        let tri = &tris[hits.prim[i] as usize];
+        let on_triangle = common::point_at(tri, hits.u[i], hits.v[i]);
+        let on_ray = (rays.origin(i) + rays.direction(i) * hits.t[i]).as_dvec3();
+        let scale = tri.iter().map(|p| p.length()).fold(1.0, f32::max) as f64;
+        assert!(
+            on_triangle.distance(on_ray) < 1e-5 * scale,
+            "ray {i}: barycentric point {on_triangle} vs ray point {on_ray}"
+        );
+        assert!(hits.u[i] >= 0.0 && hits.v[i] >= 0.0 && hits.u[i] + hits.v[i] <= 1.0 + 1e-6);
+    }
+}
