@@ -1,0 +1,47 @@
+//! The committed scenes in `scenes/` load and are what `examples/make_scenes.rs` promises.
+
+use std::path::Path;
+
+use glam::Vec3;
+use vcm_rs::scene::Scene;
+use vcm_rs::scene::light::Light;
+
+fn load(name: &str) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
+    Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn cornell_box_is_a_closed_room_lit_from_the_ceiling() {
+    let scene = load("cornell-box.gltf");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.mesh.triangle_count(), 5 * 2 + 2 + 2 * 12);
+    let f = scene.features;
+    assert!(f.materials.diffuse && !f.materials.glossy && !f.materials.specular);
+    assert!(!f.textures && !f.alpha_masks && !f.normal_maps);
+    assert_eq!(f.lights.area, 2);
+    // Every surface faces the inside of the room: from the center of the room (inside the
+    // tall block's neighbourhood excluded) each wall and the light face toward the center.
+    for t in 0..12 {
+        let [a, b, c] = scene.mesh.corners(t);
+        let centroid = (a + b + c) / 3.0;
+        let n = scene.mesh.geometric_normal(t);
+        assert!(
+            n.dot(Vec3::ZERO - centroid) > 0.0,
+            "triangle {t} faces away"
+        );
+    }
+    for light in &scene.lights {
+        let Light::Area(area) = light else {
+            panic!("only area lights")
+        };
+        assert!(area.normal.y < -0.99, "the light shines downward");
+        let center = area.corners.iter().sum::<Vec3>() / 3.0;
+        assert!(scene.camera.raster_of(512, 512, center).is_some());
+    }
+    // The camera looks into the open side of the room.
+    assert!(scene.camera.position.z > 1.0);
+    assert!(scene.camera.forward.dot(-Vec3::Z) > 0.999);
+}
