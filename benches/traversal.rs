@@ -1,5 +1,6 @@
-//! Ray traversal throughput of the CPU backend: primary, diffuse-bounce and shadow rays on a
-//! Cornell box and on a ~1M-triangle procedural scene, plus BVH build time and memory.
+//! Ray traversal throughput of the CPU backend: primary, diffuse-bounce and shadow rays on the
+//! committed Cornell box scene and on a ~1M-triangle procedural scene, plus BVH build time and
+//! memory.
 //!
 //! Run with `cargo bench --bench traversal`. Rays/s are reported by criterion as
 //! element throughput; the build statistics are printed before the measurements.
@@ -8,12 +9,13 @@ mod common;
 
 use std::time::{Duration, Instant};
 
-use common::{Pcg, Scene, SurfacePoints, cornell_box, million_triangles};
+use common::{Scene, SurfacePoints, cornell_box, million_triangles, primary_rays};
 use criterion::{Criterion, Throughput};
+use vcm_scene::sampling::Rng;
 use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
 
 /// Image resolution of the primary rays (one ray per pixel).
-const RESOLUTION: usize = 512;
+const RESOLUTION: u32 = 512;
 
 /// Builds of the large scene timed for the build statistics.
 const BUILD_REPEATS: usize = 3;
@@ -28,14 +30,14 @@ struct Workload {
 impl Workload {
     /// Primary rays from the scene's camera; bounce and shadow rays from their hit points.
     fn new(scene: &Scene, bvh: &CpuBvh) -> Self {
-        let primary = scene.camera.primary_rays(RESOLUTION);
+        let primary = primary_rays(&scene.camera, RESOLUTION);
         let mut hits = HitBatch::default();
         bvh.intersect(&primary, &mut hits);
         let points = SurfacePoints::from_hits(&scene.triangles, &primary, &hits);
-        let mut rng = Pcg::new(1);
+        let mut rng = Rng::new(1, 0);
         Self {
             bounce: points.bounce_rays(&mut rng),
-            shadow: points.shadow_rays(&scene.light, &mut rng),
+            shadow: points.shadow_rays(&scene.emitters, &mut rng),
             primary,
         }
     }

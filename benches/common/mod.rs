@@ -1,103 +1,19 @@
-//! Procedural scenes and ray workloads for the traversal benchmark.
+//! Scenes and ray workloads for the traversal benchmark: the committed Cornell box
+//! (`scenes/cornell-box.gltf`) and a generated ~1M-triangle scene, with rays drawn by the
+//! project's generator and warps from `vcm_scene::sampling`.
 
 use std::f32::consts::{PI, TAU};
 
-use glam::{Affine3A, Quat, Vec3, vec3};
+use glam::{Vec2, Vec3, vec3};
+use vcm_scene::Camera;
+use vcm_scene::frame::Frame;
+use vcm_scene::light::Light;
+use vcm_scene::sampling::{
+    Rng, sample_cosine_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
+};
 use vcm_traversal::{HitBatch, RayBatch};
 
-/// PCG32 random numbers with a fixed seed, so every run traces the same rays.
-pub struct Pcg(u64);
-
-impl Pcg {
-    /// A generator for `seed`.
-    pub fn new(seed: u64) -> Self {
-        let mut rng = Self(seed.wrapping_add(0x853c_49e6_748f_ea9b));
-        rng.next_u32();
-        rng
-    }
-
-    fn next_u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        xorshifted.rotate_right((old >> 59) as u32)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
-    }
-
-    /// Uniform in [lo, hi).
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f32()
-    }
-}
-
-/// A pinhole camera.
-pub struct Camera {
-    position: Vec3,
-    forward: Vec3,
-    right: Vec3,
-    up: Vec3,
-}
-
-impl Camera {
-    /// A camera at `position` looking at `target` with vertical field of view `fov_y` radians.
-    pub fn look_at(position: Vec3, target: Vec3, fov_y: f32) -> Self {
-        let forward = (target - position).normalize();
-        let right = forward.cross(Vec3::Y).normalize();
-        let up = right.cross(forward);
-        let scale = (fov_y * 0.5).tan();
-        Self {
-            position,
-            forward,
-            right: right * scale,
-            up: up * scale,
-        }
-    }
-
-    /// One ray through the centre of every pixel of a square image, row by row.
-    pub fn primary_rays(&self, resolution: usize) -> RayBatch {
-        let mut rays = RayBatch::with_capacity(resolution * resolution);
-        for y in 0..resolution {
-            for x in 0..resolution {
-                let sx = (x as f32 + 0.5) / resolution as f32 * 2.0 - 1.0;
-                let sy = 1.0 - (y as f32 + 0.5) / resolution as f32 * 2.0;
-                let direction = (self.forward + self.right * sx + self.up * sy).normalize();
-                rays.push(self.position, direction, 0.0, f32::INFINITY);
-            }
-        }
-        rays
-    }
-}
-
-/// A rectangular area light `corner + s·edge_s + t·edge_t`, `s, t ∈ [0, 1)`.
-pub struct QuadLight {
-    corner: Vec3,
-    edge_s: Vec3,
-    edge_t: Vec3,
-}
-
-impl QuadLight {
-    fn sample(&self, rng: &mut Pcg) -> Vec3 {
-        self.corner + self.edge_s * rng.f32() + self.edge_t * rng.f32()
-    }
-
-    fn triangles(&self) -> [[Vec3; 3]; 2] {
-        let [a, b, c] = [
-            self.corner,
-            self.corner + self.edge_s,
-            self.corner + self.edge_t,
-        ];
-        let d = b + self.edge_t;
-        [[a, b, d], [a, d, c]]
-    }
-}
-
-/// Triangles, a camera framing them and an area light.
+/// Triangles, a camera framing them and the emitting triangles shadow rays aim at.
 pub struct Scene {
     /// Benchmark group name.
     pub name: &'static str,
@@ -105,93 +21,46 @@ pub struct Scene {
     pub triangles: Vec<[Vec3; 3]>,
     /// The camera for primary rays.
     pub camera: Camera,
-    /// The light shadow rays aim at.
-    pub light: QuadLight,
+    /// Emitting triangles, all of the same area (so each is picked with equal probability).
+    pub emitters: Vec<[Vec3; 3]>,
+}
+
+/// One ray through the centre of every pixel of a square `resolution²` image, row by row.
+pub fn primary_rays(camera: &Camera, resolution: u32) -> RayBatch {
+    let mut rays = RayBatch::with_capacity((resolution * resolution) as usize);
+    for y in 0..resolution {
+        for x in 0..resolution {
+            let raster = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let direction = camera.direction(resolution, resolution, raster);
+            rays.push(camera.position, direction, 0.0, f32::INFINITY);
+        }
+    }
+    rays
+}
+
+/// The committed Cornell box scene (made by `examples/make_scenes.rs`): its triangles, its
+/// camera and its area lights.
+pub fn cornell_box() -> Scene {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-box.gltf");
+    let scene = vcm_scene::Scene::load(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let emitters = scene
+        .lights
+        .iter()
+        .filter_map(|light| match light {
+            Light::Area(area) => Some(area.corners),
+            _ => None,
+        })
+        .collect();
+    Scene {
+        name: "cornell_box",
+        triangles: scene.triangle_corners(),
+        camera: scene.camera,
+        emitters,
+    }
 }
 
 fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> [[Vec3; 3]; 2] {
     [[a, b, c], [a, c, d]]
-}
-
-/// The 12 triangles of the unit cube `[-0.5, 0.5]³` under `transform`.
-fn cube(transform: Affine3A) -> Vec<[Vec3; 3]> {
-    let corner = |i: usize| {
-        let p = vec3((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32) - 0.5;
-        transform.transform_point3(p)
-    };
-    let faces = [
-        [0, 2, 6, 4],
-        [1, 5, 7, 3],
-        [0, 4, 5, 1],
-        [2, 3, 7, 6],
-        [0, 1, 3, 2],
-        [4, 6, 7, 5],
-    ];
-    faces
-        .iter()
-        .flat_map(|&[a, b, c, d]| quad(corner(a), corner(b), corner(c), corner(d)))
-        .collect()
-}
-
-/// The classic Cornell box: a 2-unit room open at +z, a ceiling light and two rotated boxes
-/// (36 triangles).
-pub fn cornell_box() -> Scene {
-    let p = |x: f32, y: f32, z: f32| vec3(x, y, z);
-    let mut triangles = Vec::new();
-    triangles.extend(quad(
-        p(-1., 0., -1.),
-        p(1., 0., -1.),
-        p(1., 0., 1.),
-        p(-1., 0., 1.),
-    ));
-    triangles.extend(quad(
-        p(-1., 2., -1.),
-        p(-1., 2., 1.),
-        p(1., 2., 1.),
-        p(1., 2., -1.),
-    ));
-    triangles.extend(quad(
-        p(-1., 0., -1.),
-        p(-1., 2., -1.),
-        p(1., 2., -1.),
-        p(1., 0., -1.),
-    ));
-    triangles.extend(quad(
-        p(-1., 0., -1.),
-        p(-1., 0., 1.),
-        p(-1., 2., 1.),
-        p(-1., 2., -1.),
-    ));
-    triangles.extend(quad(
-        p(1., 0., -1.),
-        p(1., 2., -1.),
-        p(1., 2., 1.),
-        p(1., 0., 1.),
-    ));
-    let light = QuadLight {
-        corner: p(-0.25, 1.98, -0.25),
-        edge_s: p(0.5, 0.0, 0.0),
-        edge_t: p(0.0, 0.0, 0.5),
-    };
-    triangles.extend(light.triangles());
-    let short_box = Affine3A::from_scale_rotation_translation(
-        Vec3::splat(0.6),
-        Quat::from_rotation_y(-17.5f32.to_radians()),
-        p(0.35, 0.3, 0.35),
-    );
-    let tall_box = Affine3A::from_scale_rotation_translation(
-        p(0.6, 1.2, 0.6),
-        Quat::from_rotation_y(17.5f32.to_radians()),
-        p(-0.35, 0.6, -0.3),
-    );
-    triangles.extend(cube(short_box));
-    triangles.extend(cube(tall_box));
-    Scene {
-        name: "cornell_box",
-        triangles,
-        camera: Camera::look_at(p(0.0, 1.0, 3.9), p(0.0, 1.0, 0.0), 40f32.to_radians()),
-        light,
-    }
 }
 
 /// Smooth pseudo-random relief: a sum of sines with random directions and phases.
@@ -200,17 +69,14 @@ struct Relief {
 }
 
 impl Relief {
-    fn new(rng: &mut Pcg, octaves: usize, base_frequency: f32) -> Self {
+    fn new(rng: &mut Rng, octaves: usize, base_frequency: f32) -> Self {
         let waves = (0..octaves)
             .map(|k| {
-                let z = rng.range(-1.0, 1.0);
-                let phi = rng.range(0.0, TAU);
-                let r = (1.0 - z * z).sqrt();
-                let direction = vec3(r * phi.cos(), r * phi.sin(), z);
+                let direction = sample_uniform_sphere(rng.uniform2());
                 let frequency = base_frequency * 2f32.powi(k as i32);
                 (
                     direction * frequency,
-                    rng.range(0.0, TAU),
+                    TAU * rng.uniform(),
                     0.55f32.powi(k as i32),
                 )
             })
@@ -284,9 +150,9 @@ fn terrain(cells: usize, half: f32, relief: &Relief) -> Vec<[Vec3; 3]> {
 }
 
 /// About a million triangles: a finely tessellated terrain, a large displaced sphere and
-/// 1200 scattered rocks, seen from above the terrain's edge.
+/// 1200 scattered rocks, seen from above the terrain's edge, under a square light.
 pub fn million_triangles() -> Scene {
-    let mut rng = Pcg::new(7);
+    let mut rng = Rng::new(7, 0);
     let ground = Relief::new(&mut rng, 7, 0.15);
     let mut triangles = terrain(450, 12.0, &ground);
     let bumps = Relief::new(&mut rng, 6, 2.0);
@@ -299,24 +165,33 @@ pub fn million_triangles() -> Scene {
         0.06,
     ));
     for _ in 0..1200 {
-        let (x, z) = (rng.range(-11.0, 11.0), rng.range(-11.0, 11.0));
-        let radius = rng.range(0.08, 0.45);
-        let center = vec3(x, ground.at(vec3(x, 0.0, z)) + radius * 0.5, z);
+        let xz = rng.uniform2() * 22.0 - 11.0;
+        let radius = 0.08 + 0.37 * rng.uniform();
+        let center = vec3(xz.x, ground.at(vec3(xz.x, 0.0, xz.y)) + radius * 0.5, xz.y);
         triangles.extend(displaced_sphere(center, radius, 10, 20, &bumps, 0.25));
     }
+    let position = vec3(0.0, 9.0, 17.0);
+    let forward = (vec3(0.0, 1.0, 0.0) - position).normalize();
+    let right = forward.cross(Vec3::Y).normalize();
+    let light = |x: f32, z: f32| vec3(x, 20.0, z);
     Scene {
         name: "million_triangles",
         triangles,
-        camera: Camera::look_at(
-            vec3(0.0, 9.0, 17.0),
-            vec3(0.0, 1.0, 0.0),
-            55f32.to_radians(),
-        ),
-        light: QuadLight {
-            corner: vec3(-4.0, 20.0, -4.0),
-            edge_s: vec3(8.0, 0.0, 0.0),
-            edge_t: vec3(0.0, 0.0, 8.0),
+        camera: Camera {
+            position,
+            right,
+            up: right.cross(forward),
+            forward,
+            yfov: 55f32.to_radians(),
+            aspect_ratio: None,
         },
+        emitters: quad(
+            light(-4.0, -4.0),
+            light(4.0, -4.0),
+            light(4.0, 4.0),
+            light(-4.0, 4.0),
+        )
+        .to_vec(),
     }
 }
 
@@ -354,23 +229,30 @@ impl SurfacePoints {
     }
 
     /// Cosine-distributed diffuse bounce rays, one per point.
-    pub fn bounce_rays(&self, rng: &mut Pcg) -> RayBatch {
+    pub fn bounce_rays(&self, rng: &mut Rng) -> RayBatch {
         let mut rays = RayBatch::with_capacity(self.len());
         for (&origin, &normal) in self.origins.iter().zip(&self.normals) {
-            let (tangent, bitangent) = normal.any_orthonormal_pair();
-            let (r, phi) = (rng.f32().sqrt(), rng.range(0.0, TAU));
-            let local = vec3(r * phi.cos(), r * phi.sin(), (1.0 - r * r).max(0.0).sqrt());
-            let direction = tangent * local.x + bitangent * local.y + normal * local.z;
-            rays.push(origin, direction, 0.0, f32::INFINITY);
+            let local = sample_cosine_hemisphere(rng.uniform2());
+            rays.push(
+                origin,
+                Frame::from_z(normal).to_world(local),
+                0.0,
+                f32::INFINITY,
+            );
         }
         rays
     }
 
-    /// Shadow rays from every point to a random point on `light`, stopping just short of it.
-    pub fn shadow_rays(&self, light: &QuadLight, rng: &mut Pcg) -> RayBatch {
+    /// Shadow rays from every point to a uniform point on a random one of `emitters`,
+    /// stopping just short of it.
+    pub fn shadow_rays(&self, emitters: &[[Vec3; 3]], rng: &mut Rng) -> RayBatch {
+        assert!(!emitters.is_empty(), "shadow rays need an emitter");
         let mut rays = RayBatch::with_capacity(self.len());
         for &origin in &self.origins {
-            rays.push(origin, light.sample(rng) - origin, 0.0, 1.0 - 1e-4);
+            let [p0, p1, p2] = emitters[rng.next_u32() as usize % emitters.len()];
+            let b = sample_uniform_triangle(rng.uniform2());
+            let target = p0 * b.x + p1 * b.y + p2 * b.z;
+            rays.push(origin, target - origin, 0.0, 1.0 - 1e-4);
         }
         rays
     }

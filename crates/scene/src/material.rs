@@ -148,3 +148,48 @@ impl Material {
         n.try_normalize()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::texture::ColorEncoding;
+
+    fn masked(cutoff: f32) -> (Material, Vec<Texture>) {
+        // Left texel alpha 0.2, right texel alpha 0.8 (alpha is never sRGB-decoded).
+        let texels = vec![[255, 255, 255, 51], [255, 255, 255, 204]];
+        let texture = Texture::new("mask".into(), 2, 1, texels, ColorEncoding::Srgb).unwrap();
+        let material = Material {
+            base_color_texture: Some(TextureRef {
+                index: 0,
+                tex_coord: 0,
+            }),
+            alpha_mode: AlphaMode::Mask { cutoff },
+            ..Material::default()
+        };
+        (material, vec![texture])
+    }
+
+    #[test]
+    fn alpha_mask_cuts_where_alpha_is_below_the_cutoff() {
+        let (material, textures) = masked(0.5);
+        assert!(!material.is_opaque_at(&textures, Vec2::new(0.25, 0.5)));
+        assert!(material.is_opaque_at(&textures, Vec2::new(0.75, 0.5)));
+        let (low, textures) = masked(0.1);
+        assert!(low.is_opaque_at(&textures, Vec2::new(0.25, 0.5)));
+        let opaque = Material {
+            alpha_mode: AlphaMode::Opaque,
+            ..low
+        };
+        assert!(opaque.is_opaque_at(&textures, Vec2::new(0.25, 0.5)));
+    }
+
+    #[test]
+    fn textures_multiply_factors() {
+        let (mut material, textures) = masked(0.5);
+        material.base_color = Vec4::new(0.5, 0.25, 1.0, 1.0);
+        material.metallic = 0.0;
+        let params = material.bsdf_params(&textures, Vec2::new(0.75, 0.5));
+        assert_eq!(params.base_color, Vec3::new(0.5, 0.25, 1.0));
+        assert!((material.alpha_at(&textures, Vec2::new(0.75, 0.5)) - 0.8).abs() < 1e-6);
+    }
+}

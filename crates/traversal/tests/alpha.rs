@@ -4,7 +4,7 @@ mod common;
 
 use std::sync::Arc;
 
-use common::Pcg;
+use common::{Rng, RngExt};
 use glam::{Vec3, vec3};
 use vcm_traversal::{AlphaTest, CpuBvh, CpuBvhOptions, HitBatch, NO_HIT, RayBatch, Traversal};
 
@@ -43,7 +43,7 @@ fn masked_triangles_let_rays_through_where_transparent() {
     let tris = layers();
     let bvh =
         CpuBvh::with_alpha_test(&tris, CpuBvhOptions::default(), Arc::new(HalfCutout)).unwrap();
-    let mut rng = Pcg::new(20);
+    let mut rng = Rng::new(20, 0);
     let mut rays = RayBatch::default();
     for _ in 0..1000 {
         let origin = vec3(rng.range(-2.0, 2.0), rng.range(-2.0, -1.0), 0.0);

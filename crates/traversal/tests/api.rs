@@ -2,14 +2,14 @@
 
 mod common;
 
-use common::{Pcg, triangle_soup};
+use common::{Rng, RngExt, TRIANGLE_AT_Z1, triangle_soup};
 use glam::{Vec3, vec3};
 use vcm_traversal::{
     BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, NO_HIT, RayBatch, Traversal,
     TraversalJob,
 };
 
-fn random_rays(rng: &mut Pcg, count: usize) -> RayBatch {
+fn random_rays(rng: &mut Rng, count: usize) -> RayBatch {
     let mut rays = RayBatch::with_capacity(count);
     for _ in 0..count {
         rays.push(
@@ -50,11 +50,7 @@ fn inconsistent_ray_arrays_are_reported() {
 
 #[test]
 fn outputs_are_resized_and_overwritten() {
-    let tris = [[
-        vec3(-1.0, -1.0, 1.0),
-        vec3(1.0, -1.0, 1.0),
-        vec3(0.0, 1.0, 1.0),
-    ]];
+    let tris = [TRIANGLE_AT_Z1];
     let bvh = CpuBvh::new(&tris, CpuBvhOptions::default()).unwrap();
     let mut rays = RayBatch::default();
     rays.push(Vec3::ZERO, Vec3::Z, 0.0, f32::INFINITY);
@@ -76,7 +72,7 @@ fn outputs_are_resized_and_overwritten() {
 
 #[test]
 fn submit_returns_filled_jobs() {
-    let mut rng = Pcg::new(30);
+    let mut rng = Rng::new(30, 0);
     let tris = triangle_soup(&mut rng, 500, 1.0);
     let bvh = CpuBvh::new(&tris, CpuBvhOptions::default()).unwrap();
     let backend: &dyn Traversal = &bvh;
@@ -112,7 +108,7 @@ fn submit_returns_filled_jobs() {
 
 #[test]
 fn results_do_not_depend_on_chunk_size_or_kernel() {
-    let mut rng = Pcg::new(31);
+    let mut rng = Rng::new(31, 0);
     let tris = triangle_soup(&mut rng, 2000, 1.0);
     let rays = random_rays(&mut rng, 1001);
     let trace = |chunk_size, kernel| {
@@ -140,7 +136,7 @@ fn results_do_not_depend_on_chunk_size_or_kernel() {
 
 #[test]
 fn reports_build_statistics() {
-    let mut rng = Pcg::new(32);
+    let mut rng = Rng::new(32, 0);
     let tris = triangle_soup(&mut rng, 1000, 1.0);
     let bvh = CpuBvh::new(&tris, CpuBvhOptions::default()).unwrap();
     let bytes_per_triangle = bvh.memory_bytes() as f64 / tris.len() as f64;

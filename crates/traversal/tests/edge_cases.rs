@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{Pcg, cuboid, uv_sphere};
+use common::{Rng, RngExt, TRIANGLE_AT_Z1, cuboid, uv_sphere};
 use glam::{Vec3, vec3};
 use vcm_traversal::{
     BuildError, BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, NO_HIT, RayBatch,
@@ -22,10 +22,19 @@ fn trace(bvh: &CpuBvh, rays: &RayBatch) -> (HitBatch, Vec<bool>) {
     (hits, occluded)
 }
 
+/// Rays `(origin, direction)` over `[0, ∞)`.
+fn unbounded_rays(rays: &[(Vec3, Vec3)]) -> RayBatch {
+    let mut batch = RayBatch::default();
+    for &(origin, direction) in rays {
+        batch.push(origin, direction, 0.0, f32::INFINITY);
+    }
+    batch
+}
+
 #[test]
 fn empty_scene_misses_everything() {
     let bvh = build(&[]);
-    let mut rng = Pcg::new(10);
+    let mut rng = Rng::new(10, 0);
     let mut rays = RayBatch::default();
     for _ in 0..100 {
         rays.push(
@@ -53,31 +62,12 @@ fn single_triangle_is_double_sided_and_edge_on_misses() {
         vec3(0.0, 1.0, 0.0),
     ];
     let bvh = build(&[tri]);
-    let mut rays = RayBatch::default();
-    rays.push(
-        vec3(0.25, 0.25, 1.0),
-        vec3(0.0, 0.0, -1.0),
-        0.0,
-        f32::INFINITY,
-    ); // front
-    rays.push(
-        vec3(0.25, 0.25, -2.0),
-        vec3(0.0, 0.0, 2.0),
-        0.0,
-        f32::INFINITY,
-    ); // back
-    rays.push(
-        vec3(0.75, 0.75, 1.0),
-        vec3(0.0, 0.0, -1.0),
-        0.0,
-        f32::INFINITY,
-    ); // outside
-    rays.push(
-        vec3(-1.0, 0.25, 0.0),
-        vec3(1.0, 0.0, 0.0),
-        0.0,
-        f32::INFINITY,
-    ); // in plane
+    let rays = unbounded_rays(&[
+        (vec3(0.25, 0.25, 1.0), vec3(0.0, 0.0, -1.0)), // front
+        (vec3(0.25, 0.25, -2.0), vec3(0.0, 0.0, 2.0)), // back
+        (vec3(0.75, 0.75, 1.0), vec3(0.0, 0.0, -1.0)), // outside
+        (vec3(-1.0, 0.25, 0.0), vec3(1.0, 0.0, 0.0)),  // in plane
+    ]);
     let (hits, _) = trace(&bvh, &rays);
     assert_eq!(hits.prim, [0, 0, NO_HIT, NO_HIT]);
     assert_eq!(hits.t[0], 1.0);
@@ -104,31 +94,12 @@ fn coplanar_and_overlapping_triangles() {
         vec3(0.0, 0.5, 0.5),
     ];
     let bvh = build(&[big, small, in_front]);
-    let mut rays = RayBatch::default();
-    rays.push(
-        vec3(0.3, 0.3, 1.0),
-        vec3(0.0, 0.0, -1.0),
-        0.0,
-        f32::INFINITY,
-    ); // big + small tie
-    rays.push(
-        vec3(0.1, 0.1, 1.0),
-        vec3(0.0, 0.0, -1.0),
-        0.0,
-        f32::INFINITY,
-    ); // in front wins
-    rays.push(
-        vec3(0.1, 0.1, -1.0),
-        vec3(0.0, 0.0, 1.0),
-        0.0,
-        f32::INFINITY,
-    ); // from behind
-    rays.push(
-        vec3(1.5, -0.5, 1.0),
-        vec3(0.0, 0.0, -1.0),
-        0.0,
-        f32::INFINITY,
-    ); // big only
+    let rays = unbounded_rays(&[
+        (vec3(0.3, 0.3, 1.0), vec3(0.0, 0.0, -1.0)), // big + small tie
+        (vec3(0.1, 0.1, 1.0), vec3(0.0, 0.0, -1.0)), // in front wins
+        (vec3(0.1, 0.1, -1.0), vec3(0.0, 0.0, 1.0)), // from behind
+        (vec3(1.5, -0.5, 1.0), vec3(0.0, 0.0, -1.0)), // big only
+    ]);
     let (hits, _) = trace(&bvh, &rays);
     assert!(hits.prim[0] == 0 || hits.prim[0] == 1);
     assert_eq!(hits.t[0], 1.0);
@@ -252,7 +223,7 @@ fn tmin_skips_the_surface_a_ray_starts_on() {
     ];
     let upper = lower.map(|p| p + Vec3::Y);
     let bvh = build(&[lower, upper]);
-    let mut rng = Pcg::new(11);
+    let mut rng = Rng::new(11, 0);
     let mut up = RayBatch::default();
     let mut down = RayBatch::default();
     for _ in 0..500 {
@@ -312,12 +283,7 @@ fn tmin_is_inclusive_and_tmax_exclusive() {
 
 #[test]
 fn invalid_rays_miss_without_panicking() {
-    let tri = [
-        vec3(-1.0, -1.0, 1.0),
-        vec3(1.0, -1.0, 1.0),
-        vec3(0.0, 1.0, 1.0),
-    ];
-    let bvh = build(&[tri]);
+    let bvh = build(&[TRIANGLE_AT_Z1]);
     let nan = f32::NAN;
     let inf = f32::INFINITY;
     let mut rays = RayBatch::default();
@@ -360,20 +326,15 @@ fn non_finite_vertices_are_rejected_by_index() {
 fn many_coincident_triangles() {
     // Identical boxes once made obvhs's PLOC degenerate into a chain (quadratic build time,
     // then a stack overflow); the build must stay fast and traversal correct.
-    let tri = [
-        vec3(-1.0, -1.0, 1.0),
-        vec3(1.0, -1.0, 1.0),
-        vec3(0.0, 1.0, 1.0),
-    ];
-    let mut tris = vec![tri; 50_000];
-    tris.push(tri.map(|p| p * 0.5));
+    let mut tris = vec![TRIANGLE_AT_Z1; 50_000];
+    tris.push(TRIANGLE_AT_Z1.map(|p| p * 0.5));
     let bvh = build(&tris);
     assert!(
         bvh.build_time().as_secs_f32() < 10.0,
         "{:?}",
         bvh.build_time()
     );
-    let mut rng = Pcg::new(12);
+    let mut rng = Rng::new(12, 0);
     let mut rays = RayBatch::default();
     for _ in 0..100 {
         let direction = vec3(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 1.0);

@@ -2,13 +2,13 @@
 
 mod common;
 
-use common::{Pcg, assert_matches_reference, height_field, triangle_soup, uv_sphere};
+use common::{Rng, RngExt, assert_matches_reference, height_field, triangle_soup, uv_sphere};
 use glam::Vec3;
 use vcm_traversal::{BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, RayBatch, Traversal};
 
 /// Random rays: origins in the meshes' bounding box, random directions and lengths, a
 /// quarter with a bounded `[tmin, tmax)`.
-fn random_rays(rng: &mut Pcg, count: usize) -> RayBatch {
+fn random_rays(rng: &mut Rng, count: usize) -> RayBatch {
     let mut rays = RayBatch::with_capacity(count);
     for _ in 0..count {
         let origin = rng.point_in_box(0.0, 1.0);
@@ -24,7 +24,7 @@ fn random_rays(rng: &mut Pcg, count: usize) -> RayBatch {
 }
 
 /// A soup, a closed sphere and a height field with shared edges, in one mesh.
-fn random_mesh(rng: &mut Pcg) -> Vec<[Vec3; 3]> {
+fn random_mesh(rng: &mut Rng) -> Vec<[Vec3; 3]> {
     let mut tris = triangle_soup(rng, 1500, 1.0);
     tris.extend(uv_sphere(Vec3::splat(0.5), 0.3, 24, 48));
     tris.extend(height_field(rng, 24));
@@ -32,7 +32,7 @@ fn random_mesh(rng: &mut Pcg) -> Vec<[Vec3; 3]> {
 }
 
 fn check_preset(preset: BuildPreset, kernel: CpuKernel, seed: u64) {
-    let mut rng = Pcg::new(seed);
+    let mut rng = Rng::new(seed, 0);
     let tris = random_mesh(&mut rng);
     let rays = random_rays(&mut rng, 3000);
     let options = CpuBvhOptions {
@@ -65,29 +65,26 @@ fn check_preset(preset: BuildPreset, kernel: CpuKernel, seed: u64) {
     common::assert_occlusion_matches_hits(&hits, &occluded);
 }
 
-#[test]
-fn fastest_preset_matches_reference() {
-    check_preset(BuildPreset::Fastest, CpuKernel::Auto, 1);
+/// One test per build preset and kernel, each on its own seed.
+macro_rules! preset_tests {
+    ($($name:ident: $preset:ident, $kernel:ident, $seed:literal;)*) => {$(
+        #[test]
+        fn $name() {
+            check_preset(BuildPreset::$preset, CpuKernel::$kernel, $seed);
+        }
+    )*};
 }
 
-#[test]
-fn medium_preset_matches_reference() {
-    check_preset(BuildPreset::Medium, CpuKernel::Auto, 2);
-}
-
-#[test]
-fn spatial_split_preset_matches_reference() {
-    check_preset(BuildPreset::Slow, CpuKernel::Auto, 3);
-}
-
-#[test]
-fn portable_kernel_matches_reference() {
-    check_preset(BuildPreset::Medium, CpuKernel::Portable, 5);
+preset_tests! {
+    fastest_preset_matches_reference: Fastest, Auto, 1;
+    medium_preset_matches_reference: Medium, Auto, 2;
+    spatial_split_preset_matches_reference: Slow, Auto, 3;
+    portable_kernel_matches_reference: Medium, Portable, 5;
 }
 
 #[test]
 fn barycentrics_reconstruct_hit_point() {
-    let mut rng = Pcg::new(4);
+    let mut rng = Rng::new(4, 0);
     let tris = random_mesh(&mut rng);
     let rays = random_rays(&mut rng, 2000);
     let bvh = CpuBvh::new(&tris, CpuBvhOptions::default()).unwrap();

@@ -1,60 +1,56 @@
-//! Shared test helpers: a seeded PCG, mesh generators and a brute-force f64 reference.
+//! Shared test helpers: seeded random draws (the project's PCG32 from `vcm_scene`), mesh
+//! generators and a brute-force f64 reference.
 #![allow(dead_code)] // Each test binary uses a different subset.
 
 use glam::{DVec3, Vec3};
+pub use vcm_scene::sampling::Rng;
+use vcm_scene::sampling::sample_uniform_sphere;
 use vcm_traversal::{HitBatch, NO_HIT, RayBatch};
 
-/// PCG32 (O'Neill), enough randomness for fixed-seed tests.
-pub struct Pcg(u64);
-
-impl Pcg {
-    pub fn new(seed: u64) -> Self {
-        let mut rng = Self(seed.wrapping_add(0x853c_49e6_748f_ea9b));
-        rng.next_u32();
-        rng
-    }
-
-    pub fn next_u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        xorshifted.rotate_right((old >> 59) as u32)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
-    }
-
+/// The draws the tests need, on top of [`Rng`]'s uniforms.
+pub trait RngExt {
     /// Uniform in [lo, hi).
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f32()
+    fn range(&mut self, lo: f32, hi: f32) -> f32;
+    /// Uniform in `0..n`.
+    fn below(&mut self, n: usize) -> usize;
+    /// Uniform in the cube [lo, hi)³.
+    fn point_in_box(&mut self, lo: f32, hi: f32) -> Vec3;
+    /// Uniform on the unit sphere.
+    fn unit_vector(&mut self) -> Vec3;
+}
+
+impl RngExt for Rng {
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.uniform()
     }
 
-    pub fn below(&mut self, n: usize) -> usize {
+    fn below(&mut self, n: usize) -> usize {
         (self.next_u32() as usize) % n
     }
 
-    pub fn point_in_box(&mut self, lo: f32, hi: f32) -> Vec3 {
+    fn point_in_box(&mut self, lo: f32, hi: f32) -> Vec3 {
         Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
     }
 
-    pub fn unit_vector(&mut self) -> Vec3 {
-        let z = self.range(-1.0, 1.0);
-        let phi = self.range(0.0, std::f32::consts::TAU);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    fn unit_vector(&mut self) -> Vec3 {
+        sample_uniform_sphere(self.uniform2())
     }
 }
 
+/// A triangle in the plane z = 1 around the +z axis (a ray from the origin along +z hits it
+/// at t = 1).
+pub const TRIANGLE_AT_Z1: [Vec3; 3] = [
+    Vec3::new(-1.0, -1.0, 1.0),
+    Vec3::new(1.0, -1.0, 1.0),
+    Vec3::new(0.0, 1.0, 1.0),
+];
+
 /// `count` random triangles with vertices in a cube of side `extent`, of varied sizes.
-pub fn triangle_soup(rng: &mut Pcg, count: usize, extent: f32) -> Vec<[Vec3; 3]> {
+pub fn triangle_soup(rng: &mut Rng, count: usize, extent: f32) -> Vec<[Vec3; 3]> {
     (0..count)
         .map(|_| {
             let center = rng.point_in_box(0.0, extent);
-            let size = extent * 0.2 * rng.f32().powi(2);
+            let size = extent * 0.2 * rng.uniform().powi(2);
             [0; 3].map(|_| center + rng.unit_vector() * size)
         })
         .collect()
@@ -123,7 +119,7 @@ pub fn cuboid(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
 }
 
 /// A height field over the unit square with `n × n` quads, sharing all edges.
-pub fn height_field(rng: &mut Pcg, n: usize) -> Vec<[Vec3; 3]> {
+pub fn height_field(rng: &mut Rng, n: usize) -> Vec<[Vec3; 3]> {
     let heights: Vec<f32> = (0..(n + 1) * (n + 1))
         .map(|_| rng.range(0.0, 0.05))
         .collect();
