@@ -1,18 +1,30 @@
 //! Writes the test scenes in `scenes/` as self-contained glTF files (buffers embedded as data
-//! URIs), following the project's scene conventions.
+//! URIs), following the project's scene conventions:
 //!
-//! Run with `cargo run --example make_scenes` from the repository root.
+//! - `cornell-box`: area light under the ceiling, two diffuse blocks;
+//! - `cornell-indirect`: the light faces the ceiling, so the room is lit indirectly;
+//! - `cornell-specular`: a mirror sphere and a solid glass sphere;
+//! - `cornell-specular-close`: the same, with the camera close to the spheres;
+//! - `cornell-water`: the lower part of the room filled with water (IOR 1.33) under a wavy
+//!   surface (an interface spanning the room), casting caustics on the floor;
+//! - `large`: the room with 196 instanced spheres of mixed materials, ~1M triangles.
+//!
+//! Run with `cargo run --example make_scenes` from any folder.
 
+use std::collections::BTreeSet;
 use std::path::Path;
 
 use base64::Engine;
-use glam::{Mat4, Quat, Vec3};
+use glam::{Quat, Vec3};
 use serde_json::{Value, json};
 
 /// Linear albedos of the classic Cornell box (white, red, green walls).
 const WHITE: [f32; 3] = [0.725, 0.71, 0.68];
 const RED: [f32; 3] = [0.63, 0.065, 0.05];
 const GREEN: [f32; 3] = [0.14, 0.45, 0.091];
+
+/// A triangle mesh: positions and counter-clockwise triangles (seen from the front).
+type Geometry = (Vec<Vec3>, Vec<[u32; 3]>);
 
 /// Accumulates meshes, materials and nodes, then writes one glTF document.
 #[derive(Default)]
@@ -24,6 +36,15 @@ struct GltfWriter {
     materials: Vec<Value>,
     nodes: Vec<Value>,
     cameras: Vec<Value>,
+    extensions: BTreeSet<String>,
+}
+
+/// Accessor indices of one uploaded geometry.
+#[derive(Clone, Copy)]
+struct Accessors {
+    position: usize,
+    normal: usize,
+    indices: usize,
 }
 
 impl GltfWriter {
@@ -39,7 +60,11 @@ impl GltfWriter {
         self.buffer_views.len() - 1
     }
 
+    /// Adds a glTF material, recording the extensions it uses.
     fn material(&mut self, value: Value) -> usize {
+        if let Some(extensions) = value.get("extensions").and_then(Value::as_object) {
+            self.extensions.extend(extensions.keys().cloned());
+        }
         self.materials.push(value);
         self.materials.len() - 1
     }
@@ -69,26 +94,49 @@ impl GltfWriter {
         }))
     }
 
-    /// Adds a triangle mesh (counter-clockwise triangles seen from the front) as its own node.
-    fn mesh(&mut self, name: &str, positions: &[Vec3], triangles: &[[u32; 3]], material: usize) {
-        let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    /// A conductor with base color `color` and perceptual roughness `roughness` (0: mirror).
+    fn metal(&mut self, name: &str, color: [f32; 3], roughness: f32) -> usize {
+        self.material(json!({
+            "name": name,
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [color[0], color[1], color[2], 1.0],
+                "metallicFactor": 1.0, "roughnessFactor": roughness
+            }
+        }))
+    }
+
+    /// A smooth dielectric bounding a solid volume (glass, water).
+    fn dielectric(&mut self, name: &str, ior: f32) -> usize {
+        self.material(json!({
+            "name": name,
+            "pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 0.0},
+            "extensions": {
+                "KHR_materials_transmission": {"transmissionFactor": 1.0},
+                "KHR_materials_ior": {"ior": ior},
+                "KHR_materials_volume": {"thicknessFactor": 1.0}
+            }
+        }))
+    }
+
+    /// Uploads positions, smooth vertex normals and indices.
+    fn upload(&mut self, (positions, triangles): &Geometry) -> Accessors {
         let mut normals = vec![Vec3::ZERO; positions.len()];
         for t in triangles {
             let [a, b, c] = t.map(|i| positions[i as usize]);
             let n = (b - a).cross(c - a);
             t.iter().for_each(|&i| normals[i as usize] += n);
         }
+        let normals: Vec<Vec3> = normals.iter().map(|n| n.normalize()).collect();
         let floats = |v: &[Vec3]| -> Vec<u8> {
             v.iter()
                 .flat_map(|p| p.to_array())
                 .flat_map(f32::to_le_bytes)
                 .collect()
         };
-        positions.iter().for_each(|p| {
-            min = min.min(*p);
-            max = max.max(*p);
-        });
-        let normals: Vec<Vec3> = normals.iter().map(|n| n.normalize()).collect();
+        let (min, max) = positions.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
         let indices: Vec<u8> = triangles
             .iter()
             .flatten()
@@ -97,19 +145,42 @@ impl GltfWriter {
         let position_view = self.view(&floats(positions), 34962);
         let normal_view = self.view(&floats(&normals), 34962);
         let index_view = self.view(&indices, 34963);
-        let first = self.accessors.len();
+        let position = self.accessors.len();
         self.accessors.extend([
             json!({"bufferView": position_view, "componentType": 5126, "count": positions.len(),
                    "type": "VEC3", "min": min.to_array(), "max": max.to_array()}),
             json!({"bufferView": normal_view, "componentType": 5126, "count": normals.len(), "type": "VEC3"}),
             json!({"bufferView": index_view, "componentType": 5125, "count": triangles.len() * 3, "type": "SCALAR"}),
         ]);
+        Accessors {
+            position,
+            normal: position + 1,
+            indices: position + 2,
+        }
+    }
+
+    /// A glTF mesh drawing uploaded geometry with `material`; returns the mesh index.
+    fn mesh(&mut self, name: &str, geometry: Accessors, material: usize) -> usize {
         self.meshes.push(json!({"name": name, "primitives": [{
-            "attributes": {"POSITION": first, "NORMAL": first + 1},
-            "indices": first + 2, "material": material
+            "attributes": {"POSITION": geometry.position, "NORMAL": geometry.normal},
+            "indices": geometry.indices, "material": material
         }]}));
-        self.nodes
-            .push(json!({"name": name, "mesh": self.meshes.len() - 1}));
+        self.meshes.len() - 1
+    }
+
+    /// Uploads `geometry` and places it once, untransformed.
+    fn object(&mut self, name: &str, geometry: &Geometry, material: usize) {
+        let accessors = self.upload(geometry);
+        let mesh = self.mesh(name, accessors, material);
+        self.instance(name, mesh, Vec3::ZERO, 1.0);
+    }
+
+    /// Places `mesh` at `translation` with uniform `scale`.
+    fn instance(&mut self, name: &str, mesh: usize, translation: Vec3, scale: f32) {
+        self.nodes.push(json!({
+            "name": name, "mesh": mesh,
+            "translation": translation.to_array(), "scale": [scale, scale, scale]
+        }));
     }
 
     /// Adds a perspective camera at `eye` looking at `target` (+Y up).
@@ -119,14 +190,13 @@ impl GltfWriter {
         let right = forward.cross(Vec3::Y).normalize();
         let up = right.cross(forward);
         let rotation = Quat::from_mat3(&glam::Mat3::from_cols(right, up, -forward));
-        let translation = eye;
         self.cameras
             .push(json!({"type": "perspective", "perspective": {
                 "yfov": yfov_degrees.to_radians(), "aspectRatio": 1.0, "znear": 0.01
             }}));
         self.nodes.push(json!({
             "name": "camera", "camera": self.cameras.len() - 1,
-            "rotation": rotation.to_array(), "translation": translation.to_array()
+            "rotation": rotation.to_array(), "translation": eye.to_array()
         }));
     }
 
@@ -134,7 +204,7 @@ impl GltfWriter {
         let data = base64::engine::general_purpose::STANDARD.encode(&self.buffer);
         let document = json!({
             "asset": {"version": "2.0", "generator": "vcm-rs examples/make_scenes.rs"},
-            "extensionsUsed": ["KHR_materials_emissive_strength", "KHR_materials_specular"],
+            "extensionsUsed": self.extensions,
             "scene": 0,
             "scenes": [{"nodes": (0..self.nodes.len()).collect::<Vec<_>>()}],
             "nodes": self.nodes, "meshes": self.meshes, "materials": self.materials,
@@ -147,23 +217,16 @@ impl GltfWriter {
 }
 
 /// A quad from four corners in counter-clockwise order seen from its front.
-fn quad(corners: [Vec3; 4]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+fn quad(corners: [Vec3; 4]) -> Geometry {
     (corners.to_vec(), vec![[0, 1, 2], [0, 2, 3]])
 }
 
 /// An axis-aligned box of half size `half`, rotated about +Y and standing on y = `floor`,
 /// with outward-facing triangles.
-fn block(
-    center_xz: (f32, f32),
-    half: Vec3,
-    angle_degrees: f32,
-    floor: f32,
-) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let transform = Mat4::from_rotation_translation(
-        Quat::from_rotation_y(angle_degrees.to_radians()),
-        Vec3::new(center_xz.0, floor + half.y, center_xz.1),
-    );
-    let corner = |x: f32, y: f32, z: f32| transform.transform_point3(half * Vec3::new(x, y, z));
+fn block(center_xz: (f32, f32), half: Vec3, angle_degrees: f32, floor: f32) -> Geometry {
+    let rotation = Quat::from_rotation_y(angle_degrees.to_radians());
+    let center = Vec3::new(center_xz.0, floor + half.y, center_xz.1);
+    let corner = |(x, y, z): (f32, f32, f32)| center + rotation * (half * Vec3::new(x, y, z));
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
     // Each face: four corners counter-clockwise seen from outside.
@@ -192,20 +255,129 @@ fn block(
     ];
     for face in faces {
         let base = positions.len() as u32;
-        positions.extend(face.map(|(x, y, z)| corner(x, y, z)));
+        positions.extend(face.map(corner));
         triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
     }
     (positions, triangles)
 }
 
-/// The Cornell box: a 2×2×2 room open toward +Z, an area light under the ceiling, two diffuse
-/// blocks, and a camera outside the open side.
-fn cornell_box() -> GltfWriter {
-    let mut w = GltfWriter::default();
+/// A unit icosphere (outward-facing) with `subdivisions` levels of 4-way splits:
+/// 20·4^subdivisions triangles.
+fn icosphere(subdivisions: u32) -> Geometry {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut positions: Vec<Vec3> = [
+        (-1., t, 0.),
+        (1., t, 0.),
+        (-1., -t, 0.),
+        (1., -t, 0.),
+        (0., -1., t),
+        (0., 1., t),
+        (0., -1., -t),
+        (0., 1., -t),
+        (t, 0., -1.),
+        (t, 0., 1.),
+        (-t, 0., -1.),
+        (-t, 0., 1.),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut triangles: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..subdivisions {
+        let mut midpoints = std::collections::HashMap::new();
+        let mut midpoint = |a: u32, b: u32, positions: &mut Vec<Vec3>| {
+            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                positions.push(((positions[a as usize] + positions[b as usize]) * 0.5).normalize());
+                positions.len() as u32 - 1
+            })
+        };
+        triangles = triangles
+            .iter()
+            .flat_map(|&[a, b, c]| {
+                let ab = midpoint(a, b, &mut positions);
+                let bc = midpoint(b, c, &mut positions);
+                let ca = midpoint(c, a, &mut positions);
+                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+            })
+            .collect();
+    }
+    (positions, triangles)
+}
+
+/// `geometry` scaled by `radius` and moved to `center`.
+fn placed((positions, triangles): Geometry, center: Vec3, radius: f32) -> Geometry {
+    (
+        positions.iter().map(|p| center + *p * radius).collect(),
+        triangles,
+    )
+}
+
+/// A wavy water surface over x, z ∈ [−w, w] around height `level`, facing up (`n` × `n` cells).
+/// It is an interface, not a closed mesh: the room below it is water (IOR from the material),
+/// above it air, as in a pool filled to the brim of the region it spans.
+fn water_surface(w: f32, level: f32, n: u32) -> Geometry {
+    let height = |x: f32, z: f32| {
+        level
+            + 0.025 * (7.0 * x + 1.3).sin() * (5.0 * z - 0.4).cos()
+            + 0.012 * (13.0 * (x + z)).sin()
+    };
+    let coordinate = |i: u32| -w + 2.0 * w * i as f32 / n as f32;
+    let index = |i: u32, j: u32| i * (n + 1) + j;
+    let positions = (0..=n)
+        .flat_map(|i| (0..=n).map(move |j| (coordinate(j), coordinate(i))))
+        .map(|(x, z)| Vec3::new(x, height(x, z), z))
+        .collect();
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            // Vertex (i, j) sits at x = coordinate(j), z = coordinate(i); this winding faces +Y.
+            let (a, b, c, d) = (
+                index(i, j),
+                index(i, j + 1),
+                index(i + 1, j + 1),
+                index(i + 1, j),
+            );
+            triangles.extend([[a, d, c], [a, c, b]]);
+        }
+    }
+    (positions, triangles)
+}
+
+/// Which light the room gets.
+enum RoomLight {
+    /// A quad under the ceiling shining down.
+    Down,
+    /// A quad below the ceiling shining up at it.
+    Up,
+}
+
+/// The Cornell room: a 2×2×2 box open toward +Z, with walls and an area light.
+fn cornell_room(w: &mut GltfWriter, light: RoomLight) -> usize {
     let white = w.diffuse("white", WHITE);
     let red = w.diffuse("red", RED);
     let green = w.diffuse("green", GREEN);
-    let light = w.emitter("light", [1.0, 0.706, 0.235], 17.0);
+    let emitter = w.emitter("light", [1.0, 0.706, 0.235], 17.0);
     let v = Vec3::new;
     let walls = [
         (
@@ -260,30 +432,114 @@ fn cornell_box() -> GltfWriter {
         ),
     ];
     for (name, corners, material) in walls {
-        let (p, t) = quad(corners);
-        w.mesh(name, &p, &t, material);
+        w.object(name, &quad(corners), material);
     }
     let s = 0.23;
-    let (p, t) = quad([
-        v(-s, 0.998, -s),
-        v(s, 0.998, -s),
-        v(s, 0.998, s),
-        v(-s, 0.998, s),
-    ]);
-    w.mesh("light", &p, &t, light);
-    let (p, t) = block((-0.33, -0.3), v(0.3, 0.6, 0.3), 17.0, -1.0);
-    w.mesh("tall block", &p, &t, white);
-    let (p, t) = block((0.34, 0.32), v(0.3, 0.3, 0.3), -17.0, -1.0);
-    w.mesh("short block", &p, &t, white);
-    w.camera(v(0.0, 0.0, 3.9), v(0.0, 0.0, 0.0), 38.0);
+    let corners = match light {
+        RoomLight::Down => [
+            v(-s, 0.998, -s),
+            v(s, 0.998, -s),
+            v(s, 0.998, s),
+            v(-s, 0.998, s),
+        ],
+        RoomLight::Up => [v(-s, 0.9, -s), v(-s, 0.9, s), v(s, 0.9, s), v(s, 0.9, -s)],
+    };
+    w.object("light", &quad(corners), emitter);
+    white
+}
+
+fn blocks(w: &mut GltfWriter, material: usize) {
+    let tall = block((-0.33, -0.3), Vec3::new(0.3, 0.6, 0.3), 17.0, -1.0);
+    w.object("tall block", &tall, material);
+    let short = block((0.34, 0.32), Vec3::splat(0.3), -17.0, -1.0);
+    w.object("short block", &short, material);
+}
+
+fn standard_camera(w: &mut GltfWriter) {
+    w.camera(Vec3::new(0.0, 0.0, 3.9), Vec3::ZERO, 38.0);
+}
+
+fn cornell_box(light: RoomLight) -> GltfWriter {
+    let mut w = GltfWriter::default();
+    let white = cornell_room(&mut w, light);
+    blocks(&mut w, white);
+    standard_camera(&mut w);
+    w
+}
+
+fn cornell_specular(close: bool) -> GltfWriter {
+    let mut w = GltfWriter::default();
+    cornell_room(&mut w, RoomLight::Down);
+    let mirror = w.metal("mirror", [1.0, 1.0, 1.0], 0.0);
+    let glass = w.dielectric("glass", 1.5);
+    let r = 0.35;
+    let sphere = |x: f32, z: f32| placed(icosphere(4), Vec3::new(x, -1.0 + r + 1e-3, z), r);
+    w.object("mirror sphere", &sphere(-0.45, -0.35), mirror);
+    w.object("glass sphere", &sphere(0.45, 0.3), glass);
+    if close {
+        w.camera(Vec3::new(0.0, -0.35, 1.3), Vec3::new(0.0, -0.62, 0.0), 50.0);
+    } else {
+        standard_camera(&mut w);
+    }
+    w
+}
+
+fn cornell_water() -> GltfWriter {
+    let mut w = GltfWriter::default();
+    let white = cornell_room(&mut w, RoomLight::Down);
+    blocks(&mut w, white);
+    let water = w.dielectric("water", 1.33);
+    // Inset from the walls so its border does not coincide with them.
+    w.object("water", &water_surface(0.999, -0.45, 96), water);
+    standard_camera(&mut w);
+    w
+}
+
+/// The room with a 14 × 14 grid of instanced spheres (5,120 triangles each) in four materials.
+fn large() -> GltfWriter {
+    let mut w = GltfWriter::default();
+    cornell_room(&mut w, RoomLight::Down);
+    let materials = [
+        w.diffuse("matte", [0.6, 0.6, 0.6]),
+        w.material(json!({"name": "plastic", "pbrMetallicRoughness": {
+            "baseColorFactor": [0.2, 0.3, 0.7, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.4}})),
+        w.metal("gold", [1.0, 0.78, 0.34], 0.3),
+        w.dielectric("glass", 1.5),
+    ];
+    let sphere = w.upload(&icosphere(4));
+    let meshes: Vec<usize> = materials
+        .iter()
+        .map(|&m| w.mesh("sphere", sphere, m))
+        .collect();
+    let n = 14;
+    let radius = 0.06;
+    for i in 0..n {
+        for j in 0..n {
+            let x = -0.85 + 1.7 * j as f32 / (n - 1) as f32;
+            let z = -0.85 + 1.7 * i as f32 / (n - 1) as f32;
+            let center = Vec3::new(x, -1.0 + radius + 1e-3, z);
+            w.instance("sphere", meshes[((i + j) % 4) as usize], center, radius);
+        }
+    }
+    standard_camera(&mut w);
     w
 }
 
 fn main() -> std::io::Result<()> {
     let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     std::fs::create_dir_all(&out)?;
-    let path = out.join("cornell-box.gltf");
-    cornell_box().write(&path)?;
-    println!("wrote {}", path.display());
+    let scenes = [
+        ("cornell-box", cornell_box(RoomLight::Down)),
+        ("cornell-indirect", cornell_box(RoomLight::Up)),
+        ("cornell-specular", cornell_specular(false)),
+        ("cornell-specular-close", cornell_specular(true)),
+        ("cornell-water", cornell_water()),
+        ("large", large()),
+    ];
+    for (name, writer) in scenes {
+        let path = out.join(format!("{name}.gltf"));
+        writer.write(&path)?;
+        println!("wrote {}", path.display());
+    }
     Ok(())
 }

@@ -45,3 +45,55 @@ fn cornell_box_is_a_closed_room_lit_from_the_ceiling() {
     assert!(scene.camera.position.z > 1.0);
     assert!(scene.camera.forward.dot(-Vec3::Z) > 0.999);
 }
+
+#[test]
+fn every_scene_loads_cleanly_with_the_features_its_name_promises() {
+    let expect = [
+        ("cornell-box.gltf", false, false),
+        ("cornell-indirect.gltf", false, false),
+        ("cornell-specular.gltf", true, true),
+        ("cornell-specular-close.gltf", true, true),
+        ("cornell-water.gltf", true, true),
+        ("large.gltf", true, true),
+    ];
+    for (name, specular, transmission) in expect {
+        let scene = load(name);
+        assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
+        assert_eq!(scene.dropped_triangles, 0, "{name}");
+        let m = scene.features.materials;
+        assert!(m.diffuse, "{name}");
+        assert_eq!(
+            (m.specular, m.transmission),
+            (specular, transmission),
+            "{name}"
+        );
+        assert_eq!(scene.features.lights.area, 2, "{name}");
+    }
+    assert!(load("large.gltf").mesh.triangle_count() >= 1_000_000);
+}
+
+#[test]
+fn the_indirect_light_faces_the_ceiling_and_the_water_surface_faces_up() {
+    for light in &load("cornell-indirect.gltf").lights {
+        let Light::Area(area) = light else {
+            panic!("only area lights")
+        };
+        assert!(area.normal.y > 0.99);
+    }
+    let water = load("cornell-water.gltf");
+    let water_material = water
+        .materials
+        .iter()
+        .position(|m| m.name == "water")
+        .unwrap() as u32;
+    let surface: Vec<usize> = (0..water.mesh.triangle_count())
+        .filter(|&t| water.mesh.material_ids[t] == water_material)
+        .collect();
+    assert!(!surface.is_empty());
+    assert!(
+        surface
+            .iter()
+            .all(|&t| water.mesh.geometric_normal(t).y > 0.5)
+    );
+    assert_eq!(water.materials[water_material as usize].ior, 1.33);
+}
