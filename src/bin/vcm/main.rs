@@ -1,6 +1,8 @@
 //! `vcm`: the command line front end of vcm-rs.
 
+mod compare;
 mod info;
+mod render;
 
 use clap::{Parser, Subcommand};
 
@@ -14,6 +16,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Render a scene to a linear EXR and a tone-mapped PNG beside it.
+    Render(render::RenderArgs),
+    /// Error metrics (RMSE, relMSE, MAE) between two EXR images, and a false-colour error image.
+    Compare(compare::CompareArgs),
     /// Load a scene and print what it contains (geometry, materials, lights, features,
     /// warnings), and the CPU BVH's build time and size.
     Info(info::InfoArgs),
@@ -22,6 +28,8 @@ enum Command {
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Render(args) => render::run(&args),
+        Command::Compare(args) => compare::run(&args),
         Command::Info(args) => info::run(&args),
     };
     match result {

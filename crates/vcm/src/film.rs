@@ -1,0 +1,136 @@
+//! Accumulation of radiance samples per pixel.
+
+use glam::{DVec3, Vec3};
+
+/// Radiance samples accumulated per pixel in f64, with a box pixel filter: each sample's
+/// position is uniform over its pixel, so a pixel's value is the plain mean of its samples.
+///
+/// Pixels are indexed row by row from the top-left corner: `pixel = y · width + x`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    width: u32,
+    height: u32,
+    /// Sum of the accepted samples per pixel (radiance, W·sr⁻¹·m⁻² in scene units, RGB).
+    sum: Vec<DVec3>,
+    /// Number of samples taken per pixel, dropped ones included.
+    samples: Vec<u64>,
+    /// Samples dropped because a channel was NaN or infinite.
+    dropped: u64,
+}
+
+impl Film {
+    /// An empty film of `width` × `height` pixels.
+    pub fn new(width: u32, height: u32) -> Film {
+        let pixels = width as usize * height as usize;
+        Film {
+            width,
+            height,
+            sum: vec![DVec3::ZERO; pixels],
+            samples: vec![0; pixels],
+            dropped: 0,
+        }
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Records one radiance sample (RGB, W·sr⁻¹·m⁻² in scene units) for `pixel`.
+    ///
+    /// A sample with a NaN or infinite channel is not added: it counts as a sample of zero
+    /// radiance (so the pixel's mean stays an average over the samples taken) and is counted in
+    /// [`Film::dropped`]. Panics if `pixel` is outside the image.
+    pub fn add(&mut self, pixel: usize, rgb: Vec3) {
+        self.samples[pixel] += 1;
+        if rgb.is_finite() {
+            self.sum[pixel] += rgb.as_dvec3();
+        } else {
+            self.dropped += 1;
+        }
+    }
+
+    /// Number of samples dropped as non-finite, over all pixels.
+    pub fn dropped(&self) -> u64 {
+        self.dropped
+    }
+
+    /// Number of samples taken for `pixel` (dropped ones included).
+    pub fn samples(&self, pixel: usize) -> u64 {
+        self.samples[pixel]
+    }
+
+    /// Mean radiance per pixel (W·sr⁻¹·m⁻², RGB), zero for pixels without samples.
+    pub fn mean(&self) -> Vec<Vec3> {
+        self.sum
+            .iter()
+            .zip(&self.samples)
+            .map(|(&sum, &n)| {
+                if n == 0 {
+                    Vec3::ZERO
+                } else {
+                    (sum / n as f64).as_vec3()
+                }
+            })
+            .collect()
+    }
+
+    /// Adds the samples of `other`, a film of the same size (panics otherwise).
+    pub fn merge(&mut self, other: &Film) {
+        assert_eq!(
+            (self.width, self.height),
+            (other.width, other.height),
+            "merging films of different sizes"
+        );
+        for (sum, o) in self.sum.iter_mut().zip(&other.sum) {
+            *sum += *o;
+        }
+        for (n, o) in self.samples.iter_mut().zip(&other.samples) {
+            *n += o;
+        }
+        self.dropped += other.dropped;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mean_averages_the_samples_of_each_pixel() {
+        let mut film = Film::new(2, 1);
+        film.add(0, Vec3::new(1.0, 2.0, 3.0));
+        film.add(0, Vec3::new(3.0, 2.0, 1.0));
+        assert_eq!(film.mean(), vec![Vec3::splat(2.0), Vec3::ZERO]);
+        assert_eq!((film.samples(0), film.samples(1)), (2, 0));
+    }
+
+    #[test]
+    fn non_finite_samples_are_dropped_and_counted() {
+        let mut film = Film::new(1, 1);
+        film.add(0, Vec3::splat(4.0));
+        film.add(0, Vec3::new(f32::NAN, 1.0, 1.0));
+        film.add(0, Vec3::new(1.0, f32::INFINITY, 1.0));
+        film.add(0, Vec3::new(1.0, 1.0, f32::NEG_INFINITY));
+        assert_eq!(film.dropped(), 3);
+        assert_eq!(film.samples(0), 4);
+        assert_eq!(film.mean(), vec![Vec3::splat(1.0)]);
+    }
+
+    #[test]
+    fn merge_adds_samples_and_drop_counts() {
+        let mut a = Film::new(1, 2);
+        a.add(1, Vec3::ONE);
+        let mut b = Film::new(1, 2);
+        b.add(1, Vec3::splat(3.0));
+        b.add(0, Vec3::splat(f32::NAN));
+        a.merge(&b);
+        assert_eq!(a.mean(), vec![Vec3::ZERO, Vec3::splat(2.0)]);
+        assert_eq!((a.samples(0), a.dropped()), (1, 1));
+    }
+}

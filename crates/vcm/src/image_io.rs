@@ -1,0 +1,239 @@
+//! Reading and writing images: linear OpenEXR for results, tone-mapped PNG for viewing, and
+//! false-colour error images. Every write goes to a temporary file in the same folder that is
+//! renamed over the target, so an interrupted write never leaves a broken image.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+/// Why an image could not be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// The EXR file could not be read or written.
+    #[error("{path}: {reason}")]
+    Exr {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        reason: String,
+    },
+    /// The PNG file could not be written.
+    #[error("{path}: {reason}")]
+    Png {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        reason: String,
+    },
+    /// Renaming the temporary file over the target failed.
+    #[error("{path}: cannot replace the file: {source}")]
+    Rename {
+        /// The target file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+}
+
+/// A linear RGB image (row-major, top row first).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Linear RGB per pixel.
+    pub pixels: Vec<Vec3>,
+}
+
+/// A temporary name beside `path` (same folder, so the rename is atomic).
+fn temporary_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Writes with `write` to a temporary file, then renames it over `path`.
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), ImageError>,
+) -> Result<(), ImageError> {
+    let temporary = temporary_path(path);
+    if let Err(e) = write(&temporary) {
+        let _ = std::fs::remove_file(&temporary);
+        return Err(e);
+    }
+    std::fs::rename(&temporary, path).map_err(|source| {
+        let _ = std::fs::remove_file(&temporary);
+        ImageError::Rename {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
+}
+
+impl RgbImage {
+    /// Writes the image as a 32-bit float RGB OpenEXR file.
+    pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
+        write_atomically(path, |temporary| {
+            exr::prelude::write_rgb_file(temporary, self.width, self.height, |x, y| {
+                let p = self.pixels[y * self.width + x];
+                (p.x, p.y, p.z)
+            })
+            .map_err(|e| ImageError::Exr {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            })
+        })
+    }
+
+    /// Reads the first RGB(A) layer of an OpenEXR file.
+    pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
+        let image = exr::prelude::read_first_rgba_layer_from_file(
+            path,
+            |resolution, _| RgbImage {
+                width: resolution.width(),
+                height: resolution.height(),
+                pixels: vec![Vec3::ZERO; resolution.width() * resolution.height()],
+            },
+            |image: &mut RgbImage, position, (r, g, b, _a): (f32, f32, f32, f32)| {
+                let width = image.width;
+                image.pixels[position.y() * width + position.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .map_err(|e| ImageError::Exr {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        Ok(image.layer_data.channel_data.pixels)
+    }
+
+    /// Writes an 8-bit sRGB PNG of the image scaled by `2^exposure` (values clamped to [0, 1]).
+    pub fn write_png(&self, path: &Path, exposure: f32) -> Result<(), ImageError> {
+        let scale = exposure.exp2();
+        let bytes = self
+            .pixels
+            .iter()
+            .flat_map(|p| (*p * scale).to_array())
+            .map(linear_to_srgb_byte)
+            .collect();
+        write_rgb8_png(path, self.width, self.height, bytes)
+    }
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) of a clamped linear value, as a byte.
+pub fn linear_to_srgb_byte(linear: f32) -> u8 {
+    let c = if linear.is_finite() {
+        linear.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let encoded = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (encoded * 255.0 + 0.5) as u8
+}
+
+/// Writes 8-bit RGB bytes as a PNG, atomically.
+fn write_rgb8_png(
+    path: &Path,
+    width: usize,
+    height: usize,
+    bytes: Vec<u8>,
+) -> Result<(), ImageError> {
+    let png_error = |reason: String| ImageError::Png {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let buffer = image::RgbImage::from_raw(width as u32, height as u32, bytes)
+        .ok_or_else(|| png_error("pixel count does not match the size".into()))?;
+    write_atomically(path, |temporary| {
+        buffer
+            .save_with_format(temporary, image::ImageFormat::Png)
+            .map_err(|e| png_error(e.to_string()))
+    })
+}
+
+/// Writes a false-colour PNG of per-pixel errors: log10 of the error mapped from 10^-4 (dark
+/// blue) through green and yellow to 10^0 and above (red).
+pub fn write_error_png(
+    path: &Path,
+    width: usize,
+    height: usize,
+    errors: &[f64],
+) -> Result<(), ImageError> {
+    let bytes = errors.iter().flat_map(|&e| false_colour(e)).collect();
+    write_rgb8_png(path, width, height, bytes)
+}
+
+/// Maps an error to a colour on a blue–cyan–green–yellow–red ramp over 10^-4 … 10^0.
+fn false_colour(error: f64) -> [u8; 3] {
+    let t = if error > 0.0 && error.is_finite() {
+        ((error.log10() + 4.0) / 4.0).clamp(0.0, 1.0)
+    } else if error.is_nan() || error == f64::INFINITY {
+        1.0
+    } else {
+        0.0
+    };
+    let stops = [
+        [0.05, 0.05, 0.4],
+        [0.0, 0.6, 0.9],
+        [0.1, 0.8, 0.2],
+        [0.95, 0.9, 0.1],
+        [0.9, 0.1, 0.05],
+    ];
+    let x = t * (stops.len() - 1) as f64;
+    let i = (x.floor() as usize).min(stops.len() - 2);
+    let f = x - i as f64;
+    std::array::from_fn(|c| ((stops[i][c] * (1.0 - f) + stops[i + 1][c] * f) * 255.0).round() as u8)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trip_is_exact_and_leaves_no_temporary_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("image.exr");
+        let image = RgbImage {
+            width: 3,
+            height: 2,
+            pixels: (0..6)
+                .map(|i| Vec3::new(i as f32, 0.5, 1e-3 * i as f32))
+                .collect(),
+        };
+        image.write_exr(&path).unwrap();
+        assert_eq!(RgbImage::read_exr(&path).unwrap(), image);
+        image.write_png(&dir.path().join("image.png"), 0.0).unwrap();
+        let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(files.len(), 2, "temporary files left behind");
+    }
+
+    #[test]
+    fn failed_writes_are_errors_naming_the_file() {
+        let image = RgbImage {
+            width: 1,
+            height: 1,
+            pixels: vec![Vec3::ONE],
+        };
+        let path = Path::new("/nonexistent-folder/out.exr");
+        let message = image.write_exr(path).unwrap_err().to_string();
+        assert!(message.contains("out.exr"), "{message}");
+        assert!(RgbImage::read_exr(path).is_err());
+    }
+
+    #[test]
+    fn srgb_encoding_and_false_colours() {
+        assert_eq!(linear_to_srgb_byte(0.0), 0);
+        assert_eq!(linear_to_srgb_byte(1.0), 255);
+        // sRGB 128/255 decodes to linear 0.21586; encoding it again gives 128.
+        assert_eq!(linear_to_srgb_byte(0.21586), 128);
+        assert_eq!(linear_to_srgb_byte(f32::NAN), 0);
+        assert_ne!(false_colour(1e-4), false_colour(1.0));
+        assert_eq!(false_colour(10.0), false_colour(1.0));
+    }
+}

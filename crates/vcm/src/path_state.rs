@@ -1,0 +1,74 @@
+//! The state one camera path carries from wave to wave.
+
+use glam::Vec3;
+use vcm_scene::sampling::Rng;
+
+/// How the direction of a path's current segment was chosen, which decides the MIS weight of
+/// emission found at its end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum SegmentOrigin {
+    /// The camera ray or a delta BSDF lobe: light sampling cannot produce this segment, so
+    /// emission found at its end gets full weight.
+    Deterministic,
+    /// A non-delta BSDF sample drawn with this solid-angle pdf (sr⁻¹).
+    Bsdf {
+        /// Solid-angle pdf of the sampled direction.
+        pdf_w: f32,
+    },
+}
+
+/// A shadow ray waiting for its occlusion test, with the contribution it adds when unoccluded.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ShadowRay {
+    /// Ray origin, offset off the receiving surface.
+    pub origin: Vec3,
+    /// Ray direction; not necessarily unit (for finite lights it reaches the light at t = 1).
+    pub direction: Vec3,
+    /// Exclusive upper bound of the ray parameter.
+    pub tmax: f32,
+    /// MIS-weighted radiance (RGB) added to the path's pixel when the ray is unoccluded.
+    pub contribution: Vec3,
+}
+
+/// One camera path (thesis Fig. 4.4, without the bidirectional MIS quantities).
+#[derive(Clone, Debug)]
+pub(crate) struct PathState {
+    /// The pixel the path started from (`y · width + x`).
+    pub pixel: u32,
+    /// The path's own random stream.
+    pub rng: Rng,
+    /// Origin of the current segment.
+    pub origin: Vec3,
+    /// Unit direction of the current segment.
+    pub direction: Vec3,
+    /// Product of f·cos / pdf (and Russian roulette factors) so far.
+    pub throughput: Vec3,
+    /// Radiance gathered so far (RGB), added to the film when the path ends.
+    pub radiance: Vec3,
+    /// Number of segments including the current one (the camera ray is segment 1).
+    pub segments: u32,
+    /// How the current segment was sampled.
+    pub segment_origin: SegmentOrigin,
+    /// The shadow ray queued by the last shading step, if any.
+    pub shadow: Option<ShadowRay>,
+    /// False once the path has ended (missed, absorbed, terminated or reached `max_depth`).
+    pub alive: bool,
+}
+
+impl PathState {
+    /// A path at the camera: unit throughput, no radiance yet.
+    pub fn new(pixel: u32, rng: Rng, origin: Vec3, direction: Vec3) -> PathState {
+        PathState {
+            pixel,
+            rng,
+            origin,
+            direction,
+            throughput: Vec3::ONE,
+            radiance: Vec3::ZERO,
+            segments: 1,
+            segment_origin: SegmentOrigin::Deterministic,
+            shadow: None,
+            alive: true,
+        }
+    }
+}

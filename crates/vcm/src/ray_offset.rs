@@ -1,0 +1,144 @@
+//! Spawning rays from surface points without self-intersection, at any scene scale.
+//!
+//! A hit point computed in floating point lies within a small box around the true point on the
+//! surface. Offsetting the origin along the geometric normal by the box's extent along that
+//! normal, and rounding the result away from the surface, puts it strictly on the side the ray
+//! leaves toward (Pharr, Jakob & Humphreys, *PBR* 4th ed., §6.8.4–6.8.6, `OffsetRayOrigin`).
+//! Both the error bound and the offset are relative to the coordinates' magnitude, so nothing
+//! depends on the scene's units.
+
+use glam::Vec3;
+
+/// Unit roundoff of `f32`: half the distance from 1 to the next float, 2⁻²⁴.
+const MACHINE_EPSILON: f32 = f32::EPSILON * 0.5;
+
+/// γ(n) = n·ε / (1 − n·ε) (Higham 2002, §3.1; *PBR* 4th ed. eq. 6.31): bounds the relative
+/// error of n chained floating-point operations.
+pub fn gamma(n: u32) -> f32 {
+    let ne = n as f32 * MACHINE_EPSILON;
+    ne / (1.0 - ne)
+}
+
+/// Absolute error bound (scene units, the same on every axis) of a point computed as
+/// `b.x · p0 + b.y · p1 + b.z · p2` from barycentrics `b`: γ(7) · max over axes of
+/// (|b0·p0| + |b1·p1| + |b2·p2|).
+///
+/// pbrt-v4 keeps this bound per axis (*PBR* 4th ed. eq. 6.33) and relies on its triangle test
+/// rejecting t ≤ δt, a conservative bound on the error of t. The traversal backends here accept
+/// any t ≥ tmin without such a bound, so the offset must also cover the test's own rounding,
+/// which is relative to all coordinates: on a plane with exact coordinates along one axis
+/// (z = 0, say) the per-axis bound is zero there, and a grazing ray from the un-moved point can
+/// re-hit its triangle. Using the largest axis's bound on every axis covers that case.
+pub fn barycentric_error(corners: &[Vec3; 3], b: Vec3) -> Vec3 {
+    let sum = (corners[0] * b.x).abs() + (corners[1] * b.y).abs() + (corners[2] * b.z).abs();
+    Vec3::splat(sum.max_element() * gamma(7))
+}
+
+/// Moves `p` (with per-axis error bound `p_error`) off its surface of unit geometric normal
+/// `n_g`, to the side that direction `w` points into: by d = |n_g|·p_error along ±n_g, then
+/// each moved coordinate one float further away (*PBR* 4th ed. §6.8.6).
+pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n_g: Vec3, w: Vec3) -> Vec3 {
+    let d = n_g.abs().dot(p_error);
+    let offset = if w.dot(n_g) < 0.0 { -d * n_g } else { d * n_g };
+    let moved = p + offset;
+    Vec3::from_array(std::array::from_fn(|axis| {
+        let (x, o) = (moved[axis], offset[axis]);
+        if o > 0.0 {
+            x.next_up()
+        } else if o < 0.0 {
+            x.next_down()
+        } else {
+            x
+        }
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DVec3, Vec2};
+    use vcm_scene::sampling::{Rng, sample_uniform_triangle};
+    use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
+
+    /// Triangles of size `scale`: a slanted one translated by 3·`scale` (coordinates larger
+    /// than the triangle) and one in the plane z = 0 (exact z coordinates).
+    fn triangles(scale: f32) -> [[Vec3; 3]; 2] {
+        let slanted = [
+            Vec3::new(0.1, 0.2, 0.3),
+            Vec3::new(1.3, -0.4, 0.9),
+            Vec3::new(-0.2, 1.1, -0.7),
+        ]
+        .map(|c| (c + Vec3::splat(3.0)) * scale);
+        let flat = [
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+        ]
+        .map(|c| c * scale);
+        [slanted, flat]
+    }
+
+    /// Signed distance (in f64) of `p` from the plane of `tri`, positive on the normal's side.
+    fn signed_distance(tri: &[Vec3; 3], p: Vec3) -> f64 {
+        let [a, b, c] = tri.map(Vec3::as_dvec3);
+        let n: DVec3 = (b - a).cross(c - a).normalize();
+        (p.as_dvec3() - a).dot(n)
+    }
+
+    #[test]
+    fn gamma_matches_its_definition() {
+        let e = 2f64.powi(-24);
+        assert!((gamma(7) as f64 - 7.0 * e / (1.0 - 7.0 * e)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn offset_points_lie_on_the_side_of_the_outgoing_direction_at_all_scales() {
+        let mut rng = Rng::from_key(&[7]);
+        for exponent in -4..=5 {
+            let scale = 10f32.powi(exponent);
+            for tri in triangles(scale) {
+                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+                for _ in 0..2000 {
+                    let b = sample_uniform_triangle(rng.uniform2());
+                    let p = tri[0] * b.x + tri[1] * b.y + tri[2] * b.z;
+                    let error = barycentric_error(&tri, b);
+                    for w in [n + Vec3::X * 0.3, -n + Vec3::Y * 0.2] {
+                        let q = offset_ray_origin(p, error, n, w);
+                        let side = signed_distance(&tri, q).signum();
+                        assert_eq!(side, w.dot(n).signum() as f64, "scale {scale}, b {b}");
+                        // The offset stays tiny relative to the scene.
+                        assert!((q - p).length() < 1e-5 * scale * 10.0, "scale {scale}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rays_leaving_an_offset_origin_do_not_hit_their_own_triangle() {
+        let mut rng = Rng::from_key(&[11]);
+        for exponent in -4..=5 {
+            let scale = 10f32.powi(exponent);
+            for tri in triangles(scale) {
+                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+                let bvh = CpuBvh::new(&[tri], CpuBvhOptions::default()).unwrap();
+                let mut rays = RayBatch::default();
+                for _ in 0..2000 {
+                    let b = sample_uniform_triangle(rng.uniform2());
+                    let p = tri[0] * b.x + tri[1] * b.y + tri[2] * b.z;
+                    // Grazing and steep directions on both sides.
+                    let tangent = (tri[1] - tri[0]).normalize();
+                    let Vec2 { x: lift, y: sign } = rng.uniform2();
+                    let side = if sign < 0.5 { -n } else { n };
+                    let w = (tangent + side * (1e-4 + lift)).normalize();
+                    let origin = offset_ray_origin(p, barycentric_error(&tri, b), n, w);
+                    rays.push(origin, w, 0.0, f32::INFINITY);
+                }
+                let mut hits = HitBatch::default();
+                bvh.intersect(&rays, &mut hits);
+                let self_hits = (0..hits.len()).filter(|&i| hits.is_hit(i)).count();
+                assert_eq!(self_hits, 0, "scale {scale}, triangle {tri:?}");
+            }
+        }
+    }
+}

@@ -1,0 +1,157 @@
+//! Shading one path vertex: emission found by the path, one light sample (next event
+//! estimation) and the continuation by BSDF sampling.
+//!
+//! MIS combines the two ways a path can reach an area light, BSDF sampling (pdf p_bsdf in
+//! solid angle) and light sampling (p_light = pick pmf × area pdf × d² / cos θ_light, the
+//! area-to-solid-angle conversion of Veach 1997 eq. 8.10), with the power heuristic
+//! w_i = p_i² / (p_bsdf² + p_light²) (Veach 1997 eq. 9.13), one sample of each technique.
+
+use glam::Vec3;
+use vcm_scene::Scene;
+use vcm_scene::bsdf::{Bsdf, LobeKind, TransportMode};
+use vcm_scene::mesh::SurfacePoint;
+use vcm_scene::sampling::power_heuristic;
+
+use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
+use crate::ray_offset::{barycentric_error, offset_ray_origin};
+use crate::shadow::shadow_segment;
+
+/// Segments after which Russian roulette starts.
+const ROULETTE_AFTER_SEGMENTS: u32 = 3;
+
+/// Highest continuation probability of Russian roulette.
+const MAX_CONTINUATION: f32 = 0.95;
+
+/// What shading needs besides the path: the scene and the path length limit.
+pub(crate) struct ShadeContext<'a> {
+    /// The scene being rendered.
+    pub scene: &'a Scene,
+    /// Longest path in segments (`u32::MAX`: unlimited).
+    pub max_segments: u32,
+}
+
+/// A closest hit of the path's current segment.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Hit {
+    /// Triangle index.
+    pub triangle: u32,
+    /// Barycentric weight of the triangle's second corner.
+    pub u: f32,
+    /// Barycentric weight of the triangle's third corner.
+    pub v: f32,
+    /// Distance along the (unit) ray direction, scene units.
+    pub t: f32,
+}
+
+/// Shades the vertex where `path` hit the scene (`None`: it escaped and ends). Adds the
+/// weighted emission to the path's radiance, queues at most one shadow ray and either
+/// prepares the next segment or ends the path.
+pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) {
+    path.shadow = None;
+    // `max_depth` 0 allows not even the camera segment.
+    let Some(hit) = hit.filter(|_| path.segments <= ctx.max_segments) else {
+        path.alive = false;
+        return;
+    };
+    let scene = ctx.scene;
+    let point = scene.surface_point(hit.triangle, hit.u, hit.v);
+    path.radiance += path.throughput * emission(scene, path, &point, hit);
+
+    // Both a light sample and a continuation add a segment.
+    if path.segments >= ctx.max_segments {
+        path.alive = false;
+        return;
+    }
+    let bsdf = scene.bsdf(&point);
+    let wo = -path.direction;
+    let corners = scene.mesh.corners(hit.triangle as usize);
+    let error = barycentric_error(&corners, Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v));
+    let spawn = |w: Vec3| offset_ray_origin(point.position, error, point.geometric_normal, w);
+    if bsdf.has_non_delta() {
+        path.shadow = next_event(scene, path, &point, &bsdf, wo, spawn);
+    }
+    path.alive = scatter(path, &bsdf, wo, spawn);
+}
+
+/// Emitted radiance toward the path at `point`, MIS-weighted against light sampling
+/// (full weight after the camera and delta lobes, which light sampling cannot produce).
+fn emission(scene: &Scene, path: &PathState, point: &SurfacePoint, hit: Hit) -> Vec3 {
+    let Some(emitted) = scene.emission_on_hit(hit.triangle, hit.u, hit.v, path.direction) else {
+        return Vec3::ZERO;
+    };
+    let SegmentOrigin::Bsdf { pdf_w } = path.segment_origin else {
+        return emitted.radiance;
+    };
+    let light = scene
+        .light_sampler
+        .light_of_triangle(hit.triangle)
+        .expect("an emitting triangle is an area light");
+    let cos_at_light = point.geometric_normal.dot(-path.direction).abs();
+    // Light sampling's pdf of the same point in solid angle at the receiver (Veach eq. 8.10).
+    let light_pdf_w =
+        scene.light_sampler.pmf(light) * emitted.direct_pdf_a * hit.t * hit.t / cos_at_light;
+    emitted.radiance * power_heuristic(1.0, pdf_w, 1.0, light_pdf_w)
+}
+
+/// One light sample from `point`: the MIS-weighted contribution and its shadow ray, or `None`
+/// when the sample cannot contribute.
+fn next_event(
+    scene: &Scene,
+    path: &mut PathState,
+    point: &SurfacePoint,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    spawn: impl Fn(Vec3) -> Vec3,
+) -> Option<ShadowRay> {
+    let (u_pick, u_light) = (path.rng.uniform(), path.rng.uniform2());
+    let (index, pick_pmf) = scene.light_sampler.sample(u_pick)?;
+    let light = &scene.lights[index];
+    let illumination = light.illuminate(&scene.textures, point.position, u_light)?;
+    let eval = bsdf.eval(wo, illumination.direction, TransportMode::Radiance);
+    if eval.f_cos == Vec3::ZERO {
+        return None;
+    }
+    let light_pdf_w = illumination.direct_pdf_w * pick_pmf;
+    let weight = if light.is_delta() {
+        1.0
+    } else {
+        power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf_fwd)
+    };
+    let contribution = path.throughput * illumination.value * eval.f_cos * (weight / light_pdf_w);
+    let origin = spawn(illumination.direction);
+    let (direction, tmax) = shadow_segment(light, &illumination, point.position, origin);
+    Some(ShadowRay {
+        origin,
+        direction,
+        tmax,
+        contribution,
+    })
+}
+
+/// Samples the BSDF for the next segment and applies Russian roulette; returns whether the
+/// path goes on.
+fn scatter(path: &mut PathState, bsdf: &Bsdf, wo: Vec3, spawn: impl Fn(Vec3) -> Vec3) -> bool {
+    let (u_lobe, u_dir) = (path.rng.uniform(), path.rng.uniform2());
+    let Some(sample) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
+        return false;
+    };
+    path.throughput *= sample.f_cos / sample.pdf_fwd;
+    path.segment_origin = if sample.lobe == LobeKind::Specular {
+        SegmentOrigin::Deterministic
+    } else {
+        SegmentOrigin::Bsdf {
+            pdf_w: sample.pdf_fwd,
+        }
+    };
+    if path.segments >= ROULETTE_AFTER_SEGMENTS {
+        let continuation = path.throughput.max_element().min(MAX_CONTINUATION);
+        if path.rng.uniform() >= continuation {
+            return false;
+        }
+        path.throughput /= continuation;
+    }
+    path.origin = spawn(sample.wi);
+    path.direction = sample.wi;
+    path.segments += 1;
+    true
+}

@@ -1,0 +1,254 @@
+//! Scenes built in code and frame statistics shared by the integration tests.
+
+#![allow(dead_code)] // each test binary uses a different part
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{DVec3, Vec2, Vec3, Vec4};
+use vcm::{Film, PathTracer, PtSettings};
+use vcm_scene::light::Light;
+use vcm_scene::{Camera, Material, Mesh, Scene};
+use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};
+
+/// A camera at `position` looking down -Z with +Y up and vertical field of view `yfov` (rad).
+pub fn camera(position: Vec3, yfov: f32) -> Camera {
+    Camera {
+        position,
+        right: Vec3::X,
+        up: Vec3::Y,
+        forward: -Vec3::Z,
+        yfov,
+        aspect_ratio: None,
+    }
+}
+
+/// A mesh without normals, texture coordinates or tangents.
+pub fn mesh(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>, material_ids: Vec<u32>) -> Mesh {
+    let n = positions.len();
+    Mesh {
+        positions,
+        normals: vec![Vec3::ZERO; n],
+        uvs: vec![Vec2::ZERO; n],
+        tangents: vec![Vec4::ZERO; n],
+        triangles,
+        material_ids,
+    }
+}
+
+/// The two triangles of the quad `corners` (counter-clockwise seen from the front), appended
+/// to `positions` / `triangles`.
+pub fn push_quad(positions: &mut Vec<Vec3>, triangles: &mut Vec<[u32; 3]>, corners: [Vec3; 4]) {
+    let base = positions.len() as u32;
+    positions.extend(corners);
+    triangles.push([base, base + 1, base + 2]);
+    triangles.push([base, base + 2, base + 3]);
+}
+
+/// A unit icosphere around the origin, `subdivisions` times refined, with every triangle
+/// facing inward (counter-clockwise seen from the center).
+pub fn inward_icosphere(subdivisions: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let phi = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut positions: Vec<Vec3> = [
+        (-1.0, phi, 0.0),
+        (1.0, phi, 0.0),
+        (-1.0, -phi, 0.0),
+        (1.0, -phi, 0.0),
+        (0.0, -1.0, phi),
+        (0.0, 1.0, phi),
+        (0.0, -1.0, -phi),
+        (0.0, 1.0, -phi),
+        (phi, 0.0, -1.0),
+        (phi, 0.0, 1.0),
+        (-phi, 0.0, -1.0),
+        (-phi, 0.0, 1.0),
+    ]
+    .map(|(x, y, z)| Vec3::new(x, y, z).normalize())
+    .to_vec();
+    // Outward-facing icosahedron (counter-clockwise seen from outside).
+    let mut triangles: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..subdivisions {
+        let mut midpoints = std::collections::HashMap::new();
+        let mut midpoint = |a: u32, b: u32, positions: &mut Vec<Vec3>| {
+            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let m = (positions[a as usize] + positions[b as usize]).normalize();
+                positions.push(m);
+                positions.len() as u32 - 1
+            })
+        };
+        triangles = triangles
+            .iter()
+            .flat_map(|&[a, b, c]| {
+                let ab = midpoint(a, b, &mut positions);
+                let bc = midpoint(b, c, &mut positions);
+                let ca = midpoint(c, a, &mut positions);
+                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+            })
+            .collect();
+    }
+    let inward = triangles.into_iter().map(|[a, b, c]| [a, c, b]).collect();
+    (positions, inward)
+}
+
+/// A scene from parts, with no textures and no warnings.
+pub fn scene(mesh: Mesh, materials: Vec<Material>, lights: Vec<Light>, camera: Camera) -> Scene {
+    Scene::new(
+        PathBuf::from("test"),
+        mesh,
+        materials,
+        Vec::new(),
+        lights,
+        camera,
+        Vec::new(),
+    )
+}
+
+/// A path tracer over `scene` with the CPU backend.
+pub fn path_tracer(scene: Scene, settings: PtSettings) -> PathTracer {
+    let bvh = CpuBvh::new(&scene.triangle_corners(), CpuBvhOptions::default()).unwrap();
+    let traversal: Arc<dyn Traversal> = Arc::new(bvh);
+    PathTracer::new(Arc::new(scene), traversal, settings).unwrap()
+}
+
+/// Per-pixel and image-wide means over independent frames, with standard errors computed from
+/// the spread of the per-frame values (channel means of RGB).
+pub struct FrameSeries {
+    /// All frames merged.
+    pub film: Film,
+    /// Mean over frames per pixel.
+    pub pixel_mean: Vec<f64>,
+    /// Standard error of `pixel_mean`, from each pixel's own frames.
+    pub pixel_std_err: Vec<f64>,
+    /// Standard error of a pixel mean with the per-frame variance pooled over all pixels
+    /// (for images whose pixels all see one distribution).
+    pub pooled_pixel_std_err: f64,
+    /// Mean over frames of the image mean.
+    pub image_mean: f64,
+    /// Standard error of `image_mean`.
+    pub image_std_err: f64,
+}
+
+/// Mean and standard error of the mean of `values` (n ≥ 2).
+fn mean_and_std_err(values: impl ExactSizeIterator<Item = f64> + Clone) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.clone().sum::<f64>() / n;
+    let variance = values.map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (variance / n).sqrt())
+}
+
+/// Renders `frames` frames (iterations 0, 1, …), each into its own film.
+pub fn render_series(tracer: &mut PathTracer, frames: u32) -> FrameSeries {
+    let PtSettings { width, height, .. } = *tracer.settings();
+    let mut film = Film::new(width, height);
+    let mut per_frame: Vec<Vec<f64>> = Vec::new();
+    for iteration in 0..frames {
+        let mut frame = Film::new(width, height);
+        tracer.render_frame(&mut frame, iteration);
+        per_frame.push(
+            frame
+                .mean()
+                .iter()
+                .map(|rgb| f64::from(rgb.element_sum()) / 3.0)
+                .collect(),
+        );
+        film.merge(&frame);
+    }
+    let pixels = (width * height) as usize;
+    let (pixel_mean, pixel_std_err): (Vec<f64>, Vec<f64>) = (0..pixels)
+        .map(|p| mean_and_std_err(per_frame.iter().map(|f| f[p])))
+        .unzip();
+    let pooled_pixel_std_err =
+        (pixel_std_err.iter().map(|e| e * e).sum::<f64>() / pixels as f64).sqrt();
+    let image_means = per_frame
+        .iter()
+        .map(|f| f.iter().sum::<f64>() / pixels as f64);
+    let (image_mean, image_std_err) = mean_and_std_err(image_means.collect::<Vec<_>>().into_iter());
+    FrameSeries {
+        film,
+        pixel_mean,
+        pixel_std_err,
+        pooled_pixel_std_err,
+        image_mean,
+        image_std_err,
+    }
+}
+
+/// Subsamples per pixel side for analytic pixel values.
+const QUADRATURE: u32 = 32;
+
+/// Box-filtered values of a `size` × `size` image of the plane z = 0 seen by `camera`: the
+/// mean of `radiance_at(point)` over each pixel (midpoint rule, 32 × 32 subsamples).
+pub fn plane_pixel_values(
+    camera: &Camera,
+    size: u32,
+    radiance_at: impl Fn(DVec3) -> f64,
+) -> Vec<f64> {
+    let eye = camera.position.as_dvec3();
+    let step = 1.0 / QUADRATURE as f32;
+    let pixel_value = |pixel: u32| {
+        let corner = Vec2::new((pixel % size) as f32, (pixel / size) as f32);
+        let sum: f64 = (0..QUADRATURE * QUADRATURE)
+            .map(|i| {
+                let offset =
+                    Vec2::new((i % QUADRATURE) as f32 + 0.5, (i / QUADRATURE) as f32 + 0.5);
+                let dir = camera
+                    .direction(size, size, corner + offset * step)
+                    .as_dvec3();
+                radiance_at(eye + dir * (-eye.z / dir.z))
+            })
+            .sum();
+        sum / f64::from(QUADRATURE * QUADRATURE)
+    };
+    (0..size * size).map(pixel_value).collect()
+}
+
+/// Asserts that the rendered image matches `expected` (per pixel): the image mean within 4
+/// standard errors, every pixel within 5 of its own (with 64 pixels the chance of a false
+/// failure stays below 1e-4). Both allow 1e-5 of the brightest expected pixel besides, for
+/// f32 rounding along the path and for slivers of a pixel too small for its few samples to
+/// land in (a spot cone's edge crossing a corner: no sample there means a standard error of 0).
+pub fn assert_pixels_match(series: &FrameSeries, expected: &[f64], label: &str) {
+    let floor = 1e-5 * expected.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    let want = expected.iter().sum::<f64>() / expected.len() as f64;
+    let (mean, se) = (series.image_mean, series.image_std_err);
+    assert!(
+        (mean - want).abs() <= 4.0 * se + floor,
+        "{label}: image mean {mean} vs {want} ± 4·{se}"
+    );
+    for (p, want) in expected.iter().enumerate() {
+        let (m, e) = (series.pixel_mean[p], series.pixel_std_err[p]);
+        assert!(
+            (m - want).abs() <= 5.0 * e + floor,
+            "{label}, pixel {p}: {m} vs {want} ± 5·{e}"
+        );
+    }
+    assert_eq!(series.film.dropped(), 0, "{label}");
+}
+
+/// A square of half side `half` in the plane z = 0, facing +Z.
+pub fn push_floor(positions: &mut Vec<Vec3>, triangles: &mut Vec<[u32; 3]>, half: f32) {
+    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .map(|(x, y)| Vec3::new(x * half, y * half, 0.0));
+    push_quad(positions, triangles, corners);
+}

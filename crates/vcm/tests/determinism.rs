@@ -1,0 +1,85 @@
+//! A render is a pure function of (scene, settings, seed, iteration): the same film, bit for
+//! bit, for any number of threads.
+
+mod common;
+
+use glam::Vec3;
+use vcm::{Film, PtSettings};
+use vcm_scene::Material;
+use vcm_scene::light::{Light, PointLight};
+
+/// A diffuse floor, a rough metal wall, a one-sided area light facing down and a point light.
+fn render(threads: usize) -> Film {
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    let quads = [
+        [
+            (-2.0, -2.0, 0.0),
+            (2.0, -2.0, 0.0),
+            (2.0, 2.0, 0.0),
+            (-2.0, 2.0, 0.0),
+        ],
+        [
+            (-2.0, 2.0, 0.0),
+            (2.0, 2.0, 0.0),
+            (2.0, 2.0, 3.0),
+            (-2.0, 2.0, 3.0),
+        ],
+        [
+            (-0.5, -0.5, 2.0),
+            (-0.5, 0.5, 2.0),
+            (0.5, 0.5, 2.0),
+            (0.5, -0.5, 2.0),
+        ],
+    ];
+    for quad in quads {
+        let corners = quad.map(|(x, y, z)| Vec3::new(x, y, z));
+        common::push_quad(&mut positions, &mut triangles, corners);
+    }
+    let lamp = Material {
+        emission: Vec3::new(5.0, 4.0, 3.0),
+        ..Material::diffuse("lamp", Vec3::ZERO)
+    };
+    let scene = common::scene(
+        common::mesh(positions, triangles, vec![0, 0, 1, 1, 2, 2]),
+        vec![
+            Material::diffuse("floor", Vec3::splat(0.7)),
+            Material {
+                metallic: 1.0,
+                roughness: 0.4,
+                ..Material::diffuse("wall", Vec3::new(0.9, 0.6, 0.3))
+            },
+            lamp,
+        ],
+        vec![Light::Point(PointLight {
+            position: Vec3::new(1.0, -1.0, 1.0),
+            intensity: Vec3::splat(2.0),
+        })],
+        common::camera(Vec3::new(0.0, -1.0, 6.0), 0.9),
+    );
+    let settings = PtSettings {
+        width: 24,
+        height: 16,
+        seed: 3,
+        max_depth: None,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut tracer = common::path_tracer(scene, settings);
+        let mut film = Film::new(settings.width, settings.height);
+        for iteration in 0..4 {
+            tracer.render_frame(&mut film, iteration);
+        }
+        film
+    })
+}
+
+#[test]
+fn films_are_bit_identical_for_one_and_two_threads() {
+    let (one, two) = (render(1), render(2));
+    assert!(one.mean().iter().any(|rgb| rgb.max_element() > 0.0));
+    // Film equality compares the f64 sums exactly.
+    assert_eq!(one, two);
+}

@@ -1,0 +1,128 @@
+//! White-furnace tests: inside a closed sphere that emits Le everywhere and reflects with
+//! Lambertian albedo ρ, the radiance is Le · Σₖ ρᵏ over the path lengths allowed, Le / (1 − ρ)
+//! without a limit, in every pixel and every direction, whatever the sphere's size.
+
+mod common;
+
+use glam::Vec3;
+use vcm::PtSettings;
+use vcm_scene::Material;
+
+const ALBEDO: f32 = 0.5;
+const EMITTED: f32 = 1.0;
+const SIZE: u32 = 16;
+
+/// The diffuse furnace with a sphere of radius `scale`.
+fn furnace(max_depth: Option<u32>, scale: f32) -> vcm::PathTracer {
+    let material = Material {
+        emission: Vec3::splat(EMITTED),
+        ..Material::diffuse("furnace", Vec3::splat(ALBEDO))
+    };
+    furnace_of(material, max_depth, scale)
+}
+
+/// A furnace of `material` with a sphere of radius `scale`.
+fn furnace_of(material: Material, max_depth: Option<u32>, scale: f32) -> vcm::PathTracer {
+    let (positions, triangles) = common::inward_icosphere(2);
+    let positions = positions.into_iter().map(|p| p * scale).collect();
+    let material_ids = vec![0; triangles.len()];
+    let scene = common::scene(
+        common::mesh(positions, triangles, material_ids),
+        vec![material],
+        Vec::new(),
+        common::camera(Vec3::new(0.1, -0.2, 0.05) * scale, 1.2),
+    );
+    let settings = PtSettings {
+        width: SIZE,
+        height: SIZE,
+        seed: 5,
+        max_depth,
+    };
+    common::path_tracer(scene, settings)
+}
+
+/// Le · (1 + ρ + … + ρ^(segments − 1)).
+fn expected(segments: Option<u32>) -> f64 {
+    let (le, rho) = (f64::from(EMITTED), f64::from(ALBEDO));
+    match segments {
+        None => le / (1.0 - rho),
+        Some(n) => le * (1.0 - rho.powi(n as i32)) / (1.0 - rho),
+    }
+}
+
+fn assert_converges(max_depth: Option<u32>, scale: f32, frames: u32) {
+    let series = common::render_series(&mut furnace(max_depth, scale), frames);
+    let want = expected(max_depth);
+    let (mean, se) = (series.image_mean, series.image_std_err);
+    assert!(
+        (mean - want).abs() < 4.0 * se,
+        "image mean {mean} vs {want} ± 4·{se} (max_depth {max_depth:?}, scale {scale})"
+    );
+    // Every pixel sees the same distribution, whose tail is long (path length, near-edge light
+    // samples): a pixel's own few samples often miss the rare large values and understate its
+    // spread, so the per-pixel bound uses the variance pooled over all pixels. 5σ: with 256
+    // pixels the chance of a false failure stays below 1e-3.
+    let e = series.pooled_pixel_std_err;
+    for (p, &m) in series.pixel_mean.iter().enumerate() {
+        assert!(
+            (m - want).abs() < 5.0 * e,
+            "pixel {p}: {m} vs {want} ± 5·{e} (scale {scale})"
+        );
+    }
+    assert_eq!(series.film.dropped(), 0);
+}
+
+#[test]
+fn unlimited_paths_converge_to_le_over_one_minus_albedo() {
+    assert_converges(None, 1.0, 200);
+}
+
+#[test]
+fn tiny_and_huge_furnaces_converge_to_the_same_value() {
+    for scale in [1e-4, 1e5] {
+        assert_converges(None, scale, 100);
+    }
+}
+
+#[test]
+fn three_segments_give_the_first_three_terms() {
+    assert_converges(Some(3), 1.0, 100);
+}
+
+#[test]
+fn one_segment_sees_only_the_emission_and_zero_segments_nothing() {
+    for (max_depth, want) in [(1, EMITTED), (0, 0.0)] {
+        let mut tracer = furnace(Some(max_depth), 1.0);
+        let mut film = vcm::Film::new(SIZE, SIZE);
+        let stats = tracer.render_frame(&mut film, 0);
+        assert_eq!(stats.camera_rays, u64::from(SIZE * SIZE));
+        assert_eq!((stats.continuation_rays, stats.shadow_rays), (0, 0));
+        for rgb in film.mean() {
+            assert_eq!(rgb, Vec3::splat(want), "max_depth {max_depth}");
+        }
+    }
+}
+
+#[test]
+fn a_perfect_mirror_furnace_adds_le_per_segment() {
+    // Schlick Fresnel with F0 = 1 reflects everything: every segment ends on Le, always with
+    // full MIS weight since delta bounces cannot be light-sampled.
+    let mirror = Material {
+        emission: Vec3::splat(EMITTED),
+        metallic: 1.0,
+        roughness: 0.0,
+        ..Material::default()
+    };
+    let segments = 3;
+    let mut tracer = furnace_of(mirror, Some(segments), 1.0);
+    let mut film = vcm::Film::new(SIZE, SIZE);
+    let stats = tracer.render_frame(&mut film, 0);
+    assert_eq!(stats.shadow_rays, 0);
+    let want = EMITTED * segments as f32;
+    for rgb in film.mean() {
+        assert!(
+            (rgb - Vec3::splat(want)).abs().max_element() < 1e-5 * want,
+            "{rgb}"
+        );
+    }
+}

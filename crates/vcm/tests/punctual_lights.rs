@@ -1,0 +1,144 @@
+//! A Lambertian plane lit by point, spot and directional lights: the radiance toward the
+//! camera is L = ρ/π · I · cos θ / d² (times the spot's falloff), or ρ/π · E · cos θ outside
+//! an occluder's shadow for a directional light of irradiance E. Only direct light: the plane
+//! cannot see itself. The point light scene is also rendered at tiny and huge scales: lengths
+//! × s and intensity × s² give the same image.
+
+mod common;
+
+use glam::{DVec3, Vec3};
+use vcm::PtSettings;
+use vcm_scene::Material;
+use vcm_scene::light::{DirectionalLight, Light, PointLight, SpotLight};
+
+const ALBEDO: f32 = 0.5;
+/// Radiant intensity at scale 1 (W/sr).
+const INTENSITY: Vec3 = Vec3::new(4.0, 8.0, 12.0);
+/// Light position at scale 1.
+const LIGHT: Vec3 = Vec3::new(0.5, -0.3, 1.5);
+const SIZE: u32 = 8;
+
+/// Channel mean of an RGB value.
+fn mean(rgb: Vec3) -> f64 {
+    f64::from(rgb.element_sum()) / 3.0
+}
+
+/// Analytic radiance (channel mean) leaving the plane z = 0 at `p`, lit by a light of radiant
+/// intensity `intensity` (W/sr toward `p`) at `position`.
+fn radiance(position: Vec3, intensity: f64, p: DVec3) -> f64 {
+    let to_light = position.as_dvec3() - p;
+    let d2 = to_light.length_squared();
+    let cos_theta = to_light.z / d2.sqrt();
+    f64::from(ALBEDO) / std::f64::consts::PI * intensity * cos_theta / d2
+}
+
+/// A path tracer for the floor (of half side `half`, plus `extra` quads of material 1, black)
+/// under `light`, seen by `camera`.
+fn floor_under(
+    light: Light,
+    camera: vcm_scene::Camera,
+    half: f32,
+    extra: &[[Vec3; 4]],
+) -> vcm::PathTracer {
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    common::push_floor(&mut positions, &mut triangles, half);
+    for quad in extra {
+        common::push_quad(&mut positions, &mut triangles, *quad);
+    }
+    let mut material_ids = vec![1; triangles.len()];
+    material_ids[..2].fill(0);
+    let scene = common::scene(
+        common::mesh(positions, triangles, material_ids),
+        vec![
+            Material::diffuse("floor", Vec3::splat(ALBEDO)),
+            Material::diffuse("black", Vec3::ZERO),
+        ],
+        vec![light],
+        camera,
+    );
+    let settings = PtSettings {
+        width: SIZE,
+        height: SIZE,
+        seed: 9,
+        max_depth: None,
+    };
+    common::path_tracer(scene, settings)
+}
+
+/// Renders the point light scene at scale `scale` and compares every pixel with the closed
+/// form.
+fn assert_matches_closed_form(scale: f32) {
+    let camera = common::camera(Vec3::new(0.2, 0.1, 3.0) * scale, 0.6);
+    let light = PointLight {
+        position: LIGHT * scale,
+        intensity: INTENSITY * scale * scale,
+    };
+    let mut tracer = floor_under(Light::Point(light.clone()), camera, 20.0 * scale, &[]);
+    let series = common::render_series(&mut tracer, 64);
+    let expected = common::plane_pixel_values(&camera, SIZE, |p| {
+        radiance(light.position, mean(light.intensity), p)
+    });
+    common::assert_pixels_match(&series, &expected, &format!("scale {scale}"));
+}
+
+#[test]
+fn lambertian_plane_under_a_point_light_matches_the_closed_form() {
+    assert_matches_closed_form(1.0);
+}
+
+#[test]
+fn the_closed_form_holds_at_tiny_and_huge_scales() {
+    for scale in [1e-4, 1e5] {
+        assert_matches_closed_form(scale);
+    }
+}
+
+#[test]
+fn spot_light_falloff_matches_the_closed_form() {
+    // The whole view lies inside the outer cone (tan 0.85 · 1.5 ≈ 1.7 > the view's corners at
+    // ≤ 1.5 from the axis) and mostly outside the inner one, so every pixel sees the falloff
+    // ramp and no pixel a cut-off sliver that its few samples could miss.
+    let camera = common::camera(Vec3::new(0.0, 0.0, 3.0), 0.6);
+    let spot = SpotLight {
+        position: Vec3::new(0.1, -0.1, 1.5),
+        direction: Vec3::new(-0.05, 0.05, -1.0).normalize(),
+        intensity: INTENSITY,
+        cos_inner: 0.2f32.cos(),
+        cos_outer: 0.85f32.cos(),
+    };
+    let mut tracer = floor_under(Light::Spot(spot.clone()), camera, 20.0, &[]);
+    let series = common::render_series(&mut tracer, 64);
+    let expected = common::plane_pixel_values(&camera, SIZE, |p| {
+        let to_p = (p - spot.position.as_dvec3()).normalize().as_vec3();
+        let falloff = f64::from(spot.falloff(spot.direction.dot(to_p)));
+        radiance(spot.position, mean(spot.intensity) * falloff, p)
+    });
+    common::assert_pixels_match(&series, &expected, "spot");
+}
+
+#[test]
+fn directional_light_and_its_shadow_match_the_closed_form() {
+    // Light travels along (-1, 0, -1)/√2; a black square at z = 1 beside the camera's view
+    // shadows the floor where x + 1 ∈ [0.8, 1.6] and |y| ≤ 0.3.
+    let camera = common::camera(Vec3::new(0.0, 0.0, 3.0), 0.6);
+    let irradiance = Vec3::new(2.0, 3.0, 4.0);
+    let light = DirectionalLight {
+        direction: Vec3::new(-1.0, 0.0, -1.0).normalize(),
+        irradiance,
+        scene_center: Vec3::ZERO,
+        scene_radius: 30.0,
+    };
+    let occluder =
+        [(0.8, -0.3), (1.6, -0.3), (1.6, 0.3), (0.8, 0.3)].map(|(x, y)| Vec3::new(x, y, 1.0));
+    let mut tracer = floor_under(Light::Directional(light), camera, 20.0, &[occluder]);
+    let series = common::render_series(&mut tracer, 64);
+    let lit = f64::from(ALBEDO) / std::f64::consts::PI * mean(irradiance) * 0.5f64.sqrt();
+    let expected = common::plane_pixel_values(&camera, SIZE, |p| {
+        let shadowed = (0.8..=1.6).contains(&(p.x + 1.0)) && p.y.abs() <= 0.3;
+        if shadowed { 0.0 } else { lit }
+    });
+    // Some pixels lie fully in the shadow, some fully in the light.
+    assert!(expected.contains(&0.0));
+    assert!(expected.iter().any(|&l| (l - lit).abs() < 1e-9 * lit));
+    common::assert_pixels_match(&series, &expected, "directional");
+}

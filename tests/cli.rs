@@ -1,0 +1,110 @@
+//! The `vcm` command line: renders write EXR and PNG, bad input gives a clear error and a
+//! non-zero exit status, `compare` reports metrics.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn vcm(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vcm"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the vcm binary runs")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+#[test]
+fn render_writes_exr_and_png_and_compare_measures_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("box.exr");
+    let exr_arg = exr.to_str().unwrap();
+    let output = vcm(&[
+        "render", "--spp", "2", "--width", "48", "--height", "32", "-o", exr_arg,
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let summary = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        summary.contains("samples/s") && summary.contains("dropped"),
+        "{summary}"
+    );
+    let image = vcm::image_io::RgbImage::read_exr(&exr).unwrap();
+    assert_eq!((image.width, image.height), (48, 32));
+    let mean =
+        image.pixels.iter().map(|p| p.x + p.y + p.z).sum::<f32>() / image.pixels.len() as f32;
+    assert!(
+        mean > 0.01 && mean.is_finite(),
+        "the Cornell box renders light: mean {mean}"
+    );
+    assert!(exr.with_extension("png").is_file());
+
+    let diff = dir.path().join("diff.png");
+    let output = vcm(&[
+        "compare",
+        exr_arg,
+        exr_arg,
+        "--diff",
+        diff.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("relmse 0.0"));
+    assert!(diff.is_file());
+}
+
+#[test]
+fn the_report_records_error_against_the_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("reference.exr");
+    let common = ["--width", "24", "--height", "24"];
+    let mut args = vec!["render", "--spp", "8", "-o", reference.to_str().unwrap()];
+    args.extend(common);
+    assert!(vcm(&args).status.success());
+    let report = dir.path().join("conv.csv");
+    let out = dir.path().join("short.exr");
+    let mut args = vec![
+        "render",
+        "--spp",
+        "1",
+        "--seed",
+        "7",
+        "-o",
+        out.to_str().unwrap(),
+        "--reference",
+        reference.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ];
+    args.extend(common);
+    let output = vcm(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let csv = std::fs::read_to_string(&report).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("seconds,spp,rmse,relmse,mae"));
+    let last: Vec<f64> = lines
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(last[1], 1.0);
+    assert!(last[3] > 0.0, "a 1 spp render differs from an 8 spp one");
+}
+
+#[test]
+fn bad_input_is_a_clear_error_with_non_zero_status() {
+    let cases: [(&[&str], &str); 4] = [
+        (&["render", "no/such/scene.gltf"], "scene.gltf"),
+        (&["render", "--spp", "0"], "--spp"),
+        (&["render", "-o", "/nonexistent-folder/out.exr"], "out.exr"),
+        (&["render", "--bogus-option"], "--bogus-option"),
+    ];
+    for (args, needle) in cases {
+        let output = vcm(args);
+        assert!(!output.status.success(), "{args:?} succeeded");
+        let message = stderr(&output);
+        assert!(message.contains(needle), "{args:?}: {message}");
+    }
+    assert!(!Path::new("/nonexistent-folder").exists());
+}
