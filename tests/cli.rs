@@ -90,6 +90,8 @@ fn the_report_records_error_against_the_reference() {
         .collect();
     assert_eq!(last[1], 1.0);
     assert!(last[3] > 0.0, "a 1 spp render differs from an 8 spp one");
+    let plot = image::open(report.with_extension("png")).unwrap();
+    assert_eq!((plot.width(), plot.height()), (800, 600));
 }
 
 #[test]

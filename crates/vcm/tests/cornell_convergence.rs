@@ -55,7 +55,12 @@ fn a_short_render_agrees_with_a_long_one_within_the_standard_error() {
     for r in 0..REGIONS * REGIONS {
         let sigma = (short_err[r].powi(2) + long_err[r].powi(2)).sqrt();
         let z = (short[r] - long[r]) / sigma;
-        assert!(z.abs() < 4.4, "region {r}: {} vs {} (z = {z:.2})", short[r], long[r]);
+        assert!(
+            z.abs() < 4.4,
+            "region {r}: {} vs {} (z = {z:.2})",
+            short[r],
+            long[r]
+        );
         assert!(long[r] > 0.0, "region {r} is black");
     }
 }

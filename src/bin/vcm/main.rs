@@ -2,6 +2,7 @@
 
 mod compare;
 mod info;
+mod plot;
 mod render;
 
 use clap::{Parser, Subcommand};

@@ -12,6 +12,8 @@ use vcm::metrics::{ErrorMetrics, compare};
 use vcm::{Film, FrameStats, PathTracer, PtSettings};
 use vcm_rs::scene::Scene;
 
+use crate::plot::{Series, plot_relmse};
+
 /// Light transport algorithms (more arrive with the VCM integrator).
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum Algorithm {
@@ -66,7 +68,8 @@ pub struct RenderArgs {
     /// Reference EXR to measure the error against while rendering.
     #[arg(long)]
     reference: Option<PathBuf>,
-    /// CSV file for the error over time: seconds,spp,rmse,relmse,mae at 1, 2, 4, … s and at the end.
+    /// CSV file for the error over time: seconds,spp,rmse,relmse,mae at 1, 2, 4, … s and at
+    /// the end; a log-log plot of relMSE against seconds is drawn beside it (PNG).
     #[arg(long, requires = "reference")]
     report: Option<PathBuf>,
 }
@@ -210,6 +213,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     image.write_png(&png, 0.0)?;
     if let Some(report) = &args.report {
         write_report(report, &checkpoints)?;
+        let plot = report.with_extension("png");
+        let series = Series {
+            label: format!("{:?}", args.algo).to_lowercase(),
+            points: checkpoints
+                .iter()
+                .map(|c| (c.seconds, c.metrics.relmse))
+                .collect(),
+        };
+        let title = format!("relMSE over time: {}", args.scene.display());
+        plot_relmse(&plot, &title, &[series])?;
+        println!("wrote {} and {}", report.display(), plot.display());
     }
     print_summary(&film, &totals, spp, elapsed, &checkpoints);
     println!("wrote {} and {}", args.output.display(), png.display());

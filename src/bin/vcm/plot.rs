@@ -1,0 +1,141 @@
+//! Convergence plots: relMSE against seconds on log-log axes, one curve per series, as PNG.
+//!
+//! Text needs a TrueType font: `VCM_PLOT_FONT` names one, else common system fonts (DejaVu,
+//! Liberation) are tried; without any, the plot is drawn without labels and a warning says so.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use anyhow::{Context, bail};
+use plotters::prelude::*;
+
+/// One curve: a label and (seconds, relMSE) points.
+pub struct Series {
+    /// Legend text (e.g. the algorithm).
+    pub label: String,
+    /// (seconds, relMSE) pairs in time order.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Font files tried, in order, when `VCM_PLOT_FONT` is not set.
+const FONT_CANDIDATES: &[&str] = &[
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/System/Library/Fonts/Supplemental/Arial.ttf",
+    "C:\\Windows\\Fonts\\arial.ttf",
+];
+
+/// Registers a system font as "sans-serif" once; false when none could be loaded.
+fn font_available() -> bool {
+    static LOADED: OnceLock<bool> = OnceLock::new();
+    *LOADED.get_or_init(|| {
+        let candidates: Vec<PathBuf> = match std::env::var_os("VCM_PLOT_FONT") {
+            Some(path) => vec![path.into()],
+            None => FONT_CANDIDATES.iter().map(PathBuf::from).collect(),
+        };
+        candidates.iter().any(|path| {
+            std::fs::read(path).ok().is_some_and(|bytes| {
+                // Registered fonts live for the whole process.
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok()
+            })
+        })
+    })
+}
+
+/// Draws the series into a PNG at `path` (written to a temporary file, then renamed).
+pub fn plot_relmse(path: &Path, title: &str, series: &[Series]) -> anyhow::Result<()> {
+    let positive = || {
+        series
+            .iter()
+            .flat_map(|s| &s.points)
+            .filter(|(t, e)| *t > 0.0 && *e > 0.0 && t.is_finite() && e.is_finite())
+    };
+    if positive().next().is_none() {
+        bail!(
+            "{}: no positive (seconds, relMSE) points to plot",
+            path.display()
+        );
+    }
+    let (t0, t1) = positive().fold((f64::MAX, f64::MIN), |(a, b), (t, _)| {
+        (a.min(*t), b.max(*t))
+    });
+    let (e0, e1) = positive().fold((f64::MAX, f64::MIN), |(a, b), (_, e)| {
+        (a.min(*e), b.max(*e))
+    });
+    let labels = font_available();
+    if !labels {
+        eprintln!("warning: no TrueType font found (set VCM_PLOT_FONT); the plot has no labels");
+    }
+    // The bitmap backend picks the encoder from the extension: keep ".png" on the temporary.
+    let name = path
+        .file_name()
+        .map_or_else(|| "plot.png".into(), |n| n.to_string_lossy());
+    let temporary = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
+    draw(
+        &temporary,
+        title,
+        series,
+        (t0 / 1.5, t1 * 1.5),
+        (e0 / 2.0, e1 * 2.0),
+        labels,
+    )
+    .map_err(|e| anyhow::anyhow!("{}: cannot draw the plot: {e}", path.display()))?;
+    std::fs::rename(&temporary, path).with_context(|| format!("{}: cannot write", path.display()))
+}
+
+fn draw(
+    path: &Path,
+    title: &str,
+    series: &[Series],
+    (t0, t1): (f64, f64),
+    (e0, e1): (f64, f64),
+    labels: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let root = BitMapBackend::new(path, (800, 600)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut builder = ChartBuilder::on(&root);
+    builder.margin(20);
+    if labels {
+        builder
+            .caption(title, ("sans-serif", 22))
+            .x_label_area_size(45)
+            .y_label_area_size(70);
+    }
+    let mut chart = builder.build_cartesian_2d((t0..t1).log_scale(), (e0..e1).log_scale())?;
+    let mut mesh = chart.configure_mesh();
+    if labels {
+        mesh.x_desc("seconds")
+            .y_desc("relMSE")
+            .label_style(("sans-serif", 14));
+    } else {
+        mesh.x_labels(0).y_labels(0);
+    }
+    mesh.draw()?;
+    for (i, s) in series.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let points = s
+            .points
+            .iter()
+            .copied()
+            .filter(|(t, e)| *t > 0.0 && *e > 0.0);
+        let line = chart.draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))?;
+        if labels {
+            line.label(s.label.clone()).legend(move |(x, y)| {
+                PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        }
+        chart.draw_series(points.map(|p| Circle::new(p, 3, color.filled())))?;
+    }
+    if labels {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
+}
