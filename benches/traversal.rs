@@ -100,7 +100,11 @@ fn main() {
         rayon::current_num_threads(),
         std::thread::available_parallelism().map_or(0, |n| n.get()),
     );
+    // No HTML plots: the throughput figures are what matters, and criterion's plotting breaks
+    // when the workspace enables plotters' ab_glyph text backend (used by `vcm render`'s plots)
+    // without a registered font.
     let mut criterion = Criterion::default()
+        .without_plots()
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4))
