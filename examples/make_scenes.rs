@@ -17,6 +17,7 @@ use std::path::Path;
 use base64::Engine;
 use glam::{Quat, Vec3};
 use serde_json::{Value, json};
+use vcm_scene::shapes::icosphere;
 
 /// Linear albedos of the classic Cornell box (white, red, green walls).
 const WHITE: [f32; 3] = [0.725, 0.71, 0.68];
@@ -257,70 +258,6 @@ fn block(center_xz: (f32, f32), half: Vec3, angle_degrees: f32, floor: f32) -> G
         let base = positions.len() as u32;
         positions.extend(face.map(corner));
         triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
-    }
-    (positions, triangles)
-}
-
-/// A unit icosphere (outward-facing) with `subdivisions` levels of 4-way splits:
-/// 20·4^subdivisions triangles.
-fn icosphere(subdivisions: u32) -> Geometry {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut positions: Vec<Vec3> = [
-        (-1., t, 0.),
-        (1., t, 0.),
-        (-1., -t, 0.),
-        (1., -t, 0.),
-        (0., -1., t),
-        (0., 1., t),
-        (0., -1., -t),
-        (0., 1., -t),
-        (t, 0., -1.),
-        (t, 0., 1.),
-        (-t, 0., -1.),
-        (-t, 0., 1.),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let mut triangles: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..subdivisions {
-        let mut midpoints = std::collections::HashMap::new();
-        let mut midpoint = |a: u32, b: u32, positions: &mut Vec<Vec3>| {
-            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                positions.push(((positions[a as usize] + positions[b as usize]) * 0.5).normalize());
-                positions.len() as u32 - 1
-            })
-        };
-        triangles = triangles
-            .iter()
-            .flat_map(|&[a, b, c]| {
-                let ab = midpoint(a, b, &mut positions);
-                let bc = midpoint(b, c, &mut positions);
-                let ca = midpoint(c, a, &mut positions);
-                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-            })
-            .collect();
     }
     (positions, triangles)
 }

@@ -31,6 +31,7 @@ pub mod material;
 pub mod mesh;
 pub mod sampling;
 pub mod scene;
+pub mod shapes;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod texture;

@@ -48,66 +48,8 @@ pub fn push_quad(positions: &mut Vec<Vec3>, triangles: &mut Vec<[u32; 3]>, corne
 /// A unit icosphere around the origin, `subdivisions` times refined, with every triangle
 /// facing inward (counter-clockwise seen from the center).
 pub fn inward_icosphere(subdivisions: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let phi = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut positions: Vec<Vec3> = [
-        (-1.0, phi, 0.0),
-        (1.0, phi, 0.0),
-        (-1.0, -phi, 0.0),
-        (1.0, -phi, 0.0),
-        (0.0, -1.0, phi),
-        (0.0, 1.0, phi),
-        (0.0, -1.0, -phi),
-        (0.0, 1.0, -phi),
-        (phi, 0.0, -1.0),
-        (phi, 0.0, 1.0),
-        (-phi, 0.0, -1.0),
-        (-phi, 0.0, 1.0),
-    ]
-    .map(|(x, y, z)| Vec3::new(x, y, z).normalize())
-    .to_vec();
-    // Outward-facing icosahedron (counter-clockwise seen from outside).
-    let mut triangles: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..subdivisions {
-        let mut midpoints = std::collections::HashMap::new();
-        let mut midpoint = |a: u32, b: u32, positions: &mut Vec<Vec3>| {
-            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                let m = (positions[a as usize] + positions[b as usize]).normalize();
-                positions.push(m);
-                positions.len() as u32 - 1
-            })
-        };
-        triangles = triangles
-            .iter()
-            .flat_map(|&[a, b, c]| {
-                let ab = midpoint(a, b, &mut positions);
-                let bc = midpoint(b, c, &mut positions);
-                let ca = midpoint(c, a, &mut positions);
-                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-            })
-            .collect();
-    }
-    let inward = triangles.into_iter().map(|[a, b, c]| [a, c, b]).collect();
+    let (positions, outward) = vcm_scene::shapes::icosphere(subdivisions);
+    let inward = outward.into_iter().map(|[a, b, c]| [a, c, b]).collect();
     (positions, inward)
 }
 
