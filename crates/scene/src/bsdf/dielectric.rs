@@ -16,7 +16,9 @@
 //! probability T = 1 − R and coefficient T·s.
 
 use super::fresnel::{fresnel_dielectric, reflect, refract};
-use super::lobe::{Lobe, LobeSample, mean};
+use super::lobe::{
+    Lobe, LobeSample, interface_delta_prob, interface_selection_weight, microfacet_kind,
+};
 use super::microfacet::Ggx;
 use super::{LobeKind, TransportMode};
 use glam::{Vec2, Vec3};
@@ -124,23 +126,15 @@ impl Lobe for Dielectric {
     }
 
     fn delta_prob(&self, wo: Vec3, eta: f32, transmitted: bool) -> f32 {
-        if self.ggx.is_some() {
-            return 0.0;
-        }
         let r = fresnel_dielectric(wo.z, eta);
-        if transmitted { 1.0 - r } else { r }
+        interface_delta_prob(self.ggx.as_ref(), r, transmitted)
     }
 
     fn selection_weight(&self, wo: Vec3, eta: f32) -> f32 {
-        let r = fresnel_dielectric(wo.z, eta);
-        self.weight * (r + (1.0 - r) * mean(self.tint))
+        interface_selection_weight(self.weight, self.tint, fresnel_dielectric(wo.z, eta))
     }
 
     fn kind(&self) -> LobeKind {
-        if self.ggx.is_some() {
-            LobeKind::Glossy
-        } else {
-            LobeKind::Specular
-        }
+        microfacet_kind(self.ggx.as_ref())
     }
 }

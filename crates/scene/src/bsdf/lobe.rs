@@ -5,8 +5,34 @@
 //! `eta` is the relative IOR η(wi side) / η(wo side) of a refracting interface (only the
 //! thick dielectric uses it). Every lobe value already includes the lobe's mixture weight.
 
+use super::microfacet::Ggx;
 use super::{LobeKind, TransportMode};
 use glam::{Vec2, Vec3};
+
+/// The class of a microfacet lobe: glossy with a GGX distribution, a delta (specular) without.
+pub(super) fn microfacet_kind(ggx: Option<&Ggx>) -> LobeKind {
+    if ggx.is_some() {
+        LobeKind::Glossy
+    } else {
+        LobeKind::Specular
+    }
+}
+
+/// Discrete probability that a smooth interface with reflectance `r` picks its reflected
+/// (`r`) or transmitted (1 − r) delta; 0 for rough interfaces, which have no deltas.
+pub(super) fn interface_delta_prob(ggx: Option<&Ggx>, r: f32, transmitted: bool) -> f32 {
+    match (ggx, transmitted) {
+        (Some(_), _) => 0.0,
+        (None, true) => 1.0 - r,
+        (None, false) => r,
+    }
+}
+
+/// Selection weight of an interface lobe: its reflectance `r` plus the tinted transmittance,
+/// times the lobe's mixture weight.
+pub(super) fn interface_selection_weight(weight: f32, tint: Vec3, r: f32) -> f32 {
+    weight * (r + (1.0 - r) * mean(tint))
+}
 
 /// Direction drawn by a lobe.
 pub(super) enum LobeSample {

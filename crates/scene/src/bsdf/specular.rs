@@ -8,7 +8,7 @@
 
 use super::albedo::SpecularAlbedo;
 use super::fresnel::{reflect, schlick};
-use super::lobe::{Lobe, LobeSample, mean};
+use super::lobe::{Lobe, LobeSample, mean, microfacet_kind};
 use super::microfacet::Ggx;
 use super::{LobeKind, TransportMode};
 use glam::{Vec2, Vec3};
@@ -92,10 +92,6 @@ impl Lobe for SchlickReflection {
     }
 
     fn kind(&self) -> LobeKind {
-        if self.ggx.is_some() {
-            LobeKind::Glossy
-        } else {
-            LobeKind::Specular
-        }
+        microfacet_kind(self.ggx.as_ref())
     }
 }

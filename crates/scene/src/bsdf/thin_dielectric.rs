@@ -11,7 +11,9 @@
 //!   reflect ωo about m, keep it with probability R'(ωo·m), else mirror it.
 
 use super::fresnel::{fresnel_dielectric, reflect, thin_sheet_reflectance};
-use super::lobe::{Lobe, LobeSample, mean};
+use super::lobe::{
+    Lobe, LobeSample, interface_delta_prob, interface_selection_weight, microfacet_kind,
+};
 use super::microfacet::Ggx;
 use super::{LobeKind, TransportMode};
 use glam::{Vec2, Vec3};
@@ -104,23 +106,14 @@ impl Lobe for ThinDielectric {
     }
 
     fn delta_prob(&self, wo: Vec3, _eta: f32, transmitted: bool) -> f32 {
-        if self.ggx.is_some() {
-            return 0.0;
-        }
-        let r = self.reflectance(wo.z);
-        if transmitted { 1.0 - r } else { r }
+        interface_delta_prob(self.ggx.as_ref(), self.reflectance(wo.z), transmitted)
     }
 
     fn selection_weight(&self, wo: Vec3, _eta: f32) -> f32 {
-        let r = self.reflectance(wo.z);
-        self.weight * (r + (1.0 - r) * mean(self.tint))
+        interface_selection_weight(self.weight, self.tint, self.reflectance(wo.z))
     }
 
     fn kind(&self) -> LobeKind {
-        if self.ggx.is_some() {
-            LobeKind::Glossy
-        } else {
-            LobeKind::Specular
-        }
+        microfacet_kind(self.ggx.as_ref())
     }
 }
