@@ -179,7 +179,10 @@ pub(super) struct SpecularAlbedo {
 impl SpecularAlbedo {
     /// Lobe with Schlick (F0, F90) and roughness `alpha` (a mirror below [`SMOOTH_ALPHA`]).
     pub fn new(f0: Vec3, f90: Vec3, alpha: f32) -> SpecularAlbedo {
-        let row = (alpha >= SMOOTH_ALPHA).then(|| locate(node_of_alpha(alpha), R_RES));
+        // A layer that reflects nothing (F0 = F90 = 0, e.g. specularFactor 0) has E = 0 at any
+        // roughness: the closed form below gives that without touching (or building) the tables.
+        let reflects = f0.max(f90).max_element() > 0.0;
+        let row = (alpha >= SMOOTH_ALPHA && reflects).then(|| locate(node_of_alpha(alpha), R_RES));
         SpecularAlbedo { f0, f90, row }
     }
 
