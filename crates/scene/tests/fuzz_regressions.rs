@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use vcm_scene::loader::{load_gltf_from_bytes, obj::load_obj_from_reader};
+use vcm_scene::{Scene, SceneError};
 
 fn inputs(kind: &str) -> Vec<PathBuf> {
     let fuzz = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz");
@@ -17,36 +18,30 @@ fn inputs(kind: &str) -> Vec<PathBuf> {
     files
 }
 
-#[test]
-fn gltf_fuzz_inputs_never_panic() {
-    let files = inputs("gltf");
-    assert!(!files.is_empty(), "no glTF fuzz inputs found");
+/// Feeds every input of `kind` to `load` under the name `/nonexistent-fuzz-dir/<name>`:
+/// each must load or fail with an error that names that file.
+fn replay(kind: &str, name: &str, load: impl Fn(&Path, Vec<u8>) -> Result<Scene, SceneError>) {
+    let files = inputs(kind);
+    assert!(!files.is_empty(), "no {kind} fuzz inputs found");
+    let path = Path::new("/nonexistent-fuzz-dir").join(name);
     for file in files {
         let bytes = std::fs::read(&file).unwrap();
-        let path = Path::new("/nonexistent-fuzz-dir/input.gltf");
-        if let Err(e) = load_gltf_from_bytes(path, &bytes) {
-            assert!(
-                e.to_string().contains("input.gltf"),
-                "{}: {e}",
-                file.display()
-            );
+        if let Err(e) = load(&path, bytes) {
+            assert!(e.to_string().contains(name), "{}: {e}", file.display());
         }
     }
 }
 
 #[test]
+fn gltf_fuzz_inputs_never_panic() {
+    replay("gltf", "input.gltf", |path, bytes| {
+        load_gltf_from_bytes(path, &bytes)
+    });
+}
+
+#[test]
 fn obj_fuzz_inputs_never_panic() {
-    let files = inputs("obj");
-    assert!(!files.is_empty(), "no OBJ fuzz inputs found");
-    for file in files {
-        let bytes = std::fs::read(&file).unwrap();
-        let path = Path::new("/nonexistent-fuzz-dir/input.obj");
-        if let Err(e) = load_obj_from_reader(path, &mut std::io::Cursor::new(bytes)) {
-            assert!(
-                e.to_string().contains("input.obj"),
-                "{}: {e}",
-                file.display()
-            );
-        }
-    }
+    replay("obj", "input.obj", |path, bytes| {
+        load_obj_from_reader(path, &mut std::io::Cursor::new(bytes))
+    });
 }

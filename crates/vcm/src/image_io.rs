@@ -46,30 +46,14 @@ pub struct RgbImage {
     pub pixels: Vec<Vec3>,
 }
 
-/// A temporary name beside `path` (same folder, so the rename is atomic).
-fn temporary_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
-}
-
-/// Writes with `write` to a temporary file, then renames it over `path`.
+/// [`write_atomically`](crate::atomic_write::write_atomically) with image errors.
 fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), ImageError>,
 ) -> Result<(), ImageError> {
-    let temporary = temporary_path(path);
-    if let Err(e) = write(&temporary) {
-        let _ = std::fs::remove_file(&temporary);
-        return Err(e);
-    }
-    std::fs::rename(&temporary, path).map_err(|source| {
-        let _ = std::fs::remove_file(&temporary);
-        ImageError::Rename {
-            path: path.to_path_buf(),
-            source,
-        }
+    crate::atomic_write::write_atomically(path, write, |source| ImageError::Rename {
+        path: path.to_path_buf(),
+        source,
     })
 }
 

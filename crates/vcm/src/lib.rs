@@ -36,6 +36,7 @@
 
 #![warn(missing_docs)]
 
+pub mod atomic_write;
 mod error;
 mod film;
 pub mod image_io;

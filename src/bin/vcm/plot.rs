@@ -6,8 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use plotters::prelude::*;
+use vcm::atomic_write::write_atomically;
 
 /// One curve: a label and (seconds, relMSE) points.
 pub struct Series {
@@ -68,21 +69,22 @@ pub fn plot_relmse(path: &Path, title: &str, series: &[Series]) -> anyhow::Resul
     if !labels {
         eprintln!("warning: no TrueType font found (set VCM_PLOT_FONT); the plot has no labels");
     }
-    // The bitmap backend picks the encoder from the extension: keep ".png" on the temporary.
-    let name = path
-        .file_name()
-        .map_or_else(|| "plot.png".into(), |n| n.to_string_lossy());
-    let temporary = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
-    draw(
-        &temporary,
-        title,
-        series,
-        (t0 / 1.5, t1 * 1.5),
-        (e0 / 2.0, e1 * 2.0),
-        labels,
+    // The bitmap backend picks the encoder from the extension, which the temporary name keeps.
+    write_atomically(
+        path,
+        |temporary| {
+            draw(
+                temporary,
+                title,
+                series,
+                (t0 / 1.5, t1 * 1.5),
+                (e0 / 2.0, e1 * 2.0),
+                labels,
+            )
+            .map_err(|e| anyhow::anyhow!("{}: cannot draw the plot: {e}", path.display()))
+        },
+        |e| anyhow::anyhow!("{}: cannot write: {e}", path.display()),
     )
-    .map_err(|e| anyhow::anyhow!("{}: cannot draw the plot: {e}", path.display()))?;
-    std::fs::rename(&temporary, path).with_context(|| format!("{}: cannot write", path.display()))
 }
 
 fn draw(

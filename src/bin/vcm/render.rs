@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
+use vcm::atomic_write::write_atomically;
 use vcm::image_io::RgbImage;
 use vcm::metrics::{ErrorMetrics, compare};
 use vcm::{Film, FrameStats, PathTracer, PtSettings};
@@ -276,9 +277,8 @@ fn write_report(path: &Path, checkpoints: &[Checkpoint]) -> anyhow::Result<()> {
             c.seconds, c.spp, m.rmse, m.relmse, m.mae
         );
     }
-    let temporary = path.with_extension("csv.tmp");
-    std::fs::write(&temporary, csv).with_context(|| format!("{}: cannot write", path.display()))?;
-    std::fs::rename(&temporary, path).with_context(|| format!("{}: cannot write", path.display()))
+    write_atomically(path, |temporary| std::fs::write(temporary, csv), |e| e)
+        .with_context(|| format!("{}: cannot write", path.display()))
 }
 
 /// Peak resident memory of this process in MiB (Linux), if known.
