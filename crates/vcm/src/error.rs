@@ -21,4 +21,7 @@ pub enum RenderError {
         /// Requested height in pixels.
         height: u32,
     },
+    /// A setting outside its valid range.
+    #[error("invalid setting: {0}")]
+    InvalidSetting(String),
 }

@@ -55,6 +55,18 @@ impl Film {
         }
     }
 
+    /// Adds a light tracing splat to `pixel`: radiance that reaches the pixel from a light
+    /// path, already divided by the number of light paths of its frame. Unlike
+    /// [`Film::add`] it does not count as a sample (each frame's camera samples do). A
+    /// non-finite splat is dropped and counted. Panics if `pixel` is outside the image.
+    pub fn add_splat(&mut self, pixel: usize, rgb: Vec3) {
+        if rgb.is_finite() {
+            self.sum[pixel] += rgb.as_dvec3();
+        } else {
+            self.dropped += 1;
+        }
+    }
+
     /// Number of samples dropped as non-finite, over all pixels.
     pub fn dropped(&self) -> u64 {
         self.dropped
@@ -120,6 +132,17 @@ mod tests {
         assert_eq!(film.dropped(), 3);
         assert_eq!(film.samples(0), 4);
         assert_eq!(film.mean(), vec![Vec3::splat(1.0)]);
+    }
+
+    #[test]
+    fn splats_add_radiance_without_counting_samples() {
+        let mut film = Film::new(1, 1);
+        film.add(0, Vec3::ONE);
+        film.add_splat(0, Vec3::splat(2.0));
+        film.add_splat(0, Vec3::splat(f32::NAN));
+        assert_eq!(film.samples(0), 1);
+        assert_eq!(film.dropped(), 1);
+        assert_eq!(film.mean(), vec![Vec3::splat(3.0)]);
     }
 
     #[test]

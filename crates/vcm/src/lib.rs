@@ -1,34 +1,38 @@
 //! # vcm
 //!
-//! Integrators for vcm-rs. This stage holds the wavefront path tracer and what it is built on:
+//! Integrators for vcm-rs and what they are built on. Every integrator implements
+//! [`Integrator`]: frame after frame into a [`Film`].
 //!
-//! - [`Film`]: per-pixel f64 accumulation of radiance samples (box filter), with non-finite
+//! - [`PathTracer`]: unidirectional path tracing with next event estimation and MIS (the
+//!   reference), run in waves: every active path is traced, shaded in parallel, its shadow ray
+//!   tested, and the survivors compacted for the next wave.
+//! - [`Vcm`]: vertex connection and merging, and each of its sub-algorithms ([`Algorithm`]:
+//!   light tracing, BPT, PPM, BPM, VCM): a light pass fills the [`light_vertex_cache`], a
+//!   [`hash_grid`] is built over it for merging, then a camera pass connects and merges.
+//! - [`Film`]: per-pixel f64 accumulation (box filter), light tracing splats, non-finite
 //!   samples dropped and counted.
 //! - [`ray_offset`]: ray origins offset by floating-point error bounds (pbrt-v4), so that
 //!   spawned rays neither re-hit their own surface nor depend on the scene's scale.
-//! - [`PathTracer`]: unidirectional path tracing with next event estimation and multiple
-//!   importance sampling, run in waves: every active path is traced, then shaded in parallel,
-//!   then its shadow ray is tested, then the survivors are compacted for the next wave.
 //!
 //! A render is a pure function of (scene, settings, seed, iteration): every path draws its
-//! random numbers from `Rng::from_key(&[seed, iteration, pixel, 0])`, so the image is
-//! bit-identical for any number of threads.
+//! random numbers from a generator keyed by (seed, iteration, path index, stream), and results
+//! are gathered in path order, so the image is bit-identical for any number of threads.
 //!
 //! ```no_run
 //! use std::sync::Arc;
-//! use vcm::{Film, PathTracer, PtSettings};
+//! use vcm::{Algorithm, Film, Integrator, Vcm, VcmSettings};
 //! use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};
 //!
 //! let scene = Arc::new(vcm_scene::Scene::load("scenes/cornell-box.gltf")?);
 //! // Scenes with alpha masks need the alpha test: `vcm_rs::cpu_traversal` builds it.
 //! let bvh = CpuBvh::new(&scene.triangle_corners(), CpuBvhOptions::default())?;
 //! let traversal: Arc<dyn Traversal> = Arc::new(bvh);
-//! let settings = PtSettings { width: 256, height: 256, seed: 1, max_depth: None };
-//! let mut tracer = PathTracer::new(scene, traversal, settings)?;
+//! let settings = VcmSettings::new(Algorithm::Vcm, 256, 256);
+//! let mut vcm = Vcm::new(scene, traversal, settings)?;
 //! let mut film = Film::new(settings.width, settings.height);
 //! for iteration in 0..16 {
-//!     let stats = tracer.render_frame(&mut film, iteration);
-//!     eprintln!("frame {iteration}: {} shadow rays", stats.shadow_rays);
+//!     let stats = vcm.render_frame(&mut film, iteration);
+//!     eprintln!("frame {iteration}: {} light vertices", stats.light_vertices);
 //! }
 //! let radiance = film.mean(); // W·sr⁻¹·m⁻² per pixel, row by row from the top left
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -37,16 +41,24 @@
 #![warn(missing_docs)]
 
 pub mod atomic_write;
+mod bidir;
 mod error;
 mod film;
+pub mod hash_grid;
 pub mod image_io;
+mod integrator;
+pub mod light_vertex_cache;
 pub mod metrics;
 mod path_state;
 mod path_tracer;
 pub mod ray_offset;
+mod roulette;
 mod shade;
 mod shadow;
+mod surface_hit;
 
+pub use bidir::{Algorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Vcm, VcmSettings};
 pub use error::RenderError;
 pub use film::Film;
-pub use path_tracer::{FrameStats, PathTracer, PtSettings};
+pub use integrator::{FrameStats, Integrator};
+pub use path_tracer::{PathTracer, PtSettings};

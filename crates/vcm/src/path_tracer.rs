@@ -11,8 +11,10 @@ use vcm_traversal::{HitBatch, RayBatch, Traversal};
 
 use crate::error::RenderError;
 use crate::film::Film;
+use crate::integrator::{FrameStats, Integrator, check_image_size};
 use crate::path_state::PathState;
-use crate::shade::{Hit, ShadeContext, shade};
+use crate::shade::{ShadeContext, shade};
+use crate::surface_hit::Hit;
 
 /// What a [`PathTracer`] renders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -26,22 +28,6 @@ pub struct PtSettings {
     /// Longest path in segments (a directly seen light is 1); `None`: unlimited, ended by
     /// Russian roulette only.
     pub max_depth: Option<u32>,
-}
-
-/// Work done by one [`PathTracer::render_frame`] call.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct FrameStats {
-    /// Rays from the camera (one per pixel).
-    pub camera_rays: u64,
-    /// Rays that continue a path after a BSDF sample.
-    pub continuation_rays: u64,
-    /// Occlusion rays of light samples.
-    pub shadow_rays: u64,
-    /// Wall-clock time in closest-hit and occlusion queries.
-    pub traversal_time: Duration,
-    /// Wall-clock time in everything else: ray generation, shading, queue compaction and
-    /// accumulation.
-    pub shading_time: Duration,
 }
 
 /// Unidirectional path tracer with next event estimation and MIS, one sample per pixel and
@@ -65,13 +51,7 @@ impl PathTracer {
         traversal: Arc<dyn Traversal>,
         settings: PtSettings,
     ) -> Result<PathTracer, RenderError> {
-        let PtSettings { width, height, .. } = settings;
-        if width == 0 || height == 0 {
-            return Err(RenderError::EmptyImage { width, height });
-        }
-        if u64::from(width) * u64::from(height) > u64::from(u32::MAX) {
-            return Err(RenderError::ImageTooLarge { width, height });
-        }
+        check_image_size(settings.width, settings.height)?;
         Ok(PathTracer {
             scene,
             traversal,
@@ -88,12 +68,11 @@ impl PathTracer {
     pub fn settings(&self) -> &PtSettings {
         &self.settings
     }
+}
 
+impl Integrator for PathTracer {
     /// Renders frame `iteration`: one path per pixel, each added to `film` once it ends.
-    ///
-    /// The result depends only on the scene, the settings and `iteration`, not on the number
-    /// of threads. Panics if `film` is not `width` × `height`.
-    pub fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats {
+    fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats {
         let PtSettings { width, height, .. } = self.settings;
         assert_eq!(
             (film.width(), film.height()),
@@ -116,6 +95,12 @@ impl PathTracer {
         stats
     }
 
+    fn image_size(&self) -> (u32, u32) {
+        (self.settings.width, self.settings.height)
+    }
+}
+
+impl PathTracer {
     /// One path per pixel in pixel order, its position jittered uniformly over the pixel.
     fn generate_camera_paths(&mut self, iteration: u32) {
         let PtSettings {
@@ -157,13 +142,7 @@ impl PathTracer {
         };
         let hits = &self.hits;
         self.paths.par_iter_mut().enumerate().for_each(|(i, path)| {
-            let hit = hits.is_hit(i).then(|| Hit {
-                triangle: hits.prim[i],
-                u: hits.u[i],
-                v: hits.v[i],
-                t: hits.t[i],
-            });
-            shade(&ctx, path, hit);
+            shade(&ctx, path, Hit::from_batch(hits, i));
         });
         self.shadow_rays.clear();
         for shadow in self.paths.iter().filter_map(|p| p.shadow.as_ref()) {

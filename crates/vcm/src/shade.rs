@@ -13,14 +13,10 @@ use vcm_scene::mesh::SurfacePoint;
 use vcm_scene::sampling::power_heuristic;
 
 use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
-use crate::ray_offset::{barycentric_error, offset_ray_origin};
 use crate::shadow::shadow_segment;
+use crate::surface_hit::{Hit, SurfaceHit};
 
-/// Segments after which Russian roulette starts.
-const ROULETTE_AFTER_SEGMENTS: u32 = 3;
-
-/// Highest continuation probability of Russian roulette.
-const MAX_CONTINUATION: f32 = 0.95;
+use crate::roulette::continuation_probability;
 
 /// What shading needs besides the path: the scene and the path length limit.
 pub(crate) struct ShadeContext<'a> {
@@ -28,19 +24,6 @@ pub(crate) struct ShadeContext<'a> {
     pub scene: &'a Scene,
     /// Longest path in segments (`u32::MAX`: unlimited).
     pub max_segments: u32,
-}
-
-/// A closest hit of the path's current segment.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Hit {
-    /// Triangle index.
-    pub triangle: u32,
-    /// Barycentric weight of the triangle's second corner.
-    pub u: f32,
-    /// Barycentric weight of the triangle's third corner.
-    pub v: f32,
-    /// Distance along the (unit) ray direction, scene units.
-    pub t: f32,
 }
 
 /// Shades the vertex where `path` hit the scene (`None`: it escaped and ends). Adds the
@@ -54,7 +37,8 @@ pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) 
         return;
     };
     let scene = ctx.scene;
-    let point = scene.surface_point(hit.triangle, hit.u, hit.v);
+    let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
+    let point = surface.point;
     path.radiance += path.throughput * emission(scene, path, &point, hit);
 
     // Both a light sample and a continuation add a segment.
@@ -64,9 +48,7 @@ pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) 
     }
     let bsdf = scene.bsdf(&point);
     let wo = -path.direction;
-    let corners = scene.mesh.corners(hit.triangle as usize);
-    let error = barycentric_error(&corners, Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v));
-    let spawn = |w: Vec3| offset_ray_origin(point.position, error, point.geometric_normal, w);
+    let spawn = |w: Vec3| surface.spawn(w);
     if bsdf.has_non_delta() {
         path.shadow = next_event(scene, path, &point, &bsdf, wo, spawn);
     }
@@ -143,8 +125,7 @@ fn scatter(path: &mut PathState, bsdf: &Bsdf, wo: Vec3, spawn: impl Fn(Vec3) -> 
             pdf_w: sample.pdf_fwd,
         }
     };
-    if path.segments >= ROULETTE_AFTER_SEGMENTS {
-        let continuation = path.throughput.max_element().min(MAX_CONTINUATION);
+    if let Some(continuation) = continuation_probability(path.segments, path.throughput) {
         if path.rng.uniform() >= continuation {
             return false;
         }

@@ -28,15 +28,28 @@ pub(crate) fn shadow_segment(
         return (illumination.direction, f32::INFINITY);
     }
     let target = receiver + illumination.direction * illumination.distance;
-    let target = match light {
+    let target = offset_off_light(light, target, -illumination.direction);
+    segment_to(origin, target)
+}
+
+/// `point` on `light`, offset off an area light's triangle to the side of direction `w` by its
+/// error bound (point-like lights have no surface to leave).
+pub(crate) fn offset_off_light(light: &Light, point: Vec3, w: Vec3) -> Vec3 {
+    match light {
         // Any barycentrics are ≤ 1, so b = (1, 1, 1) bounds the sample point's error.
         Light::Area(area) => offset_ray_origin(
-            target,
+            point,
             barycentric_error(&area.corners, Vec3::ONE),
             area.normal,
-            -illumination.direction,
+            w,
         ),
-        _ => target,
-    };
+        _ => point,
+    }
+}
+
+/// Direction and `tmax` of an occlusion ray from `origin` to `target` (both already offset
+/// off their surfaces): the direction reaches `target` at t = 1 and the ray stops at
+/// t = 1 − [`SHADOW_END_EPSILON`].
+pub(crate) fn segment_to(origin: Vec3, target: Vec3) -> (Vec3, f32) {
     (target - origin, 1.0 - SHADOW_END_EPSILON)
 }

@@ -5,7 +5,7 @@ mod common;
 use std::sync::Arc;
 
 use glam::Vec3;
-use vcm::{Film, PathTracer, PtSettings, RenderError};
+use vcm::{Film, Integrator, PathTracer, PtSettings, RenderError};
 use vcm_scene::Material;
 use vcm_scene::light::{Light, PointLight};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};

@@ -8,7 +8,7 @@
 mod common;
 
 use glam::{DVec3, Vec3};
-use vcm::PtSettings;
+use vcm::{Algorithm, PtSettings, VcmSettings};
 use vcm_scene::Material;
 
 const ALBEDO: f32 = 0.6;
@@ -48,17 +48,27 @@ fn lambertian_plane_under_an_area_light_matches_lamberts_formula() {
         Vec::new(),
         camera,
     );
+    let corners = light.map(Vec3::as_dvec3);
+    let radiance = f64::from(EMITTED.element_sum()) / 3.0;
+    let expected = common::plane_pixel_values(&camera, SIZE, |p| {
+        f64::from(ALBEDO) / std::f64::consts::PI * polygon_irradiance(&corners, radiance, p)
+    });
     let settings = PtSettings {
         width: SIZE,
         height: SIZE,
         seed: 21,
         max_depth: None,
     };
-    let series = common::render_series(&mut common::path_tracer(scene, settings), 128);
-    let corners = light.map(Vec3::as_dvec3);
-    let radiance = f64::from(EMITTED.element_sum()) / 3.0;
-    let expected = common::plane_pixel_values(&camera, SIZE, |p| {
-        f64::from(ALBEDO) / std::f64::consts::PI * polygon_irradiance(&corners, radiance, p)
-    });
-    common::assert_pixels_match(&series, &expected, "area light");
+    let series = common::render_series(&mut common::path_tracer(scene.clone(), settings), 128);
+    common::assert_pixels_match(&series, &expected, "area light, path tracing");
+    // Emission hits, light samples and light paths splatted through the camera all find this
+    // light: BPT and VCM weight the three.
+    for algorithm in [Algorithm::Bpt, Algorithm::Vcm] {
+        let settings = VcmSettings {
+            seed: 21,
+            ..VcmSettings::new(algorithm, SIZE, SIZE)
+        };
+        let series = common::render_series(&mut common::vcm(scene.clone(), settings), 128);
+        common::assert_pixels_match(&series, &expected, &format!("area light, {algorithm:?}"));
+    }
 }

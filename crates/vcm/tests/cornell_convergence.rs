@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use vcm::{Film, PtSettings};
+use vcm::PtSettings;
 use vcm_scene::Scene;
 
 mod common;
@@ -13,8 +13,9 @@ mod common;
 const REGIONS: usize = 4;
 const SIZE: u32 = 32;
 
-/// Per-region means over `frames` frames and their standard errors.
-fn region_means(seed: u64, frames: u32) -> (Vec<f64>, Vec<f64>) {
+/// Per-region means of the path-traced Cornell box over `frames` frames and their standard
+/// errors.
+fn region_means(seed: u64, frames: u32) -> common::RegionSeries {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.gltf");
     let scene = Scene::load(&path).unwrap();
     let settings = PtSettings {
@@ -23,34 +24,14 @@ fn region_means(seed: u64, frames: u32) -> (Vec<f64>, Vec<f64>) {
         seed,
         max_depth: None,
     };
-    let mut tracer = common::path_tracer(scene, settings);
-    let block = SIZE as usize / REGIONS;
-    let mut per_frame = Vec::new();
-    for iteration in 0..frames {
-        let mut film = Film::new(SIZE, SIZE);
-        tracer.render_frame(&mut film, iteration);
-        assert_eq!(film.dropped(), 0);
-        let mut regions = vec![0.0; REGIONS * REGIONS];
-        for (i, rgb) in film.mean().iter().enumerate() {
-            let (x, y) = (i % SIZE as usize / block, i / SIZE as usize / block);
-            regions[y * REGIONS + x] += f64::from(rgb.element_sum()) / 3.0 / (block * block) as f64;
-        }
-        per_frame.push(regions);
-    }
-    let n = f64::from(frames);
-    (0..REGIONS * REGIONS)
-        .map(|r| {
-            let mean = per_frame.iter().map(|f| f[r]).sum::<f64>() / n;
-            let variance = per_frame.iter().map(|f| (f[r] - mean).powi(2)).sum::<f64>() / (n - 1.0);
-            (mean, (variance / n).sqrt())
-        })
-        .unzip()
+    common::region_means(&mut common::path_tracer(scene, settings), frames, REGIONS)
 }
 
 #[test]
 fn a_short_render_agrees_with_a_long_one_within_the_standard_error() {
-    let (short, short_err) = region_means(11, 24);
-    let (long, long_err) = region_means(12, 192);
+    let short = region_means(11, 24);
+    let long = region_means(12, 192);
+    let (short, short_err, long, long_err) = (short.means, short.errors, long.means, long.errors);
     // 16 comparisons: 4.4σ keeps the family-wise false alarm rate near 1e-4 (Šidák).
     for r in 0..REGIONS * REGIONS {
         let sigma = (short_err[r].powi(2) + long_err[r].powi(2)).sqrt();

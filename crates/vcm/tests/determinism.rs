@@ -4,7 +4,7 @@
 mod common;
 
 use glam::Vec3;
-use vcm::{Film, PtSettings};
+use vcm::{Film, Integrator, PtSettings};
 use vcm_scene::Material;
 use vcm_scene::light::{Light, PointLight};
 

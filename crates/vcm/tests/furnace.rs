@@ -5,24 +5,39 @@
 mod common;
 
 use glam::Vec3;
-use vcm::PtSettings;
+use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
 use vcm_scene::Material;
 
 const ALBEDO: f32 = 0.5;
 const EMITTED: f32 = 1.0;
 const SIZE: u32 = 16;
 
-/// The diffuse furnace with a sphere of radius `scale`.
-fn furnace(max_depth: Option<u32>, scale: f32) -> vcm::PathTracer {
+/// The diffuse furnace with a sphere of radius `scale`, path traced.
+fn furnace(max_depth: Option<u32>, scale: f32) -> Box<dyn Integrator> {
+    diffuse_furnace(max_depth, scale, None)
+}
+
+/// The diffuse furnace rendered by `algorithm` (`None`: the path tracer).
+fn diffuse_furnace(
+    max_depth: Option<u32>,
+    scale: f32,
+    algorithm: Option<Algorithm>,
+) -> Box<dyn Integrator> {
     let material = Material {
         emission: Vec3::splat(EMITTED),
         ..Material::diffuse("furnace", Vec3::splat(ALBEDO))
     };
-    furnace_of(material, max_depth, scale)
+    furnace_of(material, max_depth, scale, algorithm)
 }
 
-/// A furnace of `material` with a sphere of radius `scale`.
-fn furnace_of(material: Material, max_depth: Option<u32>, scale: f32) -> vcm::PathTracer {
+/// A furnace of `material` with a sphere of radius `scale`, rendered by `algorithm`
+/// (`None`: the path tracer).
+fn furnace_of(
+    material: Material,
+    max_depth: Option<u32>,
+    scale: f32,
+    algorithm: Option<Algorithm>,
+) -> Box<dyn Integrator> {
     let (positions, triangles) = common::inward_icosphere(2);
     let positions = positions.into_iter().map(|p| p * scale).collect();
     let material_ids = vec![0; triangles.len()];
@@ -32,13 +47,30 @@ fn furnace_of(material: Material, max_depth: Option<u32>, scale: f32) -> vcm::Pa
         Vec::new(),
         common::camera(Vec3::new(0.1, -0.2, 0.05) * scale, 1.2),
     );
-    let settings = PtSettings {
-        width: SIZE,
-        height: SIZE,
-        seed: 5,
-        max_depth,
-    };
-    common::path_tracer(scene, settings)
+    match algorithm {
+        None => {
+            let settings = PtSettings {
+                width: SIZE,
+                height: SIZE,
+                seed: 5,
+                max_depth,
+            };
+            Box::new(common::path_tracer(scene, settings))
+        }
+        Some(algorithm) => {
+            // With 256 light paths a frame, the default radius (0.3% of the sphere's) would
+            // catch a light vertex in one query of a thousand: a heavy-tailed estimate whose
+            // spread 200 frames cannot measure. Within distance r of a point, a sphere has
+            // area π r² exactly (Archimedes), so a large radius adds no bias here.
+            let settings = VcmSettings {
+                seed: 5,
+                max_depth,
+                radius_fraction: 0.1,
+                ..VcmSettings::new(algorithm, SIZE, SIZE)
+            };
+            Box::new(common::vcm(scene, settings))
+        }
+    }
 }
 
 /// Le · (1 + ρ + … + ρ^(segments − 1)).
@@ -51,12 +83,22 @@ fn expected(segments: Option<u32>) -> f64 {
 }
 
 fn assert_converges(max_depth: Option<u32>, scale: f32, frames: u32) {
-    let series = common::render_series(&mut furnace(max_depth, scale), frames);
+    assert_algorithm_converges(None, max_depth, scale, frames);
+}
+
+fn assert_algorithm_converges(
+    algorithm: Option<Algorithm>,
+    max_depth: Option<u32>,
+    scale: f32,
+    frames: u32,
+) {
+    let mut integrator = diffuse_furnace(max_depth, scale, algorithm);
+    let series = common::render_series(integrator.as_mut(), frames);
     let want = expected(max_depth);
     let (mean, se) = (series.image_mean, series.image_std_err);
     assert!(
         (mean - want).abs() < 4.0 * se,
-        "image mean {mean} vs {want} ± 4·{se} (max_depth {max_depth:?}, scale {scale})"
+        "{algorithm:?}: image mean {mean} vs {want} ± 4·{se} (max_depth {max_depth:?}, scale {scale})"
     );
     // Every pixel sees the same distribution, whose tail is long (path length, near-edge light
     // samples): a pixel's own few samples often miss the rare large values and understate its
@@ -66,7 +108,7 @@ fn assert_converges(max_depth: Option<u32>, scale: f32, frames: u32) {
     for (p, &m) in series.pixel_mean.iter().enumerate() {
         assert!(
             (m - want).abs() < 5.0 * e,
-            "pixel {p}: {m} vs {want} ± 5·{e} (scale {scale})"
+            "{algorithm:?}, pixel {p}: {m} vs {want} ± 5·{e} (scale {scale})"
         );
     }
     assert_eq!(series.film.dropped(), 0);
@@ -75,6 +117,35 @@ fn assert_converges(max_depth: Option<u32>, scale: f32, frames: u32) {
 #[test]
 fn unlimited_paths_converge_to_le_over_one_minus_albedo() {
     assert_converges(None, 1.0, 200);
+}
+
+const VCM_ALGORITHMS: [Algorithm; 5] = [
+    Algorithm::LightTracing,
+    Algorithm::Bpt,
+    Algorithm::Ppm,
+    Algorithm::Bpm,
+    Algorithm::Vcm,
+];
+
+#[test]
+fn every_vcm_algorithm_converges_to_le_over_one_minus_albedo() {
+    for algorithm in VCM_ALGORITHMS {
+        assert_algorithm_converges(Some(algorithm), None, 1.0, 200);
+    }
+}
+
+#[test]
+fn every_vcm_algorithm_respects_the_path_length_limit() {
+    for algorithm in VCM_ALGORITHMS {
+        assert_algorithm_converges(Some(algorithm), Some(3), 1.0, 100);
+    }
+}
+
+#[test]
+fn vcm_furnaces_of_any_size_converge_to_the_same_value() {
+    for scale in [1e-4, 1e5] {
+        assert_algorithm_converges(Some(Algorithm::Vcm), None, scale, 100);
+    }
 }
 
 #[test]
@@ -114,7 +185,7 @@ fn a_perfect_mirror_furnace_adds_le_per_segment() {
         ..Material::default()
     };
     let segments = 3;
-    let mut tracer = furnace_of(mirror, Some(segments), 1.0);
+    let mut tracer = furnace_of(mirror, Some(segments), 1.0, None);
     let mut film = vcm::Film::new(SIZE, SIZE);
     let stats = tracer.render_frame(&mut film, 0);
     assert_eq!(stats.shadow_rays, 0);

@@ -2,12 +2,14 @@
 //! camera is L = ρ/π · I · cos θ / d² (times the spot's falloff), or ρ/π · E · cos θ outside
 //! an occluder's shadow for a directional light of irradiance E. Only direct light: the plane
 //! cannot see itself. The point light scene is also rendered at tiny and huge scales: lengths
-//! × s and intensity × s² give the same image.
+//! × s and intensity × s² give the same image. Every scene is rendered by the path tracer,
+//! BPT and VCM: with delta lights, a light sample and a light path splatted through the camera
+//! both find the direct light, so the check covers their MIS weights too.
 
 mod common;
 
 use glam::{DVec3, Vec3};
-use vcm::PtSettings;
+use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
 use vcm_scene::Material;
 use vcm_scene::light::{DirectionalLight, Light, PointLight, SpotLight};
 
@@ -32,14 +34,18 @@ fn radiance(position: Vec3, intensity: f64, p: DVec3) -> f64 {
     f64::from(ALBEDO) / std::f64::consts::PI * intensity * cos_theta / d2
 }
 
-/// A path tracer for the floor (of half side `half`, plus `extra` quads of material 1, black)
-/// under `light`, seen by `camera`.
+/// The integrators every scene is rendered with (`None`: the path tracer).
+const ALGORITHMS: [Option<Algorithm>; 3] = [None, Some(Algorithm::Bpt), Some(Algorithm::Vcm)];
+
+/// An integrator (`None`: the path tracer) for the floor (of half side `half`, plus `extra`
+/// quads of material 1, black) under `light`, seen by `camera`.
 fn floor_under(
     light: Light,
     camera: vcm_scene::Camera,
     half: f32,
     extra: &[[Vec3; 4]],
-) -> vcm::PathTracer {
+    algorithm: Option<Algorithm>,
+) -> Box<dyn Integrator> {
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     common::push_floor(&mut positions, &mut triangles, half);
     for quad in extra {
@@ -56,13 +62,42 @@ fn floor_under(
         vec![light],
         camera,
     );
-    let settings = PtSettings {
-        width: SIZE,
-        height: SIZE,
-        seed: 9,
-        max_depth: None,
-    };
-    common::path_tracer(scene, settings)
+    match algorithm {
+        None => {
+            let settings = PtSettings {
+                width: SIZE,
+                height: SIZE,
+                seed: 9,
+                max_depth: None,
+            };
+            Box::new(common::path_tracer(scene, settings))
+        }
+        Some(algorithm) => {
+            let settings = VcmSettings {
+                seed: 9,
+                ..VcmSettings::new(algorithm, SIZE, SIZE)
+            };
+            Box::new(common::vcm(scene, settings))
+        }
+    }
+}
+
+/// Renders `light`'s scene with every integrator and compares the pixels with `expected`.
+fn assert_all_match(
+    light: Light,
+    camera: vcm_scene::Camera,
+    half: f32,
+    extra: &[[Vec3; 4]],
+    expected: &[f64],
+    label: &str,
+) {
+    for algorithm in ALGORITHMS {
+        let mut integrator = floor_under(light.clone(), camera, half, extra, algorithm);
+        // Light paths splatted through the camera land in a given pixel rarely (64 light
+        // paths a frame): enough frames that each pixel's standard error sees them.
+        let series = common::render_series(integrator.as_mut(), 512);
+        common::assert_pixels_match(&series, expected, &format!("{label}, {algorithm:?}"));
+    }
 }
 
 /// Renders the point light scene at scale `scale` and compares every pixel with the closed
@@ -73,12 +108,18 @@ fn assert_matches_closed_form(scale: f32) {
         position: LIGHT * scale,
         intensity: INTENSITY * scale * scale,
     };
-    let mut tracer = floor_under(Light::Point(light.clone()), camera, 20.0 * scale, &[]);
-    let series = common::render_series(&mut tracer, 64);
     let expected = common::plane_pixel_values(&camera, SIZE, |p| {
         radiance(light.position, mean(light.intensity), p)
     });
-    common::assert_pixels_match(&series, &expected, &format!("scale {scale}"));
+    let label = format!("scale {scale}");
+    assert_all_match(
+        Light::Point(light),
+        camera,
+        20.0 * scale,
+        &[],
+        &expected,
+        &label,
+    );
 }
 
 #[test]
@@ -106,14 +147,12 @@ fn spot_light_falloff_matches_the_closed_form() {
         cos_inner: 0.2f32.cos(),
         cos_outer: 0.85f32.cos(),
     };
-    let mut tracer = floor_under(Light::Spot(spot.clone()), camera, 20.0, &[]);
-    let series = common::render_series(&mut tracer, 64);
     let expected = common::plane_pixel_values(&camera, SIZE, |p| {
         let to_p = (p - spot.position.as_dvec3()).normalize().as_vec3();
         let falloff = f64::from(spot.falloff(spot.direction.dot(to_p)));
         radiance(spot.position, mean(spot.intensity) * falloff, p)
     });
-    common::assert_pixels_match(&series, &expected, "spot");
+    assert_all_match(Light::Spot(spot), camera, 20.0, &[], &expected, "spot");
 }
 
 #[test]
@@ -122,16 +161,16 @@ fn directional_light_and_its_shadow_match_the_closed_form() {
     // shadows the floor where x + 1 ∈ [0.8, 1.6] and |y| ≤ 0.3.
     let camera = common::camera(Vec3::new(0.0, 0.0, 3.0), 0.6);
     let irradiance = Vec3::new(2.0, 3.0, 4.0);
+    // A small floor in a tight bounding disk: light paths, which start on the disk, then
+    // land in the view often enough for their share of BPT's and VCM's weights to be seen.
     let light = DirectionalLight {
         direction: Vec3::new(-1.0, 0.0, -1.0).normalize(),
         irradiance,
         scene_center: Vec3::ZERO,
-        scene_radius: 30.0,
+        scene_radius: 4.5,
     };
     let occluder =
         [(0.8, -0.3), (1.6, -0.3), (1.6, 0.3), (0.8, 0.3)].map(|(x, y)| Vec3::new(x, y, 1.0));
-    let mut tracer = floor_under(Light::Directional(light), camera, 20.0, &[occluder]);
-    let series = common::render_series(&mut tracer, 64);
     let lit = f64::from(ALBEDO) / std::f64::consts::PI * mean(irradiance) * 0.5f64.sqrt();
     let expected = common::plane_pixel_values(&camera, SIZE, |p| {
         let shadowed = (0.8..=1.6).contains(&(p.x + 1.0)) && p.y.abs() <= 0.3;
@@ -140,5 +179,6 @@ fn directional_light_and_its_shadow_match_the_closed_form() {
     // Some pixels lie fully in the shadow, some fully in the light.
     assert!(expected.contains(&0.0));
     assert!(expected.iter().any(|&l| (l - lit).abs() < 1e-9 * lit));
-    common::assert_pixels_match(&series, &expected, "directional");
+    let light = Light::Directional(light);
+    assert_all_match(light, camera, 3.0, &[occluder], &expected, "directional");
 }

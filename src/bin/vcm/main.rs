@@ -2,7 +2,9 @@
 
 mod compare;
 mod info;
+mod integrators;
 mod plot;
+mod progressive;
 mod render;
 
 use clap::{Parser, Subcommand};

@@ -218,6 +218,12 @@ impl Bsdf {
             .map_or(0.0, |(_, pdf)| pdf)
     }
 
+    /// The shading normal (front orientation): radiance-mode `f_cos` is f·|ωi·n_s|, so
+    /// f alone (density estimation) is `f_cos / |ωi·n_s|`.
+    pub fn shading_normal(&self) -> Vec3 {
+        self.frame.z
+    }
+
     /// Whether every lobe is a Dirac delta (also true for a black material): no connection
     /// or merge is possible at this vertex.
     pub fn is_delta(&self) -> bool {

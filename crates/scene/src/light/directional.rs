@@ -44,7 +44,8 @@ impl DirectionalLight {
             position: self.scene_center + offset - self.direction * self.scene_radius,
             direction: self.direction,
             emission_pdf_w: self.disk_pdf_a(),
-            direct_pdf_a: self.disk_pdf_a(),
+            // Light sampling picks the one direction with probability 1.
+            direct_pdf_a: 1.0,
             cos_at_light: 1.0,
         }
     }

@@ -62,7 +62,9 @@ pub struct Emission {
     pub direction: Vec3,
     /// Area pdf of `position` times solid-angle pdf of `direction`.
     pub emission_pdf_w: f32,
-    /// Area pdf of `position` alone (1 for point lights; for directional, the disk's pdf).
+    /// Pdf with which light sampling ([`Light::illuminate`]) picks this light point: the area
+    /// pdf of `position` for area lights, 1 for point, spot and directional lights (a delta
+    /// position or direction is picked with probability 1).
     pub direct_pdf_a: f32,
     /// Cosine between the light's normal and `direction` (1 for point-like lights).
     pub cos_at_light: f32,

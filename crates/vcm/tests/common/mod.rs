@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DVec3, Vec2, Vec3, Vec4};
-use vcm::{Film, PathTracer, PtSettings};
+use vcm::{Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
 use vcm_scene::light::Light;
 use vcm_scene::{Camera, Material, Mesh, Scene};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};
@@ -66,11 +66,21 @@ pub fn scene(mesh: Mesh, materials: Vec<Material>, lights: Vec<Light>, camera: C
     )
 }
 
+/// The CPU traversal backend over `scene`.
+pub fn cpu_traversal(scene: &Scene) -> Arc<dyn Traversal> {
+    Arc::new(CpuBvh::new(&scene.triangle_corners(), CpuBvhOptions::default()).unwrap())
+}
+
 /// A path tracer over `scene` with the CPU backend.
 pub fn path_tracer(scene: Scene, settings: PtSettings) -> PathTracer {
-    let bvh = CpuBvh::new(&scene.triangle_corners(), CpuBvhOptions::default()).unwrap();
-    let traversal: Arc<dyn Traversal> = Arc::new(bvh);
+    let traversal = cpu_traversal(&scene);
     PathTracer::new(Arc::new(scene), traversal, settings).unwrap()
+}
+
+/// The VCM integrator (any of its algorithms) over `scene` with the CPU backend.
+pub fn vcm(scene: Scene, settings: VcmSettings) -> Vcm {
+    let traversal = cpu_traversal(&scene);
+    Vcm::new(Arc::new(scene), traversal, settings).unwrap()
 }
 
 /// Per-pixel and image-wide means over independent frames, with standard errors computed from
@@ -100,8 +110,8 @@ fn mean_and_std_err(values: impl ExactSizeIterator<Item = f64> + Clone) -> (f64,
 }
 
 /// Renders `frames` frames (iterations 0, 1, …), each into its own film.
-pub fn render_series(tracer: &mut PathTracer, frames: u32) -> FrameSeries {
-    let PtSettings { width, height, .. } = *tracer.settings();
+pub fn render_series(tracer: &mut dyn Integrator, frames: u32) -> FrameSeries {
+    let (width, height) = tracer.image_size();
     let mut film = Film::new(width, height);
     let mut per_frame: Vec<Vec<f64>> = Vec::new();
     for iteration in 0..frames {
@@ -133,6 +143,55 @@ pub fn render_series(tracer: &mut PathTracer, frames: u32) -> FrameSeries {
         pooled_pixel_std_err,
         image_mean,
         image_std_err,
+    }
+}
+
+/// Means over frames of image blocks and of the whole image, with standard errors from the
+/// spread of the per-frame values (channel means of RGB).
+pub struct RegionSeries {
+    /// Mean of each block, row by row.
+    pub means: Vec<f64>,
+    /// Standard error of each block's mean.
+    pub errors: Vec<f64>,
+    /// Mean of the whole image.
+    pub image_mean: f64,
+    /// Standard error of `image_mean`.
+    pub image_error: f64,
+}
+
+/// Renders `frames` frames (iterations 0, 1, …) and measures the image split into
+/// `regions` × `regions` blocks. Asserts that no sample was dropped.
+pub fn region_means(integrator: &mut dyn Integrator, frames: u32, regions: usize) -> RegionSeries {
+    let (width, height) = integrator.image_size();
+    let (block_w, block_h) = (width as usize / regions, height as usize / regions);
+    let mut per_frame = Vec::new();
+    for iteration in 0..frames {
+        let mut film = Film::new(width, height);
+        integrator.render_frame(&mut film, iteration);
+        assert_eq!(film.dropped(), 0);
+        let mut means = vec![0.0; regions * regions];
+        for (i, rgb) in film.mean().iter().enumerate() {
+            let (x, y) = (i % width as usize / block_w, i / width as usize / block_h);
+            if x < regions && y < regions {
+                means[y * regions + x] +=
+                    f64::from(rgb.element_sum()) / 3.0 / (block_w * block_h) as f64;
+            }
+        }
+        per_frame.push(means);
+    }
+    let (means, errors) = (0..regions * regions)
+        .map(|r| mean_and_std_err(per_frame.iter().map(|f| f[r])))
+        .unzip();
+    let image_means: Vec<f64> = per_frame
+        .iter()
+        .map(|f| f.iter().sum::<f64>() / f.len() as f64)
+        .collect();
+    let (image_mean, image_error) = mean_and_std_err(image_means.into_iter());
+    RegionSeries {
+        means,
+        errors,
+        image_mean,
+        image_error,
     }
 }
 

@@ -1,0 +1,426 @@
+//! The camera pass: camera paths traced in waves; at each vertex emission, a light sample,
+//! connections to cached light vertices and merging, each weighted by VCM's MIS.
+
+use std::f32::consts::PI;
+
+use glam::{UVec2, Vec2, Vec3};
+use rayon::prelude::*;
+use vcm_scene::Scene;
+use vcm_scene::bsdf::{Bsdf, LobeKind, TransportMode};
+use vcm_scene::sampling::Rng;
+use vcm_traversal::{HitBatch, RayBatch, Traversal};
+
+use super::mis::{
+    ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight,
+    emission_hit_weight, light_sample_weight, merge_weight,
+};
+use super::{Algorithm, VcmSettings, timed};
+use crate::film::Film;
+use crate::hash_grid::HashGrid;
+use crate::integrator::FrameStats;
+use crate::light_vertex_cache::{LightVertex, LightVertexCache};
+use crate::path_state::ShadowRay;
+use crate::roulette::continuation_probability;
+use crate::shadow::{segment_to, shadow_segment};
+use crate::surface_hit::{Hit, SurfaceHit};
+
+/// What the camera pass reads.
+pub(crate) struct CameraContext<'a> {
+    pub scene: &'a Scene,
+    pub traversal: &'a dyn Traversal,
+    pub settings: &'a VcmSettings,
+    /// The frame (seeds the paths).
+    pub iteration: u32,
+    pub factors: &'a MisFactors,
+    /// This frame's light vertices.
+    pub cache: &'a LightVertexCache,
+    /// The hash grid over `cache` (empty unless the algorithm merges).
+    pub grid: &'a HashGrid,
+    /// This frame's merge radius.
+    pub radius: f32,
+}
+
+impl CameraContext<'_> {
+    fn max_segments(&self) -> u32 {
+        self.settings.max_depth.unwrap_or(u32::MAX)
+    }
+}
+
+/// One camera path between waves.
+#[derive(Clone, Debug)]
+struct CameraPathState {
+    pixel: u32,
+    rng: Rng,
+    origin: Vec3,
+    direction: Vec3,
+    throughput: Vec3,
+    radiance: Vec3,
+    mis: SubpathMis,
+    /// Segments including the current one (the camera ray is 1).
+    segments: u32,
+    /// Every scattering so far was specular (emission is then found only by hitting it).
+    specular_path: bool,
+    alive: bool,
+    /// Occlusion rays queued by the last shading step: the light sample and connections.
+    shadows: Vec<ShadowRay>,
+}
+
+/// The camera pass's reusable buffers.
+#[derive(Default)]
+pub(crate) struct CameraPass {
+    paths: Vec<CameraPathState>,
+    rays: RayBatch,
+    hits: HitBatch,
+    shadow_rays: RayBatch,
+    occluded: Vec<bool>,
+}
+
+impl CameraPass {
+    /// Traces one camera path per pixel and adds each path's radiance to `film` once it ends.
+    pub fn run(&mut self, ctx: &CameraContext, film: &mut Film, stats: &mut FrameStats) {
+        let VcmSettings { width, height, .. } = *ctx.settings;
+        (0..width * height)
+            .into_par_iter()
+            .map(|pixel| start(ctx, pixel))
+            .collect_into_vec(&mut self.paths);
+        stats.camera_rays += self.paths.len() as u64;
+        let mut first_wave = true;
+        while !self.paths.is_empty() {
+            self.rays.clear();
+            for path in &self.paths {
+                self.rays
+                    .push(path.origin, path.direction, 0.0, f32::INFINITY);
+            }
+            if !first_wave {
+                stats.continuation_rays += self.rays.len() as u64;
+            }
+            first_wave = false;
+            let (rays, hits) = (&self.rays, &mut self.hits);
+            timed(&mut stats.traversal_time, || {
+                ctx.traversal.intersect(rays, hits)
+            });
+            let hits = &self.hits;
+            self.paths.par_iter_mut().enumerate().for_each(|(i, path)| {
+                shade(ctx, path, Hit::from_batch(hits, i));
+            });
+            self.add_unoccluded(ctx, stats);
+            self.paths.retain(|path| {
+                if !path.alive {
+                    film.add(path.pixel as usize, path.radiance);
+                }
+                path.alive
+            });
+        }
+    }
+
+    /// Tests every queued occlusion ray and adds the unoccluded contributions to their paths.
+    fn add_unoccluded(&mut self, ctx: &CameraContext, stats: &mut FrameStats) {
+        self.shadow_rays.clear();
+        for shadow in self.paths.iter().flat_map(|p| &p.shadows) {
+            self.shadow_rays
+                .push(shadow.origin, shadow.direction, 0.0, shadow.tmax);
+        }
+        stats.shadow_rays += self.shadow_rays.len() as u64;
+        let (rays, occluded) = (&self.shadow_rays, &mut self.occluded);
+        timed(&mut stats.traversal_time, || {
+            ctx.traversal.occluded(rays, occluded)
+        });
+        let mut blocked = self.occluded.iter();
+        for path in &mut self.paths {
+            for shadow in path.shadows.drain(..) {
+                if !blocked.next().expect("one test per queued ray") {
+                    path.radiance += shadow.contribution;
+                }
+            }
+        }
+    }
+}
+
+/// Starts the camera path of `pixel`, its position jittered uniformly over the pixel.
+fn start(ctx: &CameraContext, pixel: u32) -> CameraPathState {
+    let VcmSettings {
+        width,
+        height,
+        seed,
+        ..
+    } = *ctx.settings;
+    let camera = &ctx.scene.camera;
+    let mut rng = Rng::from_key(&[seed, u64::from(ctx.iteration), u64::from(pixel), 0]);
+    let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
+    let raster: Vec2 = xy + rng.uniform2();
+    let direction = camera.direction(width, height, raster);
+    let cos_camera = camera.forward.dot(direction);
+    let camera_pdf_w = 1.0 / (camera.pixel_area(width, height) * cos_camera.powi(3));
+    CameraPathState {
+        pixel,
+        rng,
+        origin: camera.position,
+        direction,
+        throughput: Vec3::ONE,
+        radiance: Vec3::ZERO,
+        mis: SubpathMis::camera(camera_pdf_w, ctx.factors),
+        segments: 1,
+        specular_path: true,
+        alive: true,
+        shadows: Vec::new(),
+    }
+}
+
+/// Shades the vertex where a camera path hit the scene (`None`: it escaped and ends).
+fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
+    let max_segments = ctx.max_segments();
+    let Some(hit) = hit.filter(|_| path.segments <= max_segments) else {
+        path.alive = false;
+        return;
+    };
+    let scene = ctx.scene;
+    let algorithm = ctx.settings.algorithm;
+    let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
+    let wo = -path.direction;
+    path.mis
+        .arrive(Some(hit.t * hit.t), surface.cos_geometric(wo));
+    path.radiance += path.throughput * emission(ctx, path, hit);
+    // Light tracing finds everything else from the light side.
+    if algorithm == Algorithm::LightTracing || path.segments >= max_segments {
+        path.alive = false;
+        return;
+    }
+    let bsdf = scene.bsdf(&surface.point);
+    if bsdf.has_non_delta() {
+        if algorithm.connects() {
+            if let Some(shadow) = light_sample(ctx, path, &surface, &bsdf, wo) {
+                path.shadows.push(shadow);
+            }
+            connect_to_cache(ctx, path, &surface, &bsdf, wo);
+        }
+        if algorithm.merges() {
+            path.radiance += path.throughput * merge(ctx, path, &surface, &bsdf, wo);
+            // Photon mapping proper stops at the first diffuse or glossy vertex.
+            if algorithm == Algorithm::Ppm {
+                path.alive = false;
+                return;
+            }
+        }
+    }
+    path.alive = scatter(ctx, path, &surface, &bsdf, wo);
+}
+
+/// Emitted radiance found by the path at `hit`, MIS-weighted.
+fn emission(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> Vec3 {
+    let scene = ctx.scene;
+    let Some(emitted) = scene.emission_on_hit(hit.triangle, hit.u, hit.v, path.direction) else {
+        return Vec3::ZERO;
+    };
+    let weight = if path.segments == 1 {
+        // No other technique samples a light seen directly through a pinhole.
+        1.0
+    } else if !ctx.settings.algorithm.connects() {
+        // Without connections, merging finds every path with a non-specular vertex.
+        if path.specular_path { 1.0 } else { 0.0 }
+    } else {
+        let light = scene
+            .light_sampler
+            .light_of_triangle(hit.triangle)
+            .expect("an emitting triangle is an area light");
+        let pick_pmf = scene.light_sampler.pmf(light);
+        emission_hit_weight(
+            &path.mis,
+            pick_pmf * emitted.direct_pdf_a,
+            pick_pmf * emitted.emission_pdf_w,
+        )
+    };
+    emitted.radiance * weight
+}
+
+/// One light sample (next event estimation) from a camera vertex.
+fn light_sample(
+    ctx: &CameraContext,
+    path: &mut CameraPathState,
+    surface: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+) -> Option<ShadowRay> {
+    let scene = ctx.scene;
+    let (u_pick, u_light) = (path.rng.uniform(), path.rng.uniform2());
+    let (index, pick_pmf) = scene.light_sampler.sample(u_pick)?;
+    let light = &scene.lights[index];
+    let point = surface.point.position;
+    let illumination = light.illuminate(&scene.textures, point, u_light)?;
+    let eval = bsdf.eval(wo, illumination.direction, TransportMode::Radiance);
+    if eval.f_cos == Vec3::ZERO {
+        return None;
+    }
+    let pdfs = LightSamplePdfs {
+        direct_pdf_w: illumination.direct_pdf_w * pick_pmf,
+        emission_pdf_w: illumination.emission_pdf_w * pick_pmf,
+        cos_at_light: illumination.cos_at_light,
+        cos_at_receiver: surface.cos_geometric(illumination.direction),
+        // No BSDF sample hits a delta light.
+        bsdf_fwd_pdf_w: if light.is_delta() { 0.0 } else { eval.pdf_fwd },
+        bsdf_rev_pdf_w: eval.pdf_rev,
+    };
+    let weight = light_sample_weight(&path.mis, &pdfs, ctx.factors);
+    let contribution =
+        path.throughput * illumination.value * eval.f_cos * (weight / pdfs.direct_pdf_w);
+    let origin = surface.spawn(illumination.direction);
+    let (direction, tmax) = shadow_segment(light, &illumination, point, origin);
+    Some(ShadowRay {
+        origin,
+        direction,
+        tmax,
+        contribution,
+    })
+}
+
+/// Connects the camera vertex to N_c light vertices picked uniformly from the cache.
+fn connect_to_cache(
+    ctx: &CameraContext,
+    path: &mut CameraPathState,
+    surface: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+) {
+    let vertices = ctx.cache.vertices();
+    if vertices.is_empty() {
+        return;
+    }
+    let picks = ctx.settings.connections;
+    // c = (1 / N_c) · (N_v / N_p): each pick stands for N_v / N_c vertices of N_p paths.
+    let scale = vertices.len() as f32 / (picks as f32 * ctx.factors.light_paths);
+    for _ in 0..picks {
+        let pick = (u64::from(path.rng.next_u32()) * vertices.len() as u64) >> 32;
+        let vertex = &vertices[pick as usize];
+        let segments = path.segments.saturating_add(vertex.path_length + 1);
+        if segments > ctx.max_segments() {
+            continue;
+        }
+        if let Some(shadow) = connect(ctx, path, surface, bsdf, wo, vertex, scale) {
+            path.shadows.push(shadow);
+        }
+    }
+}
+
+/// The connection between a camera vertex and one light vertex, its contribution already
+/// scaled by `scale`.
+fn connect(
+    ctx: &CameraContext,
+    path: &CameraPathState,
+    surface: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    vertex: &LightVertex,
+    scale: f32,
+) -> Option<ShadowRay> {
+    let to_light = vertex.position - surface.point.position;
+    let distance_sq = to_light.length_squared();
+    if distance_sq == 0.0 {
+        return None;
+    }
+    let direction = to_light / distance_sq.sqrt();
+    let camera_eval = bsdf.eval(wo, direction, TransportMode::Radiance);
+    if camera_eval.f_cos == Vec3::ZERO {
+        return None;
+    }
+    let light_surface = SurfaceHit::new(ctx.scene, vertex.triangle, vertex.u, vertex.v);
+    let light_bsdf = ctx.scene.bsdf(&light_surface.point);
+    let light_eval = light_bsdf.eval(vertex.wo, -direction, TransportMode::Importance);
+    if light_eval.f_cos == Vec3::ZERO {
+        return None;
+    }
+    let pdfs = ConnectionPdfs {
+        camera_fwd_pdf_a: camera_eval.pdf_fwd * light_surface.cos_geometric(direction)
+            / distance_sq,
+        camera_rev_pdf_w: camera_eval.pdf_rev,
+        light_fwd_pdf_a: light_eval.pdf_fwd * surface.cos_geometric(direction) / distance_sq,
+        light_rev_pdf_w: light_eval.pdf_rev,
+    };
+    let weight = connection_weight(&path.mis, &vertex.mis, &pdfs, ctx.factors);
+    let contribution = path.throughput
+        * vertex.throughput
+        * camera_eval.f_cos
+        * light_eval.f_cos
+        * (weight * scale / distance_sq);
+    let origin = surface.spawn(direction);
+    let (ray_direction, tmax) = segment_to(origin, light_surface.spawn(-direction));
+    Some(ShadowRay {
+        origin,
+        direction: ray_direction,
+        tmax,
+        contribution,
+    })
+}
+
+/// Density estimation with the light vertices within the frame's radius (vertex merging):
+/// the MIS-weighted reflected radiance at the camera vertex, per unit throughput.
+fn merge(
+    ctx: &CameraContext,
+    path: &CameraPathState,
+    surface: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+) -> Vec3 {
+    let vertices = ctx.cache.vertices();
+    let n_s = bsdf.shading_normal();
+    let max_segments = ctx.max_segments();
+    let ppm = ctx.settings.algorithm == Algorithm::Ppm;
+    let mut sum = Vec3::ZERO;
+    ctx.grid.query(surface.point.position, |i| {
+        let vertex = &vertices[i];
+        if path.segments.saturating_add(vertex.path_length) > max_segments {
+            return;
+        }
+        let eval = bsdf.eval(wo, vertex.wo, TransportMode::Radiance);
+        if eval.f_cos == Vec3::ZERO {
+            return;
+        }
+        let weight = if ppm {
+            1.0
+        } else {
+            merge_weight(
+                &path.mis,
+                &vertex.mis,
+                eval.pdf_fwd,
+                eval.pdf_rev,
+                ctx.factors,
+            )
+        };
+        // The density estimate needs f, not f·cos: f_cos = f·|ωi·n_s| in radiance mode.
+        sum += vertex.throughput * eval.f_cos * (weight / vertex.wo.dot(n_s).abs());
+    });
+    sum / (PI * ctx.radius * ctx.radius * ctx.factors.light_paths)
+}
+
+/// Samples the BSDF for the next segment, updates the MIS quantities and applies Russian
+/// roulette; returns whether the path goes on.
+fn scatter(
+    ctx: &CameraContext,
+    path: &mut CameraPathState,
+    surface: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+) -> bool {
+    let (u_lobe, u_dir) = (path.rng.uniform(), path.rng.uniform2());
+    let Some(sample) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
+        return false;
+    };
+    path.throughput *= sample.f_cos / sample.pdf_fwd;
+    let specular = sample.lobe == LobeKind::Specular;
+    path.specular_path &= specular;
+    path.mis.scatter(
+        surface.cos_geometric(sample.wi),
+        sample.pdf_fwd,
+        sample.pdf_rev,
+        specular,
+        ctx.factors,
+    );
+    if let Some(continuation) = continuation_probability(path.segments, path.throughput) {
+        if path.rng.uniform() >= continuation {
+            return false;
+        }
+        path.throughput /= continuation;
+    }
+    path.origin = surface.spawn(sample.wi);
+    path.direction = sample.wi;
+    path.segments += 1;
+    true
+}

@@ -1,0 +1,237 @@
+//! Multiple importance sampling weights of VCM, computed recursively along each subpath.
+//!
+//! Georgiev et al. 2012 ("Light Transport Simulation with Vertex Connection and Merging") and
+//! the tech report "Implementing Vertex Connection and Merging" (Georgiev 2012; equation
+//! numbers below refer to it) show that the balance-heuristic weight of every technique can be
+//! computed from three running quantities per subpath vertex, d_VCM, d_VC and d_VM, updated
+//! once per segment. The weight of a technique is 1 / (w_light + 1 + w_camera), where each
+//! side's partial sum w comes from its subpath's quantities and the pdfs at the joining vertex.
+//!
+//! Conventions:
+//! * pdfs in solid angle are per steradian; area pdfs convert with |cos θ| / d² using the
+//!   **geometric** normal at the receiving vertex, the same everywhere, so that all techniques
+//!   see the same density for the same path.
+//! * A light tracing splat ("connect a light vertex to the camera") is one technique used by
+//!   every one of the frame's N_p light paths, merging counts as N_p paths times the disk area
+//!   π r² (η = π r² N_p, eq. 20), and every vertex connection counts once.
+//! * Russian roulette is left out of the weights: every technique computes the same quantities
+//!   for the same path, so the weights still sum to one and the estimate stays unbiased.
+//! * Specular (delta) vertices cannot be connected or merged: d_VCM becomes 0 there and d_VC,
+//!   d_VM are carried on, scaled by the delta's pdf ratio (eqs. 53–55) — never zeroed.
+
+/// Per-frame constants of the weights: which technique families exist and how many samples
+/// each takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct MisFactors {
+    /// η_VCM = π r² N_p when merging is used, else 0: the weight of a merge relative to a
+    /// connection.
+    pub merge: f32,
+    /// 1 / η_VCM when connections are used (and merging too), else 0: the weight of a
+    /// connection relative to a merge.
+    pub connect: f32,
+    /// N_p, the number of light paths per frame (the sample count of light tracing splats).
+    pub light_paths: f32,
+}
+
+impl MisFactors {
+    /// The factors for a frame with `light_paths` light paths and merge radius `radius`,
+    /// with or without connections and merging.
+    pub fn new(connections: bool, merging: bool, radius: f32, light_paths: f32) -> MisFactors {
+        let eta = std::f32::consts::PI * radius * radius * light_paths;
+        MisFactors {
+            merge: if merging { eta } else { 0.0 },
+            connect: if connections && merging {
+                1.0 / eta
+            } else {
+                0.0
+            },
+            light_paths,
+        }
+    }
+}
+
+/// The recursive MIS quantities a subpath carries to its next vertex (thesis Fig. 4.4).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct SubpathMis {
+    /// d_VCM: the reverse density of the vertex's own sampling, relative to the forward one.
+    pub d_vcm: f32,
+    /// d_VC: the partial weight sum of the connection techniques along the subpath.
+    pub d_vc: f32,
+    /// d_VM: the partial weight sum of the merging techniques along the subpath.
+    pub d_vm: f32,
+}
+
+impl SubpathMis {
+    /// A camera subpath's start (eqs. 31–33 for the camera): `camera_pdf_w` is the solid-angle
+    /// pdf of the primary ray's direction.
+    pub fn camera(camera_pdf_w: f32, factors: &MisFactors) -> SubpathMis {
+        SubpathMis {
+            d_vcm: factors.light_paths / camera_pdf_w,
+            d_vc: 0.0,
+            d_vm: 0.0,
+        }
+    }
+
+    /// A light subpath's start (eqs. 31–33, 48–50 for delta lights). `direct_pdf` is the pdf
+    /// of light sampling picking the start point and `emission_pdf_w` that of emitting the
+    /// ray (position × direction), both including the light's selection probability;
+    /// `cos_at_light` is the emission cosine.
+    pub fn light(
+        direct_pdf: f32,
+        emission_pdf_w: f32,
+        cos_at_light: f32,
+        is_delta: bool,
+        is_finite: bool,
+        factors: &MisFactors,
+    ) -> SubpathMis {
+        let d_vc = if is_delta {
+            0.0
+        } else if is_finite {
+            cos_at_light / emission_pdf_w
+        } else {
+            1.0 / emission_pdf_w
+        };
+        SubpathMis {
+            d_vcm: direct_pdf / emission_pdf_w,
+            d_vc,
+            d_vm: d_vc * factors.connect,
+        }
+    }
+
+    /// Completes the quantities on arriving at the next vertex: the squared segment length
+    /// (`None` for the first segment of a light at infinity, whose pdfs are in solid angle)
+    /// and the cosine at the new vertex.
+    pub fn arrive(&mut self, distance_sq: Option<f32>, cos_in: f32) {
+        if let Some(d2) = distance_sq {
+            self.d_vcm *= d2;
+        }
+        let inv_cos = 1.0 / cos_in.abs();
+        self.d_vcm *= inv_cos;
+        self.d_vc *= inv_cos;
+        self.d_vm *= inv_cos;
+    }
+
+    /// Updates the quantities for a scattering at the current vertex (eqs. 34–36, 53–55):
+    /// `cos_out` is the cosine of the sampled direction, `pdf_fwd` / `pdf_rev` the BSDF's pdfs
+    /// of the sampled direction and of the reverse one.
+    pub fn scatter(
+        &mut self,
+        cos_out: f32,
+        pdf_fwd: f32,
+        pdf_rev: f32,
+        specular: bool,
+        factors: &MisFactors,
+    ) {
+        let ratio = cos_out.abs() / pdf_fwd;
+        if specular {
+            self.d_vcm = 0.0;
+            self.d_vc *= ratio * pdf_rev;
+            self.d_vm *= ratio * pdf_rev;
+        } else {
+            let d_vc = ratio * (self.d_vc * pdf_rev + self.d_vcm + factors.merge);
+            let d_vm = ratio * (self.d_vm * pdf_rev + self.d_vcm * factors.connect + 1.0);
+            *self = SubpathMis {
+                d_vcm: 1.0 / pdf_fwd,
+                d_vc,
+                d_vm,
+            };
+        }
+    }
+}
+
+/// Weight of emission found by a camera path that hits an area light (eqs. 42–43).
+/// `direct_pdf_a` and `emission_pdf_w` include the light's selection probability.
+pub(crate) fn emission_hit_weight(
+    camera: &SubpathMis,
+    direct_pdf_a: f32,
+    emission_pdf_w: f32,
+) -> f32 {
+    let w_camera = direct_pdf_a * camera.d_vcm + emission_pdf_w * camera.d_vc;
+    1.0 / (1.0 + w_camera)
+}
+
+/// The pdfs of a light sample (next event estimation) that its weight needs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LightSamplePdfs {
+    /// Solid-angle pdf of the sample at the receiver, with the light's selection probability.
+    pub direct_pdf_w: f32,
+    /// Pdf of emitting the same segment from the light, with the selection probability.
+    pub emission_pdf_w: f32,
+    /// Emission cosine at the light (1 for point-like and distant lights).
+    pub cos_at_light: f32,
+    /// Cosine at the receiver toward the light (geometric normal).
+    pub cos_at_receiver: f32,
+    /// BSDF pdf of sampling the light direction (0 for delta lights, which no BSDF sample hits).
+    pub bsdf_fwd_pdf_w: f32,
+    /// BSDF pdf of sampling the camera direction from the light direction.
+    pub bsdf_rev_pdf_w: f32,
+}
+
+/// Weight of a light sample taken at a camera vertex (eqs. 44–45).
+pub(crate) fn light_sample_weight(
+    camera: &SubpathMis,
+    pdfs: &LightSamplePdfs,
+    factors: &MisFactors,
+) -> f32 {
+    let w_light = pdfs.bsdf_fwd_pdf_w / pdfs.direct_pdf_w;
+    let w_camera = (pdfs.emission_pdf_w * pdfs.cos_at_receiver
+        / (pdfs.direct_pdf_w * pdfs.cos_at_light))
+        * (factors.merge + camera.d_vcm + camera.d_vc * pdfs.bsdf_rev_pdf_w);
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// Weight of a light vertex connected to the camera (a light tracing splat, eqs. 46–47):
+/// `camera_pdf_a` is the area pdf of the camera sampling the light vertex, `bsdf_rev_pdf_w`
+/// the light vertex's BSDF pdf of sampling its incoming direction from the camera direction.
+pub(crate) fn camera_connection_weight(
+    light: &SubpathMis,
+    camera_pdf_a: f32,
+    bsdf_rev_pdf_w: f32,
+    factors: &MisFactors,
+) -> f32 {
+    let w_light = (camera_pdf_a / factors.light_paths)
+        * (factors.merge + light.d_vcm + light.d_vc * bsdf_rev_pdf_w);
+    1.0 / (w_light + 1.0)
+}
+
+/// The pdfs at both ends of a connection between a camera vertex and a light vertex.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ConnectionPdfs {
+    /// Area pdf of the camera vertex's BSDF sampling the light vertex.
+    pub camera_fwd_pdf_a: f32,
+    /// The camera vertex's BSDF pdf of sampling its incoming direction from the connection.
+    pub camera_rev_pdf_w: f32,
+    /// Area pdf of the light vertex's BSDF sampling the camera vertex.
+    pub light_fwd_pdf_a: f32,
+    /// The light vertex's BSDF pdf of sampling its incoming direction from the connection.
+    pub light_rev_pdf_w: f32,
+}
+
+/// Weight of a connection between a camera vertex and a light vertex (eqs. 40–41).
+pub(crate) fn connection_weight(
+    camera: &SubpathMis,
+    light: &SubpathMis,
+    pdfs: &ConnectionPdfs,
+    factors: &MisFactors,
+) -> f32 {
+    let w_light =
+        pdfs.camera_fwd_pdf_a * (factors.merge + light.d_vcm + light.d_vc * pdfs.light_rev_pdf_w);
+    let w_camera =
+        pdfs.light_fwd_pdf_a * (factors.merge + camera.d_vcm + camera.d_vc * pdfs.camera_rev_pdf_w);
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// Weight of merging a camera vertex with a light vertex (eqs. 38–39): `camera_fwd_pdf_w` is
+/// the camera BSDF's pdf of the light vertex's incoming direction, `camera_rev_pdf_w` its pdf
+/// of the camera direction given that one.
+pub(crate) fn merge_weight(
+    camera: &SubpathMis,
+    light: &SubpathMis,
+    camera_fwd_pdf_w: f32,
+    camera_rev_pdf_w: f32,
+    factors: &MisFactors,
+) -> f32 {
+    let w_light = light.d_vcm * factors.connect + light.d_vm * camera_fwd_pdf_w;
+    let w_camera = camera.d_vcm * factors.connect + camera.d_vm * camera_rev_pdf_w;
+    1.0 / (w_light + 1.0 + w_camera)
+}

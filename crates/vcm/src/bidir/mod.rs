@@ -1,0 +1,295 @@
+//! Vertex connection and merging (Georgiev et al. 2012) and the algorithms it contains:
+//! light tracing, bidirectional path tracing, progressive photon mapping and bidirectional
+//! photon mapping, all from one integrator.
+//!
+//! A frame has two passes, each run as waves of ray batches over a [`Traversal`]:
+//! 1. **Light pass**: one light path per pixel. Every non-specular vertex is stored in the
+//!    [`LightVertexCache`] and, for the algorithms that use it, connected to the camera (a
+//!    light tracing splat). Merging algorithms then build a [`HashGrid`] over the cache.
+//! 2. **Camera pass**: one path per pixel. Each non-specular vertex takes a light sample,
+//!    connects to `connections` vertices picked uniformly from the whole cache (the
+//!    contribution scaled by c = N_v / (N_c · N_p), so that it estimates the same sum as
+//!    connecting to all vertices of one light path) and merges with the cached vertices
+//!    within the frame's radius.
+//!
+//! Every technique is weighted by the balance heuristic through the recursive quantities of
+//! [`mis`]. Connections to cache vertices are weighted as bidirectional path tracing weights
+//! its connections (one per light path); with N_c ≠ N_v / N_p this is still a partition of
+//! unity, hence unbiased.
+
+mod camera_pass;
+mod light_pass;
+pub(crate) mod mis;
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use vcm_scene::Scene;
+use vcm_traversal::Traversal;
+
+use crate::error::RenderError;
+use crate::film::Film;
+use crate::hash_grid::HashGrid;
+use crate::integrator::{FrameStats, Integrator};
+use crate::light_vertex_cache::LightVertexCache;
+use camera_pass::CameraPass;
+use light_pass::{LightPass, LightPassOutputs};
+use mis::MisFactors;
+
+/// Light paths traced by the preprocess that sizes the light vertex cache.
+const PREPROCESS_LIGHT_PATHS: u32 = 10_000;
+
+/// Default initial merge radius, as a fraction of the scene's bounding-sphere radius.
+pub const DEFAULT_RADIUS_FRACTION: f32 = 0.003;
+
+/// Default radius reduction exponent α of progressive photon mapping.
+pub const DEFAULT_ALPHA: f32 = 0.75;
+
+/// The algorithms of the VCM integrator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Algorithm {
+    /// Light tracing: light paths connected to the camera (plus emission seen directly).
+    LightTracing,
+    /// Bidirectional path tracing: every connection technique, no merging.
+    Bpt,
+    /// Progressive photon mapping: merging at the first non-specular camera vertex only.
+    Ppm,
+    /// Bidirectional photon mapping: merging at every camera vertex, no connections.
+    Bpm,
+    /// Vertex connection and merging: all techniques.
+    Vcm,
+}
+
+impl Algorithm {
+    /// Whether camera vertices connect to light samples and light vertices, and light vertices
+    /// to the camera.
+    pub fn connects(self) -> bool {
+        matches!(self, Algorithm::Bpt | Algorithm::Vcm)
+    }
+
+    /// Whether camera vertices merge with light vertices (needs the hash grid).
+    pub fn merges(self) -> bool {
+        matches!(self, Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm)
+    }
+
+    /// Whether light vertices are splatted onto the image through the camera.
+    fn splats(self) -> bool {
+        matches!(
+            self,
+            Algorithm::LightTracing | Algorithm::Bpt | Algorithm::Vcm
+        )
+    }
+
+    /// Whether light vertices are kept in the cache (for connections or merging).
+    fn caches(self) -> bool {
+        self.connects() || self.merges()
+    }
+}
+
+/// What a [`Vcm`] integrator renders.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VcmSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Seed of every path's random stream.
+    pub seed: u64,
+    /// Longest path in segments (a directly seen light is 1); `None`: unlimited.
+    pub max_depth: Option<u32>,
+    /// Which techniques are used.
+    pub algorithm: Algorithm,
+    /// N_c, light vertices each camera vertex connects to (≥ 1).
+    pub connections: u32,
+    /// Merge radius of the first frame, as a fraction of the scene's bounding-sphere radius.
+    pub radius_fraction: f32,
+    /// Radius reduction: frame i (from 1) merges within r₀ · i^((α − 1) / 2).
+    pub alpha: f32,
+}
+
+impl VcmSettings {
+    /// Default settings of `algorithm` for a `width` × `height` image.
+    pub fn new(algorithm: Algorithm, width: u32, height: u32) -> VcmSettings {
+        VcmSettings {
+            width,
+            height,
+            seed: 0,
+            max_depth: None,
+            algorithm,
+            connections: 1,
+            radius_fraction: DEFAULT_RADIUS_FRACTION,
+            alpha: DEFAULT_ALPHA,
+        }
+    }
+}
+
+/// The VCM integrator (and its sub-algorithms, see [`Algorithm`]).
+pub struct Vcm {
+    scene: Arc<Scene>,
+    traversal: Arc<dyn Traversal>,
+    settings: VcmSettings,
+    base_radius: f32,
+    light_pass: LightPass,
+    camera_pass: CameraPass,
+    cache: LightVertexCache,
+    grid: HashGrid,
+}
+
+impl Vcm {
+    /// The integrator for `scene`, traced with `traversal` (built over
+    /// [`Scene::triangle_corners`]). Sizes the light vertex cache with a preprocess of
+    /// 10,000 light paths when the algorithm uses the cache.
+    pub fn new(
+        scene: Arc<Scene>,
+        traversal: Arc<dyn Traversal>,
+        settings: VcmSettings,
+    ) -> Result<Vcm, RenderError> {
+        let VcmSettings { width, height, .. } = settings;
+        crate::integrator::check_image_size(width, height)?;
+        if settings.connections == 0 {
+            return Err(RenderError::InvalidSetting(
+                "connections per camera vertex must be at least 1".into(),
+            ));
+        }
+        if !(settings.radius_fraction.is_finite() && settings.radius_fraction > 0.0) {
+            return Err(RenderError::InvalidSetting(
+                "the merge radius must be a positive number".into(),
+            ));
+        }
+        if !(settings.alpha > 0.0 && settings.alpha <= 1.0) {
+            return Err(RenderError::InvalidSetting(
+                "alpha must be in (0, 1]".into(),
+            ));
+        }
+        let base_radius = settings.radius_fraction * scene.features.bounds.radius();
+        let mut vcm = Vcm {
+            scene,
+            traversal,
+            settings,
+            base_radius,
+            light_pass: LightPass::default(),
+            camera_pass: CameraPass::default(),
+            cache: LightVertexCache::default(),
+            grid: HashGrid::default(),
+        };
+        if settings.algorithm.caches() {
+            vcm.cache = LightVertexCache::with_capacity(vcm.estimate_cache_capacity());
+        }
+        Ok(vcm)
+    }
+
+    /// The settings this integrator renders with.
+    pub fn settings(&self) -> &VcmSettings {
+        &self.settings
+    }
+
+    /// The merge radius of frame `iteration` (from 0): r₀ · (iteration + 1)^((α − 1) / 2).
+    pub fn radius(&self, iteration: u32) -> f32 {
+        let exponent = 0.5 * (self.settings.alpha - 1.0);
+        self.base_radius * ((iteration as f32) + 1.0).powf(exponent)
+    }
+
+    /// The light vertex cache of the last frame.
+    pub fn cache(&self) -> &LightVertexCache {
+        &self.cache
+    }
+
+    /// Traces [`PREPROCESS_LIGHT_PATHS`] light paths (without storing or splatting anything)
+    /// and returns the cache capacity they suggest for one frame.
+    fn estimate_cache_capacity(&mut self) -> usize {
+        let light_paths = self.light_paths();
+        let factors = MisFactors::new(false, false, 1.0, 1.0);
+        let ctx = light_pass::LightContext {
+            scene: &self.scene,
+            traversal: self.traversal.as_ref(),
+            settings: &self.settings,
+            iteration: 0,
+            factors: &factors,
+        };
+        let counted = self.light_pass.count_vertices(&ctx, PREPROCESS_LIGHT_PATHS);
+        LightVertexCache::estimate_capacity(
+            counted.vertices,
+            u64::from(PREPROCESS_LIGHT_PATHS),
+            light_paths as u64,
+        )
+    }
+
+    fn light_paths(&self) -> u32 {
+        self.settings.width * self.settings.height
+    }
+}
+
+impl Integrator for Vcm {
+    fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats {
+        let VcmSettings {
+            width,
+            height,
+            algorithm,
+            ..
+        } = self.settings;
+        assert_eq!(
+            (film.width(), film.height()),
+            (width, height),
+            "film size differs from the settings"
+        );
+        let start = Instant::now();
+        let radius = self.radius(iteration);
+        let factors = MisFactors::new(
+            algorithm.connects(),
+            algorithm.merges(),
+            radius,
+            self.light_paths() as f32,
+        );
+        let mut stats = FrameStats::default();
+        self.cache.clear();
+        let light_paths = self.light_paths();
+        let outputs = LightPassOutputs {
+            cache: algorithm.caches().then_some(&mut self.cache),
+            film: algorithm.splats().then_some(&mut *film),
+        };
+        let ctx = light_pass::LightContext {
+            scene: &self.scene,
+            traversal: self.traversal.as_ref(),
+            settings: &self.settings,
+            iteration,
+            factors: &factors,
+        };
+        self.light_pass.run(&ctx, light_paths, outputs, &mut stats);
+        stats.light_vertices = self.cache.len() as u64;
+        stats.discarded_light_vertices = self.cache.discarded();
+
+        if algorithm.merges() {
+            let grid_start = Instant::now();
+            let positions: Vec<_> = self.cache.vertices().iter().map(|v| v.position).collect();
+            self.grid = HashGrid::build(&positions, radius);
+            stats.grid_build_time = grid_start.elapsed();
+        }
+        let ctx = camera_pass::CameraContext {
+            scene: &self.scene,
+            traversal: self.traversal.as_ref(),
+            settings: &self.settings,
+            iteration,
+            factors: &factors,
+            cache: &self.cache,
+            grid: &self.grid,
+            radius,
+        };
+        self.camera_pass.run(&ctx, film, &mut stats);
+        stats.shading_time = start
+            .elapsed()
+            .saturating_sub(stats.traversal_time + stats.grid_build_time);
+        stats
+    }
+
+    fn image_size(&self) -> (u32, u32) {
+        (self.settings.width, self.settings.height)
+    }
+}
+
+/// Adds `elapsed` to `total` and passes it on (for timing traversal calls inline).
+fn timed<T>(total: &mut Duration, f: impl FnOnce() -> T) -> T {
+    let start = Instant::now();
+    let result = f();
+    *total += start.elapsed();
+    result
+}

@@ -1,0 +1,75 @@
+//! What every integrator offers: rendering one frame into a film, and its statistics.
+
+use std::time::Duration;
+
+use crate::error::RenderError;
+use crate::film::Film;
+
+/// A progressive renderer: frame after frame, each adding one sample per pixel (and, for
+/// algorithms with light tracing, splats) to a [`Film`].
+pub trait Integrator: Send {
+    /// Renders frame `iteration` (0, 1, 2, …) into `film`.
+    ///
+    /// The result depends only on the scene, the settings and `iteration`, not on the number
+    /// of threads. Panics if `film` does not have the integrator's image size.
+    fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats;
+
+    /// (width, height) of the image in pixels: the size of the films it renders into.
+    fn image_size(&self) -> (u32, u32);
+}
+
+/// Work done by one [`Integrator::render_frame`] call.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// Rays from the camera (one per pixel).
+    pub camera_rays: u64,
+    /// Rays that continue a camera path after a BSDF sample.
+    pub continuation_rays: u64,
+    /// Segments of light paths (emitted rays and their continuations).
+    pub light_rays: u64,
+    /// Occlusion rays: light samples, connections between vertices, and light vertices
+    /// connected to the camera.
+    pub shadow_rays: u64,
+    /// Light vertices stored in the light vertex cache.
+    pub light_vertices: u64,
+    /// Light vertices discarded because the cache was full.
+    pub discarded_light_vertices: u64,
+    /// Wall-clock time in closest-hit and occlusion queries.
+    pub traversal_time: Duration,
+    /// Wall-clock time building the hash grid over the light vertices.
+    pub grid_build_time: Duration,
+    /// Wall-clock time in everything else: ray generation, shading, connections, merging,
+    /// queue compaction and accumulation.
+    pub shading_time: Duration,
+}
+
+impl FrameStats {
+    /// Adds the counts and times of `other`.
+    pub fn accumulate(&mut self, other: &FrameStats) {
+        self.camera_rays += other.camera_rays;
+        self.continuation_rays += other.continuation_rays;
+        self.light_rays += other.light_rays;
+        self.shadow_rays += other.shadow_rays;
+        self.light_vertices += other.light_vertices;
+        self.discarded_light_vertices += other.discarded_light_vertices;
+        self.traversal_time += other.traversal_time;
+        self.grid_build_time += other.grid_build_time;
+        self.shading_time += other.shading_time;
+    }
+
+    /// All rays traced.
+    pub fn rays(&self) -> u64 {
+        self.camera_rays + self.continuation_rays + self.light_rays + self.shadow_rays
+    }
+}
+
+/// Checks that a `width` × `height` image has pixels and that a 32-bit index reaches them all.
+pub(crate) fn check_image_size(width: u32, height: u32) -> Result<(), RenderError> {
+    if width == 0 || height == 0 {
+        return Err(RenderError::EmptyImage { width, height });
+    }
+    if u64::from(width) * u64::from(height) > u64::from(u32::MAX) {
+        return Err(RenderError::ImageTooLarge { width, height });
+    }
+    Ok(())
+}

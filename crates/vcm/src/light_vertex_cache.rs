@@ -1,0 +1,146 @@
+//! The light vertex cache: every connectable vertex of a frame's light paths, in one array
+//! of fixed capacity (Davidovič et al. 2014, "Progressive Light Transport Simulation on the
+//! GPU: Survey and Improvements").
+
+use glam::Vec3;
+
+use crate::bidir::mis::SubpathMis;
+
+/// Head room of the cache over the preprocess estimate.
+const CAPACITY_MARGIN: f64 = 1.1;
+
+/// A non-specular vertex of a light path, as connections and merging need it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightVertex {
+    /// Position on the surface.
+    pub position: Vec3,
+    /// Unit direction toward the previous vertex of the light path (where light comes from).
+    pub wo: Vec3,
+    /// The light path's throughput up to and including the segment that reached this vertex
+    /// (W in scene units: emitted power over the sampling pdfs).
+    pub throughput: Vec3,
+    /// The recursive MIS quantities on arrival.
+    pub(crate) mis: SubpathMis,
+    /// Triangle hit (the BSDF is rebuilt from it for connections).
+    pub triangle: u32,
+    /// Barycentric weight of the triangle's second corner.
+    pub u: f32,
+    /// Barycentric weight of the triangle's third corner.
+    pub v: f32,
+    /// Segments from the light to this vertex (1: the first hit).
+    pub path_length: u32,
+}
+
+/// The light vertices of one frame, in light path order then wave order. Vertices arriving
+/// after the cache is full are discarded and counted.
+#[derive(Clone, Debug, Default)]
+pub struct LightVertexCache {
+    vertices: Vec<LightVertex>,
+    capacity: usize,
+    discarded: u64,
+}
+
+impl LightVertexCache {
+    /// An empty cache that holds at most `capacity` vertices (allocated up front).
+    pub fn with_capacity(capacity: usize) -> LightVertexCache {
+        LightVertexCache {
+            vertices: Vec::with_capacity(capacity),
+            capacity,
+            discarded: 0,
+        }
+    }
+
+    /// The capacity for `light_paths` paths per frame when a preprocess saw
+    /// `sampled_vertices` cacheable vertices on `sampled_paths` paths: the mean per path ×
+    /// paths × 1.1.
+    pub fn estimate_capacity(sampled_vertices: u64, sampled_paths: u64, light_paths: u64) -> usize {
+        let per_path = sampled_vertices as f64 / sampled_paths.max(1) as f64;
+        (per_path * light_paths as f64 * CAPACITY_MARGIN).ceil() as usize
+    }
+
+    /// Empties the cache for the next frame (the capacity stays; the discard count restarts).
+    pub fn clear(&mut self) {
+        self.vertices.clear();
+        self.discarded = 0;
+    }
+
+    /// Appends `vertices` in order while there is room; counts the rest as discarded.
+    pub fn extend(&mut self, vertices: impl IntoIterator<Item = LightVertex>) {
+        for vertex in vertices {
+            if self.vertices.len() < self.capacity {
+                self.vertices.push(vertex);
+            } else {
+                self.discarded += 1;
+            }
+        }
+    }
+
+    /// The stored vertices.
+    pub fn vertices(&self) -> &[LightVertex] {
+        &self.vertices
+    }
+
+    /// Number of stored vertices.
+    pub fn len(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// Whether no vertex is stored.
+    pub fn is_empty(&self) -> bool {
+        self.vertices.is_empty()
+    }
+
+    /// The most vertices the cache holds.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Vertices discarded since the last [`LightVertexCache::clear`] because the cache was full.
+    pub fn discarded(&self) -> u64 {
+        self.discarded
+    }
+
+    /// Bytes of the vertex array (its capacity).
+    pub fn memory_bytes(&self) -> usize {
+        self.vertices.capacity() * std::mem::size_of::<LightVertex>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vertex(i: u32) -> LightVertex {
+        LightVertex {
+            position: Vec3::splat(i as f32),
+            wo: Vec3::Z,
+            throughput: Vec3::ONE,
+            mis: SubpathMis::default(),
+            triangle: i,
+            u: 0.0,
+            v: 0.0,
+            path_length: 1,
+        }
+    }
+
+    #[test]
+    fn overflow_is_discarded_and_counted() {
+        let mut cache = LightVertexCache::with_capacity(3);
+        cache.extend((0..5).map(vertex));
+        assert_eq!(cache.len(), 3);
+        assert_eq!(cache.discarded(), 2);
+        assert_eq!(cache.vertices()[2].triangle, 2);
+        cache.clear();
+        assert!(cache.is_empty());
+        assert_eq!((cache.discarded(), cache.capacity()), (0, 3));
+    }
+
+    #[test]
+    fn capacity_is_the_mean_times_paths_plus_ten_percent() {
+        assert_eq!(
+            LightVertexCache::estimate_capacity(25_000, 10_000, 1000),
+            2750
+        );
+        assert_eq!(LightVertexCache::estimate_capacity(0, 0, 1000), 0);
+    }
+}

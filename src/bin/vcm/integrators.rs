@@ -1,0 +1,106 @@
+//! The algorithm and integrator options shared by `vcm render` and `vcm convergence`.
+
+use std::sync::Arc;
+
+use vcm::{
+    Algorithm as VcmAlgorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer,
+    PtSettings, RenderError, Vcm, VcmSettings,
+};
+use vcm_rs::scene::Scene;
+use vcm_rs::traversal::Traversal;
+
+/// Light transport algorithms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Algorithm {
+    /// Path tracing with next event estimation and MIS (the reference unidirectional tracer).
+    Pt,
+    /// Light tracing: light paths connected to the camera.
+    Lt,
+    /// Bidirectional path tracing (light vertex cache connections).
+    Bpt,
+    /// Progressive photon mapping: merging at the first diffuse or glossy camera vertex.
+    Ppm,
+    /// Bidirectional photon mapping: merging at every camera vertex.
+    Bpm,
+    /// Vertex connection and merging: all of the above, combined by MIS.
+    Vcm,
+}
+
+impl Algorithm {
+    /// The lower-case name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::Pt => "pt",
+            Algorithm::Lt => "lt",
+            Algorithm::Bpt => "bpt",
+            Algorithm::Ppm => "ppm",
+            Algorithm::Bpm => "bpm",
+            Algorithm::Vcm => "vcm",
+        }
+    }
+
+    fn vcm_algorithm(self) -> Option<VcmAlgorithm> {
+        match self {
+            Algorithm::Pt => None,
+            Algorithm::Lt => Some(VcmAlgorithm::LightTracing),
+            Algorithm::Bpt => Some(VcmAlgorithm::Bpt),
+            Algorithm::Ppm => Some(VcmAlgorithm::Ppm),
+            Algorithm::Bpm => Some(VcmAlgorithm::Bpm),
+            Algorithm::Vcm => Some(VcmAlgorithm::Vcm),
+        }
+    }
+}
+
+/// Options of every integrator.
+#[derive(clap::Args, Clone, Debug)]
+pub struct IntegratorOptions {
+    /// Seed of all random numbers: a render is a pure function of scene, settings and seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Maximum path length in segments (a directly seen light is 1); default unlimited with
+    /// Russian roulette.
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Light vertices each camera vertex connects to (bpt, vcm).
+    #[arg(long, default_value_t = 1)]
+    pub connections: u32,
+    /// Initial merge radius as a fraction of the scene's bounding-sphere radius (ppm, bpm, vcm).
+    #[arg(long, default_value_t = DEFAULT_RADIUS_FRACTION)]
+    pub radius: f32,
+    /// Radius reduction exponent: frame i merges within r₀ · i^((α − 1) / 2) (ppm, bpm, vcm).
+    #[arg(long, default_value_t = DEFAULT_ALPHA)]
+    pub alpha: f32,
+}
+
+/// The integrator of `algorithm` for a `width` × `height` image.
+pub fn build(
+    algorithm: Algorithm,
+    scene: &Arc<Scene>,
+    traversal: Arc<dyn Traversal>,
+    (width, height): (u32, u32),
+    options: &IntegratorOptions,
+) -> Result<Box<dyn Integrator>, RenderError> {
+    let scene = Arc::clone(scene);
+    Ok(match algorithm.vcm_algorithm() {
+        None => {
+            let settings = PtSettings {
+                width,
+                height,
+                seed: options.seed,
+                max_depth: options.max_depth,
+            };
+            Box::new(PathTracer::new(scene, traversal, settings)?)
+        }
+        Some(vcm_algorithm) => {
+            let settings = VcmSettings {
+                seed: options.seed,
+                max_depth: options.max_depth,
+                connections: options.connections,
+                radius_fraction: options.radius,
+                alpha: options.alpha,
+                ..VcmSettings::new(vcm_algorithm, width, height)
+            };
+            Box::new(Vcm::new(scene, traversal, settings)?)
+        }
+    })
+}

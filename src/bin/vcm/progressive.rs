@@ -1,0 +1,130 @@
+//! The progressive render loop: frames until a sample count or a time budget is reached, with
+//! the error against a reference recorded at 1, 2, 4, … seconds and at the end.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use anyhow::bail;
+use glam::Vec3;
+use vcm::metrics::{ErrorMetrics, compare};
+use vcm::{Film, FrameStats, Integrator};
+
+/// When to stop rendering.
+#[derive(Clone, Copy, Debug)]
+pub enum Budget {
+    /// This many samples per pixel (frames).
+    Samples(u32),
+    /// This many seconds of wall-clock time.
+    Seconds(f64),
+}
+
+impl Budget {
+    /// The budget of `--spp` / `--time` (16 samples when neither is given).
+    pub fn from_options(spp: Option<u32>, time: Option<f64>) -> anyhow::Result<Budget> {
+        Ok(match (spp, time) {
+            (_, Some(t)) if !(t.is_finite() && t > 0.0) => {
+                bail!("--time must be a positive number of seconds")
+            }
+            (_, Some(t)) => Budget::Seconds(t),
+            (Some(0), _) => bail!("--spp must be at least 1"),
+            (spp, None) => Budget::Samples(spp.unwrap_or(16)),
+        })
+    }
+
+    fn done(&self, spp: u32, elapsed: Duration) -> bool {
+        match *self {
+            Budget::Samples(n) => spp >= n,
+            Budget::Seconds(s) => elapsed.as_secs_f64() >= s,
+        }
+    }
+
+    fn progress_bar(&self) -> indicatif::ProgressBar {
+        let (length, template) = match *self {
+            Budget::Samples(n) => (
+                u64::from(n),
+                "{bar:40} {pos}/{len} spp, {elapsed} elapsed, {eta} left",
+            ),
+            Budget::Seconds(s) => ((s * 10.0) as u64, "{bar:40} {elapsed} of the time budget"),
+        };
+        let bar = indicatif::ProgressBar::new(length);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(template) {
+            bar.set_style(style);
+        }
+        bar
+    }
+}
+
+/// One row of the convergence report.
+pub struct Checkpoint {
+    /// Seconds since the render started.
+    pub seconds: f64,
+    /// Samples per pixel so far.
+    pub spp: u32,
+    /// Error of the running mean against the reference.
+    pub metrics: ErrorMetrics,
+}
+
+/// What a progressive render did.
+pub struct Outcome {
+    /// Samples per pixel (frames) rendered.
+    pub spp: u32,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Work summed over all frames.
+    pub totals: FrameStats,
+    /// The error over time (empty without a reference).
+    pub checkpoints: Vec<Checkpoint>,
+}
+
+/// Renders frames into `film` until `budget` is spent or `interrupted` is set.
+pub fn render(
+    integrator: &mut dyn Integrator,
+    film: &mut Film,
+    budget: Budget,
+    reference: Option<&[Vec3]>,
+    interrupted: &AtomicBool,
+) -> Outcome {
+    let progress = budget.progress_bar();
+    let mut totals = FrameStats::default();
+    let mut checkpoints = Vec::new();
+    let mut next_checkpoint = 1.0;
+    let start = Instant::now();
+    let mut spp = 0;
+    while !budget.done(spp, start.elapsed()) && !interrupted.load(Ordering::SeqCst) {
+        totals.accumulate(&integrator.render_frame(film, spp));
+        spp += 1;
+        let seconds = start.elapsed().as_secs_f64();
+        progress.set_position(match budget {
+            Budget::Samples(_) => u64::from(spp),
+            Budget::Seconds(_) => (seconds * 10.0) as u64,
+        });
+        if let Some(reference) = reference
+            && seconds >= next_checkpoint
+        {
+            checkpoints.push(checkpoint(film, reference, seconds, spp));
+            while next_checkpoint <= seconds {
+                next_checkpoint *= 2.0;
+            }
+        }
+    }
+    progress.finish_and_clear();
+    let seconds = start.elapsed().as_secs_f64();
+    if let Some(reference) = reference {
+        checkpoints.push(checkpoint(film, reference, seconds, spp));
+    }
+    Outcome {
+        spp,
+        seconds,
+        totals,
+        checkpoints,
+    }
+}
+
+fn checkpoint(film: &Film, reference: &[Vec3], seconds: f64, spp: u32) -> Checkpoint {
+    let metrics = compare(&film.mean(), reference).expect("sizes were checked when loading");
+    Checkpoint {
+        seconds,
+        spp,
+        metrics,
+    }
+}
