@@ -4,12 +4,13 @@
 mod common;
 
 use glam::Vec3;
-use vcm::{Film, Integrator, PtSettings};
+use vcm::{Algorithm, Film, Integrator, PtSettings, VcmSettings};
 use vcm_scene::Material;
 use vcm_scene::light::{Light, PointLight};
 
-/// A diffuse floor, a rough metal wall, a one-sided area light facing down and a point light.
-fn render(threads: usize) -> Film {
+/// A diffuse floor, a rough metal wall, a one-sided area light facing down and a point light,
+/// rendered by `algorithm` (`None`: the path tracer) on `threads` threads.
+fn render(threads: usize, algorithm: Option<Algorithm>) -> Film {
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     let quads = [
         [
@@ -67,10 +68,21 @@ fn render(threads: usize) -> Film {
         .build()
         .unwrap();
     pool.install(|| {
-        let mut tracer = common::path_tracer(scene, settings);
+        let mut integrator: Box<dyn Integrator> = match algorithm {
+            None => Box::new(common::path_tracer(scene, settings)),
+            Some(algorithm) => {
+                let settings = VcmSettings {
+                    seed: settings.seed,
+                    // Large enough that merges happen on 384 light paths a frame.
+                    radius_fraction: 0.05,
+                    ..VcmSettings::new(algorithm, settings.width, settings.height)
+                };
+                Box::new(common::vcm(scene, settings))
+            }
+        };
         let mut film = Film::new(settings.width, settings.height);
         for iteration in 0..4 {
-            tracer.render_frame(&mut film, iteration);
+            integrator.render_frame(&mut film, iteration);
         }
         film
     })
@@ -78,8 +90,18 @@ fn render(threads: usize) -> Film {
 
 #[test]
 fn films_are_bit_identical_for_one_and_two_threads() {
-    let (one, two) = (render(1), render(2));
-    assert!(one.mean().iter().any(|rgb| rgb.max_element() > 0.0));
-    // Film equality compares the f64 sums exactly.
-    assert_eq!(one, two);
+    let algorithms = [
+        None,
+        Some(Algorithm::LightTracing),
+        Some(Algorithm::Bpt),
+        Some(Algorithm::Ppm),
+        Some(Algorithm::Bpm),
+        Some(Algorithm::Vcm),
+    ];
+    for algorithm in algorithms {
+        let (one, two) = (render(1, algorithm), render(2, algorithm));
+        assert!(one.mean().iter().any(|rgb| rgb.max_element() > 0.0));
+        // Film equality compares the f64 sums exactly.
+        assert!(one == two, "{algorithm:?} differs between 1 and 2 threads");
+    }
 }

@@ -1,6 +1,7 @@
 //! `vcm`: the command line front end of vcm-rs.
 
 mod compare;
+mod convergence;
 mod info;
 mod integrators;
 mod plot;
@@ -21,6 +22,9 @@ struct Cli {
 enum Command {
     /// Render a scene to a linear EXR and a tone-mapped PNG beside it.
     Render(render::RenderArgs),
+    /// Render a scene with several algorithms for the same time each and compare their error
+    /// against a reference over time: one relMSE plot, a CSV and a throughput table.
+    Convergence(convergence::ConvergenceArgs),
     /// Error metrics (RMSE, relMSE, MAE) between two EXR images, and a false-colour error image.
     Compare(compare::CompareArgs),
     /// Load a scene and print what it contains (geometry, materials, lights, features,
@@ -33,6 +37,7 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Render(args) => render::run(&args),
         Command::Compare(args) => compare::run(&args),
+        Command::Convergence(args) => convergence::run(&args),
         Command::Info(args) => info::run(&args),
     };
     match result {

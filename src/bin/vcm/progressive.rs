@@ -64,6 +64,17 @@ pub struct Checkpoint {
     pub metrics: ErrorMetrics,
 }
 
+impl Checkpoint {
+    /// `seconds,spp,rmse,relmse,mae` as a CSV row (no line break).
+    pub fn csv_row(&self) -> String {
+        let m = &self.metrics;
+        format!(
+            "{:.3},{},{:.6e},{:.6e},{:.6e}",
+            self.seconds, self.spp, m.rmse, m.relmse, m.mae
+        )
+    }
+}
+
 /// What a progressive render did.
 pub struct Outcome {
     /// Samples per pixel (frames) rendered.

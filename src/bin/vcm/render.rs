@@ -66,23 +66,11 @@ pub struct RenderArgs {
 
 /// Renders as the arguments say.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    if let Some(threads) = args.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build_global()
-            .context("setting up the worker threads")?;
-    }
+    set_threads(args.threads)?;
     let budget = Budget::from_options(args.spp, args.time)?;
     check_writable(&args.output)?;
-    let scene = Arc::new(Scene::load(&args.scene)?);
-    for warning in &scene.warnings {
-        eprintln!("warning: {warning}");
-    }
-    let height = args.height.unwrap_or_else(|| {
-        let aspect = scene.camera.aspect_ratio.unwrap_or(1.0);
-        ((args.width as f32 / aspect).round() as u32).max(1)
-    });
-    let (width, height) = (args.width, height);
+    let scene = load_scene(&args.scene)?;
+    let (width, height) = image_size(&scene, args.width, args.height);
     let reference = match &args.reference {
         Some(path) => Some(read_reference(path, (width, height))?),
         None => None,
@@ -134,6 +122,36 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Sets the number of worker threads (default: all cores).
+pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
+    if let Some(threads) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+            .context("setting up the worker threads")?;
+    }
+    Ok(())
+}
+
+/// Loads a scene and prints its warnings.
+pub fn load_scene(path: &Path) -> anyhow::Result<Arc<Scene>> {
+    let scene = Scene::load(path)?;
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+    Ok(Arc::new(scene))
+}
+
+/// The image size: `width`, and `height` or else the one the camera's aspect ratio gives
+/// (square without one).
+pub fn image_size(scene: &Scene, width: u32, height: Option<u32>) -> (u32, u32) {
+    let height = height.unwrap_or_else(|| {
+        let aspect = scene.camera.aspect_ratio.unwrap_or(1.0);
+        ((width as f32 / aspect).round() as u32).max(1)
+    });
+    (width, height)
+}
+
 /// Reads a reference EXR and checks that it has the render's size.
 pub fn read_reference(path: &Path, (width, height): (u32, u32)) -> anyhow::Result<Vec<Vec3>> {
     let image = RgbImage::read_exr(path)?;
@@ -166,7 +184,7 @@ pub fn relmse_points(checkpoints: &[Checkpoint]) -> Vec<(f64, f64)> {
 }
 
 /// Fails early, before rendering, when the output folder does not exist.
-fn check_writable(output: &Path) -> anyhow::Result<()> {
+pub fn check_writable(output: &Path) -> anyhow::Result<()> {
     let folder = match output.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -178,16 +196,18 @@ fn check_writable(output: &Path) -> anyhow::Result<()> {
 }
 
 /// Writes the convergence CSV through a temporary file.
-fn write_report(path: &Path, checkpoints: &[Checkpoint]) -> anyhow::Result<()> {
+pub fn write_report(path: &Path, checkpoints: &[Checkpoint]) -> anyhow::Result<()> {
     let mut csv = String::from("seconds,spp,rmse,relmse,mae\n");
     for c in checkpoints {
-        let m = &c.metrics;
-        csv += &format!(
-            "{:.3},{},{:.6e},{:.6e},{:.6e}\n",
-            c.seconds, c.spp, m.rmse, m.relmse, m.mae
-        );
+        csv += &c.csv_row();
+        csv.push('\n');
     }
-    write_atomically(path, |temporary| std::fs::write(temporary, csv), |e| e)
+    write_text(path, csv)
+}
+
+/// Writes `text` to `path` through a temporary file.
+pub fn write_text(path: &Path, text: String) -> anyhow::Result<()> {
+    write_atomically(path, |temporary| std::fs::write(temporary, text), |e| e)
         .with_context(|| format!("{}: cannot write", path.display()))
 }
 

@@ -235,3 +235,7 @@ pub(crate) fn merge_weight(
     let w_camera = camera.d_vcm * factors.connect + camera.d_vm * camera_rev_pdf_w;
     1.0 / (w_light + 1.0 + w_camera)
 }
+
+#[cfg(test)]
+#[path = "mis_tests.rs"]
+mod tests;

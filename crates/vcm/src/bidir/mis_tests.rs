@@ -1,0 +1,238 @@
+//! MIS partition of unity: for one path, the weights that the integrator's techniques give it
+//! (emission hit, light sample, every camera–light vertex connection, the light tracing splat
+//! and merging at every inner vertex) sum to one. The subpath quantities are built with the
+//! same `SubpathMis` updates the passes use, from the BSDFs' pdfs along the path.
+
+use glam::{Vec2, Vec3};
+use vcm_scene::Material;
+use vcm_scene::bsdf::{Bsdf, TransportMode};
+use vcm_scene::sampling::Rng;
+
+use super::*;
+use crate::bidir::Algorithm;
+
+/// Area of the light triangle at the path's end.
+const LIGHT_AREA: f32 = 0.3;
+/// Area of one pixel on the image plane at unit distance.
+const PIXEL_AREA: f32 = 1e-5;
+/// Light paths per frame.
+const LIGHT_PATHS: f32 = 4096.0;
+
+/// A path x₀ (the camera) … x_k (a point on an area light) with a BSDF at every inner vertex.
+struct TestPath {
+    points: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    bsdfs: Vec<Option<Bsdf>>,
+    camera_forward: Vec3,
+}
+
+impl TestPath {
+    /// A random path of `k` segments whose every vertex faces both neighbours at a cosine of
+    /// at least 0.1.
+    fn random(k: usize, rng: &mut Rng) -> TestPath {
+        loop {
+            let path = TestPath::candidate(k, rng);
+            let faces = |i: usize, j: usize| path.normals[i].dot(path.dir(i, j)) > 0.1;
+            let valid = (1..=k).all(|i| faces(i, i - 1) && (i == k || faces(i, i + 1)))
+                && path.camera_forward.dot(path.dir(0, 1)) > 0.5;
+            if valid {
+                return path;
+            }
+        }
+    }
+
+    fn candidate(k: usize, rng: &mut Rng) -> TestPath {
+        let mut u3 = || Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - 1.0;
+        let points: Vec<Vec3> = (0..=k).map(|_| u3() * 2.0).collect();
+        let jitter: Vec<Vec3> = (0..=k).map(|_| u3() * 0.3).collect();
+        let towards = |from: usize, to: usize| (points[to] - points[from]).normalize();
+        let normals: Vec<Vec3> = (0..=k)
+            .map(|i| {
+                let mut n = jitter[i];
+                if i > 0 {
+                    n += towards(i, i - 1);
+                }
+                if i < k {
+                    n += towards(i, i + 1);
+                }
+                n.normalize()
+            })
+            .collect();
+        let mut bsdfs = vec![None];
+        for &n in &normals[1..k] {
+            let material = Material {
+                roughness: 0.3 + 0.7 * rng.uniform(),
+                metallic: if rng.uniform() < 0.3 { 1.0 } else { 0.0 },
+                ..Material::diffuse("test", Vec3::splat(0.7))
+            };
+            let params = material.bsdf_params(&[], Vec2::ZERO);
+            bsdfs.push(Some(Bsdf::new(&params, n, n, false)));
+        }
+        bsdfs.push(None);
+        let camera_forward = (towards(0, 1) + jitter[0] * 0.5).normalize();
+        TestPath {
+            points,
+            normals,
+            bsdfs,
+            camera_forward,
+        }
+    }
+
+    fn k(&self) -> usize {
+        self.points.len() - 1
+    }
+
+    fn dir(&self, from: usize, to: usize) -> Vec3 {
+        (self.points[to] - self.points[from]).normalize()
+    }
+
+    fn dist_sq(&self, a: usize, b: usize) -> f32 {
+        self.points[a].distance_squared(self.points[b])
+    }
+
+    /// |cos| at vertex `at` toward vertex `to` (geometric normal).
+    fn cos(&self, at: usize, to: usize) -> f32 {
+        self.normals[at].dot(self.dir(at, to)).abs()
+    }
+
+    /// pdf at `at` of sampling the direction to `to` given the direction to `from`.
+    fn pdf(&self, at: usize, from: usize, to: usize) -> f32 {
+        let bsdf = self.bsdfs[at].as_ref().expect("inner vertex");
+        let eval = bsdf.eval(
+            self.dir(at, from),
+            self.dir(at, to),
+            TransportMode::Radiance,
+        );
+        assert!(eval.f_cos.max_element() > 0.0, "the path must carry light");
+        eval.pdf_fwd
+    }
+
+    fn camera_pdf_w(&self) -> f32 {
+        let cos = self.camera_forward.dot(self.dir(0, 1));
+        1.0 / (PIXEL_AREA * cos.powi(3))
+    }
+
+    /// (direct pdf, emission pdf) of the light point x_k emitting toward x_{k−1}.
+    fn light_pdfs(&self) -> (f32, f32) {
+        let k = self.k();
+        let cos = self.cos(k, k - 1);
+        (
+            1.0 / LIGHT_AREA,
+            cos * std::f32::consts::FRAC_1_PI / LIGHT_AREA,
+        )
+    }
+
+    /// The camera subpath's quantities on arriving at vertex `j` (1 ≤ j ≤ k).
+    fn camera_mis(&self, j: usize, factors: &MisFactors) -> SubpathMis {
+        let mut mis = SubpathMis::camera(self.camera_pdf_w(), factors);
+        for i in 1..=j {
+            if i > 1 {
+                let (fwd, rev) = (self.pdf(i - 1, i - 2, i), self.pdf(i - 1, i, i - 2));
+                mis.scatter(self.cos(i - 1, i), fwd, rev, false, factors);
+            }
+            mis.arrive(Some(self.dist_sq(i - 1, i)), self.cos(i, i - 1));
+        }
+        mis
+    }
+
+    /// The light subpath's quantities on arriving at vertex `j` (1 ≤ j < k).
+    fn light_mis(&self, j: usize, factors: &MisFactors) -> SubpathMis {
+        let k = self.k();
+        let (direct, emission) = self.light_pdfs();
+        let cos_light = self.cos(k, k - 1);
+        let mut mis = SubpathMis::light(direct, emission, cos_light, false, true, factors);
+        for i in (j..k).rev() {
+            if i < k - 1 {
+                let (fwd, rev) = (self.pdf(i + 1, i + 2, i), self.pdf(i + 1, i, i + 2));
+                mis.scatter(self.cos(i + 1, i), fwd, rev, false, factors);
+            }
+            mis.arrive(Some(self.dist_sq(i + 1, i)), self.cos(i, i + 1));
+        }
+        mis
+    }
+
+    /// The weights of every technique that samples this path, as the passes compute them.
+    fn weights(&self, algorithm: Algorithm) -> Vec<f32> {
+        let factors = MisFactors::new(algorithm.connects(), algorithm.merges(), 0.01, LIGHT_PATHS);
+        let k = self.k();
+        let mut weights = Vec::new();
+        if algorithm.connects() {
+            // Emission found by the camera path.
+            let (direct, emission) = self.light_pdfs();
+            weights.push(emission_hit_weight(
+                &self.camera_mis(k, &factors),
+                direct,
+                emission,
+            ));
+            // A light sample at x_{k−1}.
+            let pdfs = LightSamplePdfs {
+                direct_pdf_w: direct * self.dist_sq(k - 1, k) / self.cos(k, k - 1),
+                emission_pdf_w: emission,
+                cos_at_light: self.cos(k, k - 1),
+                cos_at_receiver: self.cos(k - 1, k),
+                bsdf_fwd_pdf_w: self.pdf(k - 1, k - 2, k),
+                bsdf_rev_pdf_w: self.pdf(k - 1, k, k - 2),
+            };
+            weights.push(light_sample_weight(
+                &self.camera_mis(k - 1, &factors),
+                &pdfs,
+                &factors,
+            ));
+            // Connections between camera vertex x_t and light vertex x_{t+1}.
+            for t in 1..k.saturating_sub(1) {
+                let d2 = self.dist_sq(t, t + 1);
+                let pdfs = ConnectionPdfs {
+                    camera_fwd_pdf_a: self.pdf(t, t - 1, t + 1) * self.cos(t + 1, t) / d2,
+                    camera_rev_pdf_w: self.pdf(t, t + 1, t - 1),
+                    light_fwd_pdf_a: self.pdf(t + 1, t + 2, t) * self.cos(t, t + 1) / d2,
+                    light_rev_pdf_w: self.pdf(t + 1, t, t + 2),
+                };
+                weights.push(connection_weight(
+                    &self.camera_mis(t, &factors),
+                    &self.light_mis(t + 1, &factors),
+                    &pdfs,
+                    &factors,
+                ));
+            }
+            // The light path's vertex x₁ splatted through the camera.
+            let camera_pdf_a = self.camera_pdf_w() * self.cos(1, 0) / self.dist_sq(0, 1);
+            weights.push(camera_connection_weight(
+                &self.light_mis(1, &factors),
+                camera_pdf_a,
+                self.pdf(1, 0, 2),
+                &factors,
+            ));
+        }
+        if algorithm.merges() {
+            for j in 1..k {
+                weights.push(merge_weight(
+                    &self.camera_mis(j, &factors),
+                    &self.light_mis(j, &factors),
+                    self.pdf(j, j - 1, j + 1),
+                    self.pdf(j, j + 1, j - 1),
+                    &factors,
+                ));
+            }
+        }
+        weights
+    }
+}
+
+#[test]
+fn the_weights_of_every_technique_sum_to_one() {
+    let mut rng = Rng::new(2024, 0);
+    for k in 2..=6 {
+        for _ in 0..200 {
+            let path = TestPath::random(k, &mut rng);
+            for algorithm in [Algorithm::Bpt, Algorithm::Bpm, Algorithm::Vcm] {
+                let weights = path.weights(algorithm);
+                let sum: f32 = weights.iter().sum();
+                assert!(
+                    (sum - 1.0).abs() < 1e-3,
+                    "{algorithm:?}, {k} segments: weights {weights:?} sum to {sum}"
+                );
+                assert!(weights.iter().all(|w| (0.0..=1.0).contains(w)));
+            }
+        }
+    }
+}

@@ -1,0 +1,132 @@
+//! `vcm convergence`: renders a scene with several algorithms in turn for the same time,
+//! records each one's error against a reference over time, draws all relMSE curves in one
+//! plot and prints a table of throughput per algorithm.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
+
+use anyhow::Context;
+use vcm::Film;
+
+use crate::integrators::{self, Algorithm, IntegratorOptions};
+use crate::plot::{Series, plot_relmse};
+use crate::progressive::{self, Budget, Outcome};
+use crate::render::{
+    check_writable, image_size, interrupt_flag, load_scene, read_reference, relmse_points,
+    set_threads, write_text,
+};
+
+/// Arguments of `vcm convergence`.
+#[derive(clap::Args)]
+pub struct ConvergenceArgs {
+    /// The scene file (.gltf, .glb or .obj).
+    scene: PathBuf,
+    /// The algorithms to compare, in order.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "pt,lt,bpt,ppm,vcm"
+    )]
+    algos: Vec<Algorithm>,
+    /// Seconds each algorithm renders.
+    #[arg(long, default_value_t = 10.0)]
+    time: f64,
+    /// Reference EXR (of the same size) that errors are measured against.
+    #[arg(long)]
+    reference: PathBuf,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    /// Image height in pixels (default: from the camera's aspect ratio, else square).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    #[command(flatten)]
+    integrator: IntegratorOptions,
+    /// The plot (PNG); the CSV of every checkpoint (algorithm,seconds,spp,rmse,relmse,mae) is
+    /// written beside it.
+    #[arg(short, long, default_value = "convergence.png")]
+    output: PathBuf,
+}
+
+/// Renders with every algorithm, then writes the CSV and the plot and prints the table.
+pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
+    set_threads(args.threads)?;
+    let budget = Budget::from_options(None, Some(args.time))?;
+    check_writable(&args.output)?;
+    let scene = load_scene(&args.scene)?;
+    let size = image_size(&scene, args.width, args.height);
+    let reference = read_reference(&args.reference, size)?;
+    let traversal = Arc::new(vcm_rs::cpu_traversal(&scene).context("building the BVH")?);
+    let interrupted = interrupt_flag()?;
+    let mut outcomes = Vec::new();
+    for &algorithm in &args.algos {
+        eprintln!("rendering with {} for {} s", algorithm.name(), args.time);
+        let traversal = Arc::clone(&traversal) as _;
+        let mut integrator =
+            integrators::build(algorithm, &scene, traversal, size, &args.integrator)?;
+        let mut film = Film::new(size.0, size.1);
+        let outcome = progressive::render(
+            integrator.as_mut(),
+            &mut film,
+            budget,
+            Some(&reference),
+            &interrupted,
+        );
+        outcomes.push((algorithm, outcome));
+        if interrupted.load(Ordering::SeqCst) {
+            eprintln!("interrupted: writing the results so far");
+            break;
+        }
+    }
+    let csv_path = args.output.with_extension("csv");
+    let mut csv = String::from("algorithm,seconds,spp,rmse,relmse,mae\n");
+    for (algorithm, outcome) in &outcomes {
+        for checkpoint in &outcome.checkpoints {
+            csv += &format!("{},{}\n", algorithm.name(), checkpoint.csv_row());
+        }
+    }
+    write_text(&csv_path, csv)?;
+    let series: Vec<Series> = outcomes
+        .iter()
+        .map(|(algorithm, outcome)| Series {
+            label: algorithm.name().to_string(),
+            points: relmse_points(&outcome.checkpoints),
+        })
+        .collect();
+    let title = format!("relMSE over time: {}", args.scene.display());
+    plot_relmse(&args.output, &title, &series)?;
+    print_table(&outcomes, size);
+    println!("wrote {} and {}", args.output.display(), csv_path.display());
+    Ok(())
+}
+
+/// Throughput and final error per algorithm (the thesis's Table 5.1).
+fn print_table(outcomes: &[(Algorithm, Outcome)], (width, height): (u32, u32)) {
+    println!(
+        "{:<5} {:>10} {:>12} {:>10} {:>8} {:>12}",
+        "algo", "M rays/s", "M samples/s", "frames/s", "frames", "final relMSE"
+    );
+    let pixels = f64::from(width) * f64::from(height);
+    for (algorithm, outcome) in outcomes {
+        let seconds = outcome.seconds.max(1e-9);
+        let frames = f64::from(outcome.spp);
+        let relmse = outcome
+            .checkpoints
+            .last()
+            .map_or(f64::NAN, |c| c.metrics.relmse);
+        println!(
+            "{:<5} {:>10.2} {:>12.3} {:>10.2} {:>8} {:>12.4e}",
+            algorithm.name(),
+            outcome.totals.rays() as f64 / seconds / 1e6,
+            frames * pixels / seconds / 1e6,
+            frames / seconds,
+            outcome.spp,
+            relmse
+        );
+    }
+}
