@@ -95,10 +95,81 @@ fn the_report_records_error_against_the_reference() {
 }
 
 #[test]
+fn convergence_compares_algorithms_in_one_plot_csv_and_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("reference.exr");
+    let size = ["--width", "16", "--height", "16"];
+    let mut args = vec!["render", "--spp", "4", "-o", reference.to_str().unwrap()];
+    args.extend(size);
+    assert!(vcm(&args).status.success());
+    let plot = dir.path().join("conv.png");
+    let mut args = vec![
+        "convergence",
+        "scenes/cornell-box.gltf",
+        "--algos",
+        "pt,vcm",
+        "--time",
+        "0.3",
+        "--reference",
+        reference.to_str().unwrap(),
+        "-o",
+        plot.to_str().unwrap(),
+    ];
+    args.extend(size);
+    let output = vcm(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let table = String::from_utf8_lossy(&output.stdout);
+    assert!(table.contains("frames/s"), "{table}");
+    let rows: Vec<&str> = table
+        .lines()
+        .filter(|l| l.starts_with("pt ") || l.starts_with("vcm "))
+        .collect();
+    assert_eq!(rows.len(), 2, "{table}");
+    let csv = std::fs::read_to_string(plot.with_extension("csv")).unwrap();
+    assert!(csv.starts_with("algorithm,seconds,spp,rmse,relmse,mae\n"));
+    assert!(
+        csv.lines().any(|l| l.starts_with("pt,")) && csv.lines().any(|l| l.starts_with("vcm,"))
+    );
+    assert!(image::open(&plot).is_ok());
+}
+
+#[test]
+fn every_algorithm_renders_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for algo in ["pt", "lt", "bpt", "ppm", "bpm", "vcm"] {
+        let exr = dir.path().join(format!("{algo}.exr"));
+        let args = [
+            "render",
+            "--algo",
+            algo,
+            "--spp",
+            "2",
+            "--width",
+            "16",
+            "-o",
+            exr.to_str().unwrap(),
+        ];
+        let output = vcm(&args);
+        assert!(output.status.success(), "{algo}: {}", stderr(&output));
+        let image = vcm::image_io::RgbImage::read_exr(&exr).unwrap();
+        assert!(
+            image.pixels.iter().any(|p| p.max_element() > 0.0),
+            "{algo}: black image"
+        );
+    }
+}
+
+#[test]
 fn bad_input_is_a_clear_error_with_non_zero_status() {
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 7] = [
         (&["render", "no/such/scene.gltf"], "scene.gltf"),
         (&["render", "--spp", "0"], "--spp"),
+        (
+            &["render", "--algo", "vcm", "--connections", "0"],
+            "connections",
+        ),
+        (&["render", "--algo", "ppm", "--radius", "0"], "radius"),
+        (&["render", "--algo", "bpm", "--alpha", "1.5"], "alpha"),
         (&["render", "-o", "/nonexistent-folder/out.exr"], "out.exr"),
         (&["render", "--bogus-option"], "--bogus-option"),
     ];

@@ -5,33 +5,27 @@ use std::f32::consts::PI;
 
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
-use vcm_scene::Scene;
 use vcm_scene::bsdf::{Bsdf, LobeKind, TransportMode};
 use vcm_scene::sampling::Rng;
-use vcm_traversal::{HitBatch, RayBatch, Traversal};
+use vcm_traversal::{HitBatch, RayBatch};
 
 use super::mis::{
-    ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight,
-    emission_hit_weight, light_sample_weight, merge_weight,
+    ConnectionPdfs, LightSamplePdfs, SubpathMis, connection_weight, emission_hit_weight,
+    light_sample_weight, merge_weight,
 };
-use super::{Algorithm, VcmSettings, timed};
+use super::walk::Walk;
+use super::{Algorithm, FrameContext, VcmSettings, timed};
 use crate::film::Film;
 use crate::hash_grid::HashGrid;
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
 use crate::path_state::ShadowRay;
-use crate::roulette::continuation_probability;
 use crate::shadow::{segment_to, shadow_segment};
 use crate::surface_hit::{Hit, SurfaceHit};
 
-/// What the camera pass reads.
+/// What the camera pass reads: the frame, and the light pass's results.
 pub(crate) struct CameraContext<'a> {
-    pub scene: &'a Scene,
-    pub traversal: &'a dyn Traversal,
-    pub settings: &'a VcmSettings,
-    /// The frame (seeds the paths).
-    pub iteration: u32,
-    pub factors: &'a MisFactors,
+    pub frame: FrameContext<'a>,
     /// This frame's light vertices.
     pub cache: &'a LightVertexCache,
     /// The hash grid over `cache` (empty unless the algorithm merges).
@@ -40,9 +34,11 @@ pub(crate) struct CameraContext<'a> {
     pub radius: f32,
 }
 
-impl CameraContext<'_> {
-    fn max_segments(&self) -> u32 {
-        self.settings.max_depth.unwrap_or(u32::MAX)
+impl<'a> std::ops::Deref for CameraContext<'a> {
+    type Target = FrameContext<'a>;
+
+    fn deref(&self) -> &FrameContext<'a> {
+        &self.frame
     }
 }
 
@@ -50,14 +46,8 @@ impl CameraContext<'_> {
 #[derive(Clone, Debug)]
 struct CameraPathState {
     pixel: u32,
-    rng: Rng,
-    origin: Vec3,
-    direction: Vec3,
-    throughput: Vec3,
+    walk: Walk,
     radiance: Vec3,
-    mis: SubpathMis,
-    /// Segments including the current one (the camera ray is 1).
-    segments: u32,
     /// Every scattering so far was specular (emission is then found only by hitting it).
     specular_path: bool,
     alive: bool,
@@ -89,7 +79,7 @@ impl CameraPass {
             self.rays.clear();
             for path in &self.paths {
                 self.rays
-                    .push(path.origin, path.direction, 0.0, f32::INFINITY);
+                    .push(path.walk.origin, path.walk.direction, 0.0, f32::INFINITY);
             }
             if !first_wave {
                 stats.continuation_rays += self.rays.len() as u64;
@@ -153,13 +143,15 @@ fn start(ctx: &CameraContext, pixel: u32) -> CameraPathState {
     let camera_pdf_w = 1.0 / (camera.pixel_area(width, height) * cos_camera.powi(3));
     CameraPathState {
         pixel,
-        rng,
-        origin: camera.position,
-        direction,
-        throughput: Vec3::ONE,
+        walk: Walk {
+            rng,
+            origin: camera.position,
+            direction,
+            throughput: Vec3::ONE,
+            mis: SubpathMis::camera(camera_pdf_w, ctx.factors),
+            segments: 1,
+        },
         radiance: Vec3::ZERO,
-        mis: SubpathMis::camera(camera_pdf_w, ctx.factors),
-        segments: 1,
         specular_path: true,
         alive: true,
         shadows: Vec::new(),
@@ -169,19 +161,20 @@ fn start(ctx: &CameraContext, pixel: u32) -> CameraPathState {
 /// Shades the vertex where a camera path hit the scene (`None`: it escaped and ends).
 fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     let max_segments = ctx.max_segments();
-    let Some(hit) = hit.filter(|_| path.segments <= max_segments) else {
+    let Some(hit) = hit.filter(|_| path.walk.segments <= max_segments) else {
         path.alive = false;
         return;
     };
     let scene = ctx.scene;
     let algorithm = ctx.settings.algorithm;
     let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
-    let wo = -path.direction;
-    path.mis
+    let wo = -path.walk.direction;
+    path.walk
+        .mis
         .arrive(Some(hit.t * hit.t), surface.cos_geometric(wo));
-    path.radiance += path.throughput * emission(ctx, path, hit);
+    path.radiance += path.walk.throughput * emission(ctx, path, hit);
     // Light tracing finds everything else from the light side.
-    if algorithm == Algorithm::LightTracing || path.segments >= max_segments {
+    if algorithm == Algorithm::LightTracing || path.walk.segments >= max_segments {
         path.alive = false;
         return;
     }
@@ -194,7 +187,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
             connect_to_cache(ctx, path, &surface, &bsdf, wo);
         }
         if algorithm.merges() {
-            path.radiance += path.throughput * merge(ctx, path, &surface, &bsdf, wo);
+            path.radiance += path.walk.throughput * merge(ctx, path, &surface, &bsdf, wo);
             // Photon mapping proper stops at the first diffuse or glossy vertex.
             if algorithm == Algorithm::Ppm {
                 path.alive = false;
@@ -202,16 +195,26 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
             }
         }
     }
-    path.alive = scatter(ctx, path, &surface, &bsdf, wo);
+    let lobe = path.walk.scatter(
+        &surface,
+        &bsdf,
+        wo,
+        TransportMode::Radiance,
+        ctx.factors,
+        1.0,
+    );
+    path.specular_path &= lobe == Some(LobeKind::Specular);
+    path.alive = lobe.is_some();
 }
 
 /// Emitted radiance found by the path at `hit`, MIS-weighted.
 fn emission(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> Vec3 {
     let scene = ctx.scene;
-    let Some(emitted) = scene.emission_on_hit(hit.triangle, hit.u, hit.v, path.direction) else {
+    let Some(emitted) = scene.emission_on_hit(hit.triangle, hit.u, hit.v, path.walk.direction)
+    else {
         return Vec3::ZERO;
     };
-    let weight = if path.segments == 1 {
+    let weight = if path.walk.segments == 1 {
         // No other technique samples a light seen directly through a pinhole.
         1.0
     } else if !ctx.settings.algorithm.connects() {
@@ -224,7 +227,7 @@ fn emission(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> Vec3 {
             .expect("an emitting triangle is an area light");
         let pick_pmf = scene.light_sampler.pmf(light);
         emission_hit_weight(
-            &path.mis,
+            &path.walk.mis,
             pick_pmf * emitted.direct_pdf_a,
             pick_pmf * emitted.emission_pdf_w,
         )
@@ -241,7 +244,7 @@ fn light_sample(
     wo: Vec3,
 ) -> Option<ShadowRay> {
     let scene = ctx.scene;
-    let (u_pick, u_light) = (path.rng.uniform(), path.rng.uniform2());
+    let (u_pick, u_light) = (path.walk.rng.uniform(), path.walk.rng.uniform2());
     let (index, pick_pmf) = scene.light_sampler.sample(u_pick)?;
     let light = &scene.lights[index];
     let point = surface.point.position;
@@ -259,9 +262,9 @@ fn light_sample(
         bsdf_fwd_pdf_w: if light.is_delta() { 0.0 } else { eval.pdf_fwd },
         bsdf_rev_pdf_w: eval.pdf_rev,
     };
-    let weight = light_sample_weight(&path.mis, &pdfs, ctx.factors);
+    let weight = light_sample_weight(&path.walk.mis, &pdfs, ctx.factors);
     let contribution =
-        path.throughput * illumination.value * eval.f_cos * (weight / pdfs.direct_pdf_w);
+        path.walk.throughput * illumination.value * eval.f_cos * (weight / pdfs.direct_pdf_w);
     let origin = surface.spawn(illumination.direction);
     let (direction, tmax) = shadow_segment(light, &illumination, point, origin);
     Some(ShadowRay {
@@ -288,9 +291,9 @@ fn connect_to_cache(
     // c = (1 / N_c) · (N_v / N_p): each pick stands for N_v / N_c vertices of N_p paths.
     let scale = vertices.len() as f32 / (picks as f32 * ctx.factors.light_paths);
     for _ in 0..picks {
-        let pick = (u64::from(path.rng.next_u32()) * vertices.len() as u64) >> 32;
+        let pick = (u64::from(path.walk.rng.next_u32()) * vertices.len() as u64) >> 32;
         let vertex = &vertices[pick as usize];
-        let segments = path.segments.saturating_add(vertex.path_length + 1);
+        let segments = path.walk.segments.saturating_add(vertex.path_length + 1);
         if segments > ctx.max_segments() {
             continue;
         }
@@ -334,8 +337,8 @@ fn connect(
         light_fwd_pdf_a: light_eval.pdf_fwd * surface.cos_geometric(direction) / distance_sq,
         light_rev_pdf_w: light_eval.pdf_rev,
     };
-    let weight = connection_weight(&path.mis, &vertex.mis, &pdfs, ctx.factors);
-    let contribution = path.throughput
+    let weight = connection_weight(&path.walk.mis, &vertex.mis, &pdfs, ctx.factors);
+    let contribution = path.walk.throughput
         * vertex.throughput
         * camera_eval.f_cos
         * light_eval.f_cos
@@ -366,7 +369,7 @@ fn merge(
     let mut sum = Vec3::ZERO;
     ctx.grid.query(surface.point.position, |i| {
         let vertex = &vertices[i];
-        if path.segments.saturating_add(vertex.path_length) > max_segments {
+        if path.walk.segments.saturating_add(vertex.path_length) > max_segments {
             return;
         }
         let eval = bsdf.eval(wo, vertex.wo, TransportMode::Radiance);
@@ -377,7 +380,7 @@ fn merge(
             1.0
         } else {
             merge_weight(
-                &path.mis,
+                &path.walk.mis,
                 &vertex.mis,
                 eval.pdf_fwd,
                 eval.pdf_rev,
@@ -388,39 +391,4 @@ fn merge(
         sum += vertex.throughput * eval.f_cos * (weight / vertex.wo.dot(n_s).abs());
     });
     sum / (PI * ctx.radius * ctx.radius * ctx.factors.light_paths)
-}
-
-/// Samples the BSDF for the next segment, updates the MIS quantities and applies Russian
-/// roulette; returns whether the path goes on.
-fn scatter(
-    ctx: &CameraContext,
-    path: &mut CameraPathState,
-    surface: &SurfaceHit,
-    bsdf: &Bsdf,
-    wo: Vec3,
-) -> bool {
-    let (u_lobe, u_dir) = (path.rng.uniform(), path.rng.uniform2());
-    let Some(sample) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
-        return false;
-    };
-    path.throughput *= sample.f_cos / sample.pdf_fwd;
-    let specular = sample.lobe == LobeKind::Specular;
-    path.specular_path &= specular;
-    path.mis.scatter(
-        surface.cos_geometric(sample.wi),
-        sample.pdf_fwd,
-        sample.pdf_rev,
-        specular,
-        ctx.factors,
-    );
-    if let Some(continuation) = continuation_probability(path.segments, path.throughput) {
-        if path.rng.uniform() >= continuation {
-            return false;
-        }
-        path.throughput /= continuation;
-    }
-    path.origin = surface.spawn(sample.wi);
-    path.direction = sample.wi;
-    path.segments += 1;
-    true
 }

@@ -3,18 +3,17 @@
 
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
-use vcm_scene::Scene;
-use vcm_scene::bsdf::{Bsdf, LobeKind, TransportMode};
+use vcm_scene::bsdf::{Bsdf, TransportMode};
 use vcm_scene::sampling::Rng;
-use vcm_traversal::{HitBatch, RayBatch, Traversal};
+use vcm_traversal::{HitBatch, RayBatch};
 
-use super::mis::{MisFactors, SubpathMis, camera_connection_weight};
-use super::{Algorithm, VcmSettings, timed};
+use super::mis::{SubpathMis, camera_connection_weight};
+use super::walk::Walk;
+use super::{Algorithm, FrameContext, VcmSettings, timed};
 use crate::film::Film;
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
 use crate::path_state::ShadowRay;
-use crate::roulette::continuation_probability;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 
@@ -23,22 +22,6 @@ const LIGHT_STREAM: u64 = 1;
 
 /// Random stream tag of the preprocess's light paths.
 const PREPROCESS_STREAM: u64 = 2;
-
-/// What the light pass reads.
-pub(crate) struct LightContext<'a> {
-    pub scene: &'a Scene,
-    pub traversal: &'a dyn Traversal,
-    pub settings: &'a VcmSettings,
-    /// The frame (seeds the paths).
-    pub iteration: u32,
-    pub factors: &'a MisFactors,
-}
-
-impl LightContext<'_> {
-    fn max_segments(&self) -> u32 {
-        self.settings.max_depth.unwrap_or(u32::MAX)
-    }
-}
 
 /// Where the light pass puts its results (`None`: the algorithm does not use them).
 pub(crate) struct LightPassOutputs<'a> {
@@ -66,17 +49,10 @@ struct Splat {
 /// One light path between waves.
 #[derive(Clone, Debug)]
 struct LightPathState {
-    rng: Rng,
-    origin: Vec3,
-    direction: Vec3,
-    /// Emitted power over the sampling pdfs so far.
-    throughput: Vec3,
+    walk: Walk,
     /// 1 / the largest channel of the throughput after emission: makes Russian roulette
     /// independent of the light's units.
     roulette_scale: f32,
-    mis: SubpathMis,
-    /// Segments including the current one (the emitted ray is 1).
-    segments: u32,
     /// The path starts at a light at infinity (its first segment has no length).
     from_infinity: bool,
     alive: bool,
@@ -101,7 +77,7 @@ impl LightPass {
     /// vertices in `outputs.cache` and splats their camera connections onto `outputs.film`.
     pub fn run(
         &mut self,
-        ctx: &LightContext,
+        ctx: &FrameContext,
         count: u32,
         mut outputs: LightPassOutputs,
         stats: &mut FrameStats,
@@ -121,7 +97,7 @@ impl LightPass {
 
     /// Traces `count` light paths that store and splat nothing and counts their cacheable
     /// vertices (the preprocess that sizes the cache).
-    pub fn count_vertices(&mut self, ctx: &LightContext, count: u32) -> VertexCount {
+    pub fn count_vertices(&mut self, ctx: &FrameContext, count: u32) -> VertexCount {
         let mut vertices = 0;
         let mut stats = FrameStats::default();
         self.trace_paths(
@@ -145,7 +121,7 @@ impl LightPass {
     /// wave to `collect` until every path has ended.
     fn trace_paths(
         &mut self,
-        ctx: &LightContext,
+        ctx: &FrameContext,
         count: u32,
         stream: u64,
         splat: bool,
@@ -161,7 +137,7 @@ impl LightPass {
             self.rays.clear();
             for path in &self.paths {
                 self.rays
-                    .push(path.origin, path.direction, 0.0, f32::INFINITY);
+                    .push(path.walk.origin, path.walk.direction, 0.0, f32::INFINITY);
             }
             stats.light_rays += self.rays.len() as u64;
             let (rays, hits) = (&self.rays, &mut self.hits);
@@ -180,7 +156,7 @@ impl LightPass {
     /// Tests the wave's camera connections and splats the unoccluded ones, in path order.
     fn add_unoccluded_splats(
         &mut self,
-        ctx: &LightContext,
+        ctx: &FrameContext,
         film: &mut Film,
         stats: &mut FrameStats,
     ) {
@@ -205,7 +181,7 @@ impl LightPass {
 }
 
 /// Starts light path `index`: picks a light by power and samples an emitted ray.
-fn emit(ctx: &LightContext, index: u32, stream: u64) -> LightPathState {
+fn emit(ctx: &FrameContext, index: u32, stream: u64) -> LightPathState {
     let mut rng = Rng::from_key(&[
         ctx.settings.seed,
         u64::from(ctx.iteration),
@@ -214,13 +190,15 @@ fn emit(ctx: &LightContext, index: u32, stream: u64) -> LightPathState {
     ]);
     let (u_pick, u_pos, u_dir) = (rng.uniform(), rng.uniform2(), rng.uniform2());
     let mut path = LightPathState {
-        rng,
-        origin: Vec3::ZERO,
-        direction: Vec3::Z,
-        throughput: Vec3::ZERO,
+        walk: Walk {
+            rng,
+            origin: Vec3::ZERO,
+            direction: Vec3::Z,
+            throughput: Vec3::ZERO,
+            mis: SubpathMis::default(),
+            segments: 1,
+        },
         roulette_scale: 0.0,
-        mis: SubpathMis::default(),
-        segments: 1,
         from_infinity: false,
         alive: false,
         vertex: None,
@@ -235,9 +213,9 @@ fn emit(ctx: &LightContext, index: u32, stream: u64) -> LightPathState {
         return path;
     };
     let emission_pdf_w = emission.emission_pdf_w * pick_pmf;
-    path.throughput = emission.value * (emission.cos_at_light / emission_pdf_w);
-    path.roulette_scale = 1.0 / path.throughput.max_element();
-    path.mis = SubpathMis::light(
+    path.walk.throughput = emission.value * (emission.cos_at_light / emission_pdf_w);
+    path.roulette_scale = 1.0 / path.walk.throughput.max_element();
+    path.walk.mis = SubpathMis::light(
         emission.direct_pdf_a * pick_pmf,
         emission_pdf_w,
         emission.cos_at_light,
@@ -245,52 +223,62 @@ fn emit(ctx: &LightContext, index: u32, stream: u64) -> LightPathState {
         light.is_finite(),
         ctx.factors,
     );
-    path.origin = offset_off_light(light, emission.position, emission.direction);
-    path.direction = emission.direction;
+    path.walk.origin = offset_off_light(light, emission.position, emission.direction);
+    path.walk.direction = emission.direction;
     path.from_infinity = !light.is_finite();
-    path.alive = path.throughput.max_element() > 0.0 && path.throughput.is_finite();
+    path.alive = path.walk.throughput.max_element() > 0.0 && path.walk.throughput.is_finite();
     path
 }
 
 /// Shades the vertex where a light path hit the scene (`None`: it escaped and ends): records
 /// it as a cacheable vertex, connects it to the camera (`splat`), and continues the path.
-fn shade(ctx: &LightContext, path: &mut LightPathState, hit: Option<Hit>, splat: bool) {
+fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat: bool) {
     let Some(hit) = hit else {
         path.alive = false;
         return;
     };
     let scene = ctx.scene;
     let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
-    let wo = -path.direction;
-    let distance_sq = (path.segments > 1 || !path.from_infinity).then_some(hit.t * hit.t);
-    path.mis.arrive(distance_sq, surface.cos_geometric(wo));
+    let wo = -path.walk.direction;
+    let distance_sq = (path.walk.segments > 1 || !path.from_infinity).then_some(hit.t * hit.t);
+    path.walk.mis.arrive(distance_sq, surface.cos_geometric(wo));
     let bsdf = scene.bsdf(&surface.point);
     let max_segments = ctx.max_segments();
     if bsdf.has_non_delta() {
         let vertex = LightVertex {
             position: surface.point.position,
             wo,
-            throughput: path.throughput,
-            mis: path.mis,
+            throughput: path.walk.throughput,
+            mis: path.walk.mis,
             triangle: hit.triangle,
             u: hit.u,
             v: hit.v,
-            path_length: path.segments,
+            path_length: path.walk.segments,
         };
-        if splat && path.segments < max_segments {
+        if splat && path.walk.segments < max_segments {
             path.splat = connect_to_camera(ctx, &surface, &bsdf, &vertex);
         }
         path.vertex = Some(vertex);
     }
     // A further vertex has segments + 1 segments, and using it takes one more.
-    path.alive =
-        path.segments.saturating_add(2) <= max_segments && scatter(ctx, path, &surface, &bsdf, wo);
+    path.alive = path.walk.segments.saturating_add(2) <= max_segments
+        && path
+            .walk
+            .scatter(
+                &surface,
+                &bsdf,
+                wo,
+                TransportMode::Importance,
+                ctx.factors,
+                path.roulette_scale,
+            )
+            .is_some();
 }
 
 /// Connects a light vertex to the camera: its splat, if the vertex projects into the image
 /// and scatters toward the camera.
 fn connect_to_camera(
-    ctx: &LightContext,
+    ctx: &FrameContext,
     surface: &SurfaceHit,
     bsdf: &Bsdf,
     vertex: &LightVertex,
@@ -330,38 +318,4 @@ fn connect_to_camera(
             contribution,
         },
     })
-}
-
-/// Samples the BSDF (importance transport) for the next segment, updates the MIS quantities
-/// and applies Russian roulette; returns whether the path goes on.
-fn scatter(
-    ctx: &LightContext,
-    path: &mut LightPathState,
-    surface: &SurfaceHit,
-    bsdf: &Bsdf,
-    wo: Vec3,
-) -> bool {
-    let (u_lobe, u_dir) = (path.rng.uniform(), path.rng.uniform2());
-    let Some(sample) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Importance) else {
-        return false;
-    };
-    path.throughput *= sample.f_cos / sample.pdf_fwd;
-    path.mis.scatter(
-        surface.cos_geometric(sample.wi),
-        sample.pdf_fwd,
-        sample.pdf_rev,
-        sample.lobe == LobeKind::Specular,
-        ctx.factors,
-    );
-    let relative = path.throughput * path.roulette_scale;
-    if let Some(continuation) = continuation_probability(path.segments, relative) {
-        if path.rng.uniform() >= continuation {
-            return false;
-        }
-        path.throughput /= continuation;
-    }
-    path.origin = surface.spawn(sample.wi);
-    path.direction = sample.wi;
-    path.segments += 1;
-    true
 }

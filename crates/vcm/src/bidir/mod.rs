@@ -20,6 +20,7 @@
 mod camera_pass;
 mod light_pass;
 pub(crate) mod mis;
+mod walk;
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -123,6 +124,23 @@ impl VcmSettings {
     }
 }
 
+/// What both passes of a frame read.
+pub(crate) struct FrameContext<'a> {
+    pub scene: &'a Scene,
+    pub traversal: &'a dyn Traversal,
+    pub settings: &'a VcmSettings,
+    /// The frame (seeds the paths).
+    pub iteration: u32,
+    pub factors: &'a MisFactors,
+}
+
+impl FrameContext<'_> {
+    /// Longest path in segments (`u32::MAX`: unlimited).
+    fn max_segments(&self) -> u32 {
+        self.settings.max_depth.unwrap_or(u32::MAX)
+    }
+}
+
 /// The VCM integrator (and its sub-algorithms, see [`Algorithm`]).
 pub struct Vcm {
     scene: Arc<Scene>,
@@ -199,7 +217,7 @@ impl Vcm {
     fn estimate_cache_capacity(&mut self) -> usize {
         let light_paths = self.light_paths();
         let factors = MisFactors::new(false, false, 1.0, 1.0);
-        let ctx = light_pass::LightContext {
+        let ctx = FrameContext {
             scene: &self.scene,
             traversal: self.traversal.as_ref(),
             settings: &self.settings,
@@ -247,7 +265,7 @@ impl Integrator for Vcm {
             cache: algorithm.caches().then_some(&mut self.cache),
             film: algorithm.splats().then_some(&mut *film),
         };
-        let ctx = light_pass::LightContext {
+        let ctx = FrameContext {
             scene: &self.scene,
             traversal: self.traversal.as_ref(),
             settings: &self.settings,
@@ -265,11 +283,13 @@ impl Integrator for Vcm {
             stats.grid_build_time = grid_start.elapsed();
         }
         let ctx = camera_pass::CameraContext {
-            scene: &self.scene,
-            traversal: self.traversal.as_ref(),
-            settings: &self.settings,
-            iteration,
-            factors: &factors,
+            frame: FrameContext {
+                scene: &self.scene,
+                traversal: self.traversal.as_ref(),
+                settings: &self.settings,
+                iteration,
+                factors: &factors,
+            },
             cache: &self.cache,
             grid: &self.grid,
             radius,
