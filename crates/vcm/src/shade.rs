@@ -13,7 +13,7 @@ use vcm_scene::mesh::SurfacePoint;
 use vcm_scene::sampling::power_heuristic;
 
 use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
-use crate::shadow::shadow_segment;
+use crate::shadow::LightSample;
 use crate::surface_hit::{Hit, SurfaceHit};
 
 use crate::roulette::continuation_probability;
@@ -48,11 +48,10 @@ pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) 
     }
     let bsdf = scene.bsdf(&point);
     let wo = -path.direction;
-    let spawn = |w: Vec3| surface.spawn(w);
     if bsdf.has_non_delta() {
-        path.shadow = next_event(scene, path, &point, &bsdf, wo, spawn);
+        path.shadow = next_event(scene, path, &surface, &bsdf, wo);
     }
-    path.alive = scatter(path, &bsdf, wo, spawn);
+    path.alive = scatter(path, &bsdf, wo, |w| surface.spawn(w));
 }
 
 /// Emitted radiance toward the path at `point`, MIS-weighted against light sampling
@@ -75,39 +74,25 @@ fn emission(scene: &Scene, path: &PathState, point: &SurfacePoint, hit: Hit) -> 
     emitted.radiance * power_heuristic(1.0, pdf_w, 1.0, light_pdf_w)
 }
 
-/// One light sample from `point`: the MIS-weighted contribution and its shadow ray, or `None`
-/// when the sample cannot contribute.
+/// One light sample from `surface`: the MIS-weighted contribution and its shadow ray, or
+/// `None` when the sample cannot contribute.
 fn next_event(
     scene: &Scene,
     path: &mut PathState,
-    point: &SurfacePoint,
+    surface: &SurfaceHit,
     bsdf: &Bsdf,
     wo: Vec3,
-    spawn: impl Fn(Vec3) -> Vec3,
 ) -> Option<ShadowRay> {
-    let (u_pick, u_light) = (path.rng.uniform(), path.rng.uniform2());
-    let (index, pick_pmf) = scene.light_sampler.sample(u_pick)?;
-    let light = &scene.lights[index];
-    let illumination = light.illuminate(&scene.textures, point.position, u_light)?;
-    let eval = bsdf.eval(wo, illumination.direction, TransportMode::Radiance);
-    if eval.f_cos == Vec3::ZERO {
-        return None;
-    }
-    let light_pdf_w = illumination.direct_pdf_w * pick_pmf;
-    let weight = if light.is_delta() {
+    let sample = LightSample::sample(scene, &mut path.rng, surface, bsdf, wo)?;
+    let light_pdf_w = sample.direct_pdf_w();
+    let weight = if sample.light.is_delta() {
         1.0
     } else {
-        power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf_fwd)
+        power_heuristic(1.0, light_pdf_w, 1.0, sample.eval.pdf_fwd)
     };
-    let contribution = path.throughput * illumination.value * eval.f_cos * (weight / light_pdf_w);
-    let origin = spawn(illumination.direction);
-    let (direction, tmax) = shadow_segment(light, &illumination, point.position, origin);
-    Some(ShadowRay {
-        origin,
-        direction,
-        tmax,
-        contribution,
-    })
+    let contribution =
+        path.throughput * sample.illumination.value * sample.eval.f_cos * (weight / light_pdf_w);
+    Some(sample.shadow_ray(surface, contribution))
 }
 
 /// Samples the BSDF for the next segment and applies Russian roulette; returns whether the

@@ -1,9 +1,71 @@
-//! Shadow rays for next event estimation: from an offset receiver to a light sample.
+//! Light samples for next event estimation and the shadow rays that test them: from an
+//! offset receiver to a light sample.
 
 use glam::Vec3;
+use vcm_scene::Scene;
+use vcm_scene::bsdf::{Bsdf, BsdfEval, TransportMode};
 use vcm_scene::light::{Illumination, Light};
+use vcm_scene::sampling::Rng;
 
+use crate::path_state::ShadowRay;
 use crate::ray_offset::{barycentric_error, offset_ray_origin};
+use crate::surface_hit::SurfaceHit;
+
+/// A light sample seen from a camera path's vertex, with the BSDF's response toward it.
+pub(crate) struct LightSample<'a> {
+    /// The light picked.
+    pub light: &'a Light,
+    /// Probability of picking `light`.
+    pub pick_pmf: f32,
+    /// The sampled point on the light as seen from the receiver.
+    pub illumination: Illumination,
+    /// The receiver's BSDF (radiance transport) toward the light.
+    pub eval: BsdfEval,
+}
+
+impl LightSample<'_> {
+    /// Picks a light by power and a point on it with three numbers from `rng`, seen from
+    /// `surface` whose BSDF is `bsdf` (`wo` toward the previous vertex); `None` when the
+    /// sample cannot contribute.
+    pub fn sample<'a>(
+        scene: &'a Scene,
+        rng: &mut Rng,
+        surface: &SurfaceHit,
+        bsdf: &Bsdf,
+        wo: Vec3,
+    ) -> Option<LightSample<'a>> {
+        let (u_pick, u_light) = (rng.uniform(), rng.uniform2());
+        let (index, pick_pmf) = scene.light_sampler.sample(u_pick)?;
+        let light = &scene.lights[index];
+        let receiver = surface.point.position;
+        let illumination = light.illuminate(&scene.textures, receiver, u_light)?;
+        let eval = bsdf.eval(wo, illumination.direction, TransportMode::Radiance);
+        (eval.f_cos != Vec3::ZERO).then_some(LightSample {
+            light,
+            pick_pmf,
+            illumination,
+            eval,
+        })
+    }
+
+    /// Solid-angle pdf of the sample at the receiver, with the light's selection probability.
+    pub fn direct_pdf_w(&self) -> f32 {
+        self.illumination.direct_pdf_w * self.pick_pmf
+    }
+
+    /// The shadow ray from `surface` to the sample, adding `contribution` when unoccluded.
+    pub fn shadow_ray(&self, surface: &SurfaceHit, contribution: Vec3) -> ShadowRay {
+        let origin = surface.spawn(self.illumination.direction);
+        let receiver = surface.point.position;
+        let (direction, tmax) = shadow_segment(self.light, &self.illumination, receiver, origin);
+        ShadowRay {
+            origin,
+            direction,
+            tmax,
+            contribution,
+        }
+    }
+}
 
 /// Fraction of a finite shadow ray left out at the light's end, so that the light's own
 /// surface (or a point light's position) never counts as a blocker. Relative to the ray
@@ -18,7 +80,7 @@ const SHADOW_END_EPSILON: f32 = 1e-4;
 /// t = 1 − [`SHADOW_END_EPSILON`]; an area light's sample point is first offset off the
 /// emitting triangle toward the receiver by its own error bound. Distant lights: a unit
 /// direction and an unbounded ray.
-pub(crate) fn shadow_segment(
+fn shadow_segment(
     light: &Light,
     illumination: &Illumination,
     receiver: Vec3,

@@ -20,7 +20,7 @@ use crate::hash_grid::HashGrid;
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
 use crate::path_state::ShadowRay;
-use crate::shadow::{segment_to, shadow_segment};
+use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 
 /// What the camera pass reads: the frame, and the light pass's results.
@@ -74,17 +74,12 @@ impl CameraPass {
             .map(|pixel| start(ctx, pixel))
             .collect_into_vec(&mut self.paths);
         stats.camera_rays += self.paths.len() as u64;
-        let mut first_wave = true;
         while !self.paths.is_empty() {
             self.rays.clear();
             for path in &self.paths {
                 self.rays
                     .push(path.walk.origin, path.walk.direction, 0.0, f32::INFINITY);
             }
-            if !first_wave {
-                stats.continuation_rays += self.rays.len() as u64;
-            }
-            first_wave = false;
             let (rays, hits) = (&self.rays, &mut self.hits);
             timed(&mut stats.traversal_time, || {
                 ctx.traversal.intersect(rays, hits)
@@ -100,6 +95,7 @@ impl CameraPass {
                 }
                 path.alive
             });
+            stats.continuation_rays += self.paths.len() as u64;
         }
     }
 
@@ -243,36 +239,25 @@ fn light_sample(
     bsdf: &Bsdf,
     wo: Vec3,
 ) -> Option<ShadowRay> {
-    let scene = ctx.scene;
-    let (u_pick, u_light) = (path.walk.rng.uniform(), path.walk.rng.uniform2());
-    let (index, pick_pmf) = scene.light_sampler.sample(u_pick)?;
-    let light = &scene.lights[index];
-    let point = surface.point.position;
-    let illumination = light.illuminate(&scene.textures, point, u_light)?;
-    let eval = bsdf.eval(wo, illumination.direction, TransportMode::Radiance);
-    if eval.f_cos == Vec3::ZERO {
-        return None;
-    }
+    let sample = LightSample::sample(ctx.scene, &mut path.walk.rng, surface, bsdf, wo)?;
+    let (illumination, eval) = (&sample.illumination, &sample.eval);
     let pdfs = LightSamplePdfs {
-        direct_pdf_w: illumination.direct_pdf_w * pick_pmf,
-        emission_pdf_w: illumination.emission_pdf_w * pick_pmf,
+        direct_pdf_w: sample.direct_pdf_w(),
+        emission_pdf_w: illumination.emission_pdf_w * sample.pick_pmf,
         cos_at_light: illumination.cos_at_light,
         cos_at_receiver: surface.cos_geometric(illumination.direction),
         // No BSDF sample hits a delta light.
-        bsdf_fwd_pdf_w: if light.is_delta() { 0.0 } else { eval.pdf_fwd },
+        bsdf_fwd_pdf_w: if sample.light.is_delta() {
+            0.0
+        } else {
+            eval.pdf_fwd
+        },
         bsdf_rev_pdf_w: eval.pdf_rev,
     };
     let weight = light_sample_weight(&path.walk.mis, &pdfs, ctx.factors);
     let contribution =
         path.walk.throughput * illumination.value * eval.f_cos * (weight / pdfs.direct_pdf_w);
-    let origin = surface.spawn(illumination.direction);
-    let (direction, tmax) = shadow_segment(light, &illumination, point, origin);
-    Some(ShadowRay {
-        origin,
-        direction,
-        tmax,
-        contribution,
-    })
+    Some(sample.shadow_ray(surface, contribution))
 }
 
 /// Connects the camera vertex to N_c light vertices picked uniformly from the cache.

@@ -31,12 +31,6 @@ pub(crate) struct LightPassOutputs<'a> {
     pub film: Option<&'a mut Film>,
 }
 
-/// What the preprocess counted.
-pub(crate) struct VertexCount {
-    /// Cacheable (non-specular) vertices on the traced paths.
-    pub vertices: u64,
-}
-
 /// A light tracing splat waiting for its occlusion test.
 #[derive(Clone, Copy, Debug)]
 struct Splat {
@@ -95,9 +89,9 @@ impl LightPass {
         });
     }
 
-    /// Traces `count` light paths that store and splat nothing and counts their cacheable
-    /// vertices (the preprocess that sizes the cache).
-    pub fn count_vertices(&mut self, ctx: &FrameContext, count: u32) -> VertexCount {
+    /// Traces `count` light paths that store and splat nothing and returns how many
+    /// cacheable (non-specular) vertices they have (the preprocess that sizes the cache).
+    pub fn count_vertices(&mut self, ctx: &FrameContext, count: u32) -> u64 {
         let mut vertices = 0;
         let mut stats = FrameStats::default();
         self.trace_paths(
@@ -114,7 +108,7 @@ impl LightPass {
                     .count() as u64;
             },
         );
-        VertexCount { vertices }
+        vertices
     }
 
     /// The wave loop: emit, then trace, shade (`splat`: connect to the camera) and hand the

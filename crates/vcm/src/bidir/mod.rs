@@ -224,9 +224,9 @@ impl Vcm {
             iteration: 0,
             factors: &factors,
         };
-        let counted = self.light_pass.count_vertices(&ctx, PREPROCESS_LIGHT_PATHS);
+        let vertices = self.light_pass.count_vertices(&ctx, PREPROCESS_LIGHT_PATHS);
         LightVertexCache::estimate_capacity(
-            counted.vertices,
+            vertices,
             u64::from(PREPROCESS_LIGHT_PATHS),
             light_paths as u64,
         )
@@ -252,27 +252,28 @@ impl Integrator for Vcm {
         );
         let start = Instant::now();
         let radius = self.radius(iteration);
+        let light_paths = self.light_paths();
         let factors = MisFactors::new(
             algorithm.connects(),
             algorithm.merges(),
             radius,
-            self.light_paths() as f32,
+            light_paths as f32,
         );
         let mut stats = FrameStats::default();
         self.cache.clear();
-        let light_paths = self.light_paths();
         let outputs = LightPassOutputs {
             cache: algorithm.caches().then_some(&mut self.cache),
             film: algorithm.splats().then_some(&mut *film),
         };
-        let ctx = FrameContext {
+        let frame = FrameContext {
             scene: &self.scene,
             traversal: self.traversal.as_ref(),
             settings: &self.settings,
             iteration,
             factors: &factors,
         };
-        self.light_pass.run(&ctx, light_paths, outputs, &mut stats);
+        self.light_pass
+            .run(&frame, light_paths, outputs, &mut stats);
         stats.light_vertices = self.cache.len() as u64;
         stats.discarded_light_vertices = self.cache.discarded();
 
@@ -283,13 +284,7 @@ impl Integrator for Vcm {
             stats.grid_build_time = grid_start.elapsed();
         }
         let ctx = camera_pass::CameraContext {
-            frame: FrameContext {
-                scene: &self.scene,
-                traversal: self.traversal.as_ref(),
-                settings: &self.settings,
-                iteration,
-                factors: &factors,
-            },
+            frame,
             cache: &self.cache,
             grid: &self.grid,
             radius,
