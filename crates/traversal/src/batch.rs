@@ -86,8 +86,8 @@ impl RayBatch {
         Vec3::new(self.dir_x[i], self.dir_y[i], self.dir_z[i])
     }
 
-    /// Panics unless all eight arrays have the same length.
-    pub(crate) fn assert_consistent(&self) {
+    /// Panics unless all eight arrays have the same length (backends call it first).
+    pub fn assert_consistent(&self) {
         let len = self.len();
         let lengths = [
             &self.origin_x,

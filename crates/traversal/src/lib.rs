@@ -12,12 +12,16 @@
 
 mod alpha;
 mod batch;
+pub mod build;
+#[cfg(feature = "testing")]
+pub mod contract;
 mod cpu;
 mod error;
 mod traversal;
 
 pub use alpha::AlphaTest;
 pub use batch::{HitBatch, NO_HIT, RayBatch};
-pub use cpu::{BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel};
+pub use build::BuildPreset;
+pub use cpu::{CpuBvh, CpuBvhOptions, CpuKernel};
 pub use error::BuildError;
 pub use traversal::{CompletedTraversal, PendingTraversal, Traversal, TraversalJob};

@@ -13,7 +13,9 @@ use crate::batch::{HitBatch, RayBatch};
 /// - With an alpha test, masked triangles are transparent wherever
 ///   [`AlphaTest::is_opaque_at`](crate::AlphaTest::is_opaque_at) is false, for both queries.
 /// - Among several intersections at exactly the same `t` (shared edges, coplanar overlaps)
-///   any one may be reported.
+///   the closest-hit query reports the triangle with the smallest id, so the answer does not
+///   depend on the traversal order. (Backends may round `t` differently in the last bits, so
+///   two backends can still disagree on such ties.)
 pub trait Traversal: Send + Sync {
     /// Finds the closest hit of every ray. `hits` is resized to `rays.len()` and every entry
     /// is overwritten.

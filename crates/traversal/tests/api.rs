@@ -2,8 +2,9 @@
 
 mod common;
 
-use common::{Rng, RngExt, TRIANGLE_AT_Z1, triangle_soup};
+use common::{Rng, RngExt, triangle_soup};
 use glam::{Vec3, vec3};
+use vcm_traversal::contract::TRIANGLE_AT_Z1;
 use vcm_traversal::{
     BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, NO_HIT, RayBatch, Traversal,
     TraversalJob,

@@ -2,8 +2,9 @@
 
 mod common;
 
-use common::{Rng, RngExt, assert_matches_reference, height_field, triangle_soup, uv_sphere};
+use common::{Rng, RngExt, assert_matches_reference, height_field, triangle_soup};
 use glam::Vec3;
+use vcm_traversal::contract::uv_sphere;
 use vcm_traversal::{BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, RayBatch, Traversal};
 
 /// Random rays: origins in the meshes' bounding box, random directions and lengths, a

@@ -74,7 +74,16 @@ pub(crate) fn closest_hit<N: NodeTest, F: HitFilter>(
         node_test.intersect(node, ray, state.oct_inv4, tmax),
         {
             let leaf = state.primitive_id as usize;
-            if let Some(candidate) = geometry.triangles[leaf].intersect(ray, tmax)
+            // Once something is hit, a candidate at exactly the same t wins only with a
+            // smaller id, so ties resolve the same way whatever the traversal order.
+            let limit = match closest {
+                Some(_) => tmax.next_up(),
+                None => tmax,
+            };
+            if let Some(candidate) = geometry.triangles[leaf].intersect(ray, limit)
+                && closest.is_none_or(|(best, _)| {
+                    candidate.t < tmax || geometry.ids[leaf] < geometry.ids[best]
+                })
                 && filter.accepts(leaf, &candidate)
             {
                 tmax = candidate.t;

@@ -19,7 +19,7 @@ use glam::Vec3;
 use self::batch::{Kernel, Simd};
 use self::filter::{HitFilter, Masked, Opaque};
 use self::geometry::LeafGeometry;
-pub use self::options::{BuildPreset, CpuBvhOptions, CpuKernel};
+pub use self::options::{CpuBvhOptions, CpuKernel};
 use crate::alpha::AlphaTest;
 use crate::batch::{HitBatch, RayBatch};
 use crate::error::BuildError;

@@ -1,29 +1,6 @@
 //! Build and run options of the CPU backend.
 
-use obvhs::BvhBuildParams;
-
-/// obvhs build quality presets, from fastest build to best hierarchy.
-///
-/// `Slow` and `VerySlow` split large triangles' boxes before building (a triangle may then be
-/// stored in several leaves).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum BuildPreset {
-    /// No reinsertion, one primitive per leaf.
-    Fastest,
-    /// Minimal search radius, light reinsertion.
-    VeryFast,
-    /// Small search radius, light reinsertion. The default: on a 1M-triangle scene its
-    /// hierarchy costs the same node and triangle tests per ray as `Medium`'s (within 0.5%)
-    /// and builds 10–15% faster.
-    #[default]
-    Fast,
-    /// Medium search radius, more reinsertion.
-    Medium,
-    /// Spatial pre-splits, large search radius.
-    Slow,
-    /// Spatial pre-splits, full reinsertion.
-    VerySlow,
-}
+use crate::build::BuildPreset;
 
 /// How to build and run a [`CpuBvh`](super::CpuBvh).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,20 +34,6 @@ impl Default for CpuBvhOptions {
             preset: BuildPreset::default(),
             chunk_size: 256,
             kernel: CpuKernel::Auto,
-        }
-    }
-}
-
-impl BuildPreset {
-    /// The obvhs parameters of this preset.
-    pub(super) fn params(self) -> BvhBuildParams {
-        match self {
-            Self::Fastest => BvhBuildParams::fastest_build(),
-            Self::VeryFast => BvhBuildParams::very_fast_build(),
-            Self::Fast => BvhBuildParams::fast_build(),
-            Self::Medium => BvhBuildParams::medium_build(),
-            Self::Slow => BvhBuildParams::slow_build(),
-            Self::VerySlow => BvhBuildParams::very_slow_build(),
         }
     }
 }

@@ -37,14 +37,6 @@ impl RngExt for Rng {
     }
 }
 
-/// A triangle in the plane z = 1 around the +z axis (a ray from the origin along +z hits it
-/// at t = 1).
-pub const TRIANGLE_AT_Z1: [Vec3; 3] = [
-    Vec3::new(-1.0, -1.0, 1.0),
-    Vec3::new(1.0, -1.0, 1.0),
-    Vec3::new(0.0, 1.0, 1.0),
-];
-
 /// `count` random triangles with vertices in a cube of side `extent`, of varied sizes.
 pub fn triangle_soup(rng: &mut Rng, count: usize, extent: f32) -> Vec<[Vec3; 3]> {
     (0..count)
@@ -52,68 +44,6 @@ pub fn triangle_soup(rng: &mut Rng, count: usize, extent: f32) -> Vec<[Vec3; 3]>
             let center = rng.point_in_box(0.0, extent);
             let size = extent * 0.2 * rng.uniform().powi(2);
             [0; 3].map(|_| center + rng.unit_vector() * size)
-        })
-        .collect()
-}
-
-/// A closed UV sphere (poles are fans), `rings × segments` quads, shared vertices exact.
-pub fn uv_sphere(center: Vec3, radius: f32, rings: usize, segments: usize) -> Vec<[Vec3; 3]> {
-    let vertex = |ring: usize, segment: usize| {
-        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
-        let phi = std::f32::consts::TAU * (segment % segments) as f32 / segments as f32;
-        if ring == 0 || ring == rings {
-            // Exact, shared poles.
-            center + Vec3::new(0.0, 0.0, radius * if ring == 0 { 1.0 } else { -1.0 })
-        } else {
-            center
-                + radius
-                    * Vec3::new(
-                        theta.sin() * phi.cos(),
-                        theta.sin() * phi.sin(),
-                        theta.cos(),
-                    )
-        }
-    };
-    let mut tris = Vec::new();
-    for ring in 0..rings {
-        for segment in 0..segments {
-            let (a, b) = (vertex(ring, segment), vertex(ring, segment + 1));
-            let (c, d) = (vertex(ring + 1, segment), vertex(ring + 1, segment + 1));
-            if ring != 0 {
-                tris.push([a, c, b]);
-            }
-            if ring != rings - 1 {
-                tris.push([b, c, d]);
-            }
-        }
-    }
-    tris
-}
-
-/// The 12 triangles of an axis-aligned box.
-pub fn cuboid(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
-    let corner = |i: usize| {
-        Vec3::new(
-            if i & 1 != 0 { hi.x } else { lo.x },
-            if i & 2 != 0 { hi.y } else { lo.y },
-            if i & 4 != 0 { hi.z } else { lo.z },
-        )
-    };
-    let faces = [
-        [0, 2, 6, 4],
-        [1, 5, 7, 3],
-        [0, 4, 5, 1],
-        [2, 3, 7, 6],
-        [0, 1, 3, 2],
-        [4, 6, 7, 5],
-    ];
-    faces
-        .iter()
-        .flat_map(|&[a, b, c, d]| {
-            [
-                [corner(a), corner(b), corner(c)],
-                [corner(a), corner(c), corner(d)],
-            ]
         })
         .collect()
 }

@@ -1,0 +1,87 @@
+//! Headless device selection: the best hardware adapter when there is one, else a software
+//! one (Mesa lavapipe), with the adapter's own limits rather than WebGPU's defaults.
+
+use crate::error::GpuError;
+
+/// A wgpu device and queue with the adapter they came from.
+#[derive(Debug)]
+pub struct GpuDevice {
+    /// The logical device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter's name, driver and kind.
+    pub info: wgpu::AdapterInfo,
+}
+
+impl GpuDevice {
+    /// Opens the preferred adapter among those of the Vulkan, Metal and DX12 backends
+    /// (`WGPU_BACKEND` narrows them): a discrete GPU, else an integrated one, else a virtual
+    /// one, else a CPU implementation. Needs no window or display.
+    ///
+    /// Requests the adapter's own limits: lavapipe, for one, allows storage bindings far
+    /// above the 128 MiB default, which a million-triangle scene needs.
+    pub fn open() -> Result<Self, GpuError> {
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        descriptor.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY);
+        let instance = wgpu::Instance::new(descriptor);
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        let adapter = adapters
+            .into_iter()
+            .filter(|adapter| adapter.get_downlevel_capabilities().is_webgpu_compliant())
+            .min_by_key(|adapter| preference(adapter.get_info().device_type))
+            .ok_or(GpuError::NoAdapter)?;
+        let info = adapter.get_info();
+        let descriptor = wgpu::DeviceDescriptor {
+            label: Some("vcm traversal"),
+            required_features: wgpu::Features::empty(),
+            required_limits: adapter.limits(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        };
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&descriptor)).map_err(|error| {
+                GpuError::RequestDevice {
+                    adapter: info.name.clone(),
+                    reason: error.to_string(),
+                }
+            })?;
+        Ok(Self {
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// A one-line description: adapter name, kind and backend.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?}, driver {} {})",
+            self.info.name,
+            self.info.device_type,
+            self.info.backend,
+            self.info.driver,
+            self.info.driver_info
+        )
+    }
+
+    /// The largest storage buffer binding the device accepts, in bytes.
+    pub fn max_binding_bytes(&self) -> u64 {
+        let limits = self.device.limits();
+        limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+    }
+}
+
+/// Lower is preferred: real GPUs first, software rasterizers last.
+fn preference(kind: wgpu::DeviceType) -> u8 {
+    match kind {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    }
+}

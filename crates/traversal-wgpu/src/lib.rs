@@ -1,0 +1,18 @@
+//! GPU ray traversal for vcm-rs: the [`Traversal`](vcm_traversal::Traversal) trait on WGSL
+//! compute shaders dispatched through wgpu.
+//!
+//! The hierarchy is built on the CPU (obvhs's PLOC and reinsertion, as for the CPU backend),
+//! laid out for the GPU ([`layout`]) and uploaded once; kernels come from `shaders/*.wgsl`.
+
+#![warn(missing_docs)]
+
+mod backend;
+mod device;
+mod error;
+pub mod layout;
+pub mod shader;
+mod slot;
+
+pub use backend::{GpuBvh, GpuBvhOptions};
+pub use device::GpuDevice;
+pub use error::{GpuError, NO_ADAPTER_HELP};

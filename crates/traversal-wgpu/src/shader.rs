@@ -1,0 +1,66 @@
+//! Composing the traversal kernels from the WGSL sources in `shaders/`.
+//!
+//! WGSL has no includes: a module is the host-defined constants followed by `ray.wgsl`
+//! (rays, hits, the triangle test) and the layout's traversal file. The stack size is a
+//! host constant because private arrays cannot be sized by pipeline overrides.
+
+/// The shared ray and triangle code.
+pub const RAY_WGSL: &str = include_str!("../../../shaders/ray.wgsl");
+/// Traversal of the binary layout.
+pub const TRAVERSE_BVH2_WGSL: &str = include_str!("../../../shaders/traverse_bvh2.wgsl");
+
+/// Entry point that writes one [`Hit`](vcm_traversal::HitBatch) per ray.
+pub const CLOSEST_HIT_ENTRY: &str = "closest_hit";
+/// Entry point that writes one occlusion flag per ray.
+pub const ANY_HIT_ENTRY: &str = "any_hit";
+/// Invocations per workgroup (`WORKGROUP_SIZE` in `ray.wgsl`).
+pub const WORKGROUP_SIZE: u32 = 64;
+
+/// The complete WGSL module for a hierarchy whose traversal needs `stack_size` entries.
+pub fn traversal_module(stack_size: u32) -> String {
+    format!(
+        "const STACK_SIZE: u32 = {}u;\n{RAY_WGSL}\n{TRAVERSE_BVH2_WGSL}",
+        stack_size.max(1)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Parses and validates a composed module with naga, then resolves its pipeline
+    /// overrides per entry point and writes SPIR-V, as wgpu does on Vulkan.
+    fn validate(source: &str) {
+        let module = naga::front::wgsl::parse_str(source)
+            .unwrap_or_else(|e| panic!("WGSL parse error:\n{}", e.emit_to_string(source)));
+        let info = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("WGSL validation error:\n{}", e.emit_to_string(source)));
+        for entry in [CLOSEST_HIT_ENTRY, ANY_HIT_ENTRY] {
+            let stage = Some((naga::ShaderStage::Compute, entry));
+            let constants = naga::back::PipelineConstants::default();
+            let (module, info) = naga::back::pipeline_constants::process_overrides(
+                &module, &info, stage, &constants,
+            )
+            .unwrap_or_else(|e| panic!("{entry}: overrides: {e}"));
+            let options = naga::back::spv::Options::default();
+            naga::back::spv::write_vec(&module, &info, &options, None)
+                .unwrap_or_else(|e| panic!("{entry}: SPIR-V: {e}"));
+        }
+    }
+
+    #[test]
+    fn every_shader_validates() {
+        for stack_size in [1, 64] {
+            validate(&traversal_module(stack_size));
+        }
+    }
+
+    #[test]
+    fn workgroup_size_matches_the_shader() {
+        assert!(RAY_WGSL.contains(&format!("const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;")));
+    }
+}

@@ -1,0 +1,96 @@
+//! The GPU backend against the backend-independent traversal contract, and its own API:
+//! submit/wait with several batches in flight, outputs resized and overwritten, build errors.
+
+mod common;
+
+use std::sync::Arc;
+
+use common::{gpu, random_rays};
+use glam::Vec3;
+use vcm_scene::sampling::Rng;
+use vcm_traversal::contract::{self, uv_sphere};
+use vcm_traversal::{BuildError, HitBatch, NO_HIT, RayBatch, Traversal, TraversalJob};
+use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice, GpuError};
+
+fn backend(device: &Arc<GpuDevice>, triangles: &[[Vec3; 3]]) -> GpuBvh {
+    GpuBvh::new(device.clone(), triangles, GpuBvhOptions::default()).unwrap()
+}
+
+#[test]
+fn gpu_backend_meets_the_traversal_contract() {
+    let Some(device) = gpu().map(Arc::new) else {
+        return;
+    };
+    contract::check_contract(&|triangles| Box::new(backend(&device, triangles)));
+}
+
+#[test]
+fn batches_in_flight_together_match_synchronous_queries() {
+    let Some(device) = gpu().map(Arc::new) else {
+        return;
+    };
+    let triangles = uv_sphere(Vec3::ZERO, 1.0, 32, 64);
+    let bvh = backend(&device, &triangles);
+    let mut rng = Rng::new(3, 0);
+    let batches: Vec<RayBatch> = [1, 1000, 70_000, 5]
+        .iter()
+        .map(|&n| random_rays(&mut rng, Vec3::splat(-2.0), Vec3::splat(2.0), n))
+        .collect();
+    let pending: Vec<_> = batches
+        .iter()
+        .enumerate()
+        .map(|(i, rays)| {
+            let job = if i % 2 == 0 {
+                // Stale output from an earlier, larger batch must be overwritten.
+                let mut hits = HitBatch::default();
+                hits.resize(rays.len() + 17);
+                TraversalJob::Intersect {
+                    rays: rays.clone(),
+                    hits,
+                }
+            } else {
+                TraversalJob::Occluded {
+                    rays: rays.clone(),
+                    occluded: vec![true; 3],
+                }
+            };
+            bvh.submit(job)
+        })
+        .collect();
+    for (i, pending) in pending.into_iter().enumerate() {
+        match pending.wait() {
+            TraversalJob::Intersect { rays, hits } => {
+                let mut expected = HitBatch::default();
+                bvh.intersect(&rays, &mut expected);
+                assert_eq!(hits, expected, "batch {i}");
+                assert!(rays.len() < 1000 || hits.prim.iter().any(|&p| p != NO_HIT));
+            }
+            TraversalJob::Occluded { rays, occluded } => {
+                let mut expected = Vec::new();
+                bvh.occluded(&rays, &mut expected);
+                assert_eq!(occluded, expected, "batch {i}");
+            }
+        }
+    }
+    // Slots are reused: the largest batch determines the memory held.
+    assert!(bvh.memory_bytes() >= 70_000 * 32);
+}
+
+#[test]
+fn invalid_triangles_are_reported_before_touching_the_device() {
+    let Some(device) = gpu().map(Arc::new) else {
+        return;
+    };
+    let bad = [Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y];
+    let error = GpuBvh::new(
+        device,
+        &[[Vec3::ZERO, Vec3::X, Vec3::Y], bad],
+        GpuBvhOptions::default(),
+    )
+    .err()
+    .unwrap();
+    assert!(matches!(
+        error,
+        GpuError::Build(BuildError::NonFiniteVertex { triangle: 1 })
+    ));
+}
