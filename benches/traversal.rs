@@ -1,9 +1,10 @@
-//! Ray traversal throughput of the CPU backend: primary, diffuse-bounce and shadow rays on the
-//! committed Cornell box scene and on a ~1M-triangle procedural scene, plus BVH build time and
-//! memory.
+//! Ray traversal throughput of the CPU and GPU backends on the same rays: primary,
+//! diffuse-bounce and shadow rays on the committed Cornell box scene and on a ~1M-triangle
+//! procedural scene, plus BVH build time and memory.
 //!
-//! Run with `cargo bench --bench traversal`. Rays/s are reported by criterion as
-//! element throughput; the build statistics are printed before the measurements.
+//! Run with `cargo bench --bench traversal`. Rays/s are reported by criterion as element
+//! throughput (`cpu/…` and `gpu/…` in each scene's group); the build statistics and the GPU
+//! adapter are printed before the measurements. Without a GPU adapter only the CPU runs.
 
 mod common;
 
@@ -13,6 +14,7 @@ use common::{Scene, SurfacePoints, cornell_box, million_triangles, primary_rays}
 use criterion::{Criterion, Throughput};
 use vcm_scene::sampling::Rng;
 use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
+use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions};
 
 /// Image resolution of the primary rays (one ray per pixel).
 const RESOLUTION: u32 = 512;
@@ -76,21 +78,38 @@ fn bench_scene(criterion: &mut Criterion, scene: &Scene, build_repeats: usize) {
         workload.shadow.len(),
         started.elapsed().as_secs_f64(),
     );
+    let mut backends: Vec<(&str, Box<dyn Traversal>)> = vec![("cpu", Box::new(bvh))];
+    match GpuBvh::open(&scene.triangles, GpuBvhOptions::default()) {
+        Ok(gpu) => {
+            println!(
+                "{}: GPU {} built in {:.3} s, {:.1} bytes/triangle, stack {}",
+                scene.name,
+                gpu.device().describe(),
+                gpu.build_time().as_secs_f64(),
+                gpu.memory_bytes() as f64 / scene.triangles.len() as f64,
+                gpu.stack_size(),
+            );
+            backends.push(("gpu", Box::new(gpu)));
+        }
+        Err(error) => println!("{}: no GPU backend: {error}", scene.name),
+    }
     let mut hits = HitBatch::default();
     let mut occluded = Vec::new();
     let mut group = criterion.benchmark_group(scene.name);
-    group.throughput(Throughput::Elements(workload.primary.len() as u64));
-    group.bench_function("primary_closest_hit", |b| {
-        b.iter(|| bvh.intersect(&workload.primary, &mut hits))
-    });
-    group.throughput(Throughput::Elements(workload.bounce.len() as u64));
-    group.bench_function("diffuse_bounce_closest_hit", |b| {
-        b.iter(|| bvh.intersect(&workload.bounce, &mut hits))
-    });
-    group.throughput(Throughput::Elements(workload.shadow.len() as u64));
-    group.bench_function("shadow_occlusion", |b| {
-        b.iter(|| bvh.occluded(&workload.shadow, &mut occluded))
-    });
+    for (backend, bvh) in &backends {
+        group.throughput(Throughput::Elements(workload.primary.len() as u64));
+        group.bench_function(format!("{backend}/primary_closest_hit"), |b| {
+            b.iter(|| bvh.intersect(&workload.primary, &mut hits))
+        });
+        group.throughput(Throughput::Elements(workload.bounce.len() as u64));
+        group.bench_function(format!("{backend}/diffuse_bounce_closest_hit"), |b| {
+            b.iter(|| bvh.intersect(&workload.bounce, &mut hits))
+        });
+        group.throughput(Throughput::Elements(workload.shadow.len() as u64));
+        group.bench_function(format!("{backend}/shadow_occlusion"), |b| {
+            b.iter(|| bvh.occluded(&workload.shadow, &mut occluded))
+        });
+    }
     group.finish();
 }
 

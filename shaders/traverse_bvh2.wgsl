@@ -1,7 +1,8 @@
 // Closest-hit and any-hit traversal of a binary BVH whose nodes hold both children's boxes.
 // One invocation traces one ray; the stack holds far children with their entry distances so
 // that subtrees behind the closest hit so far are skipped when popped.
-// STACK_SIZE (the hierarchy's depth) is defined by the host when it composes the module.
+// STACK_SIZE (the hierarchy's depth) is defined by the host when it composes the module, and
+// is_opaque comes from alpha_none.wgsl or alpha_masks.wgsl.
 
 struct Node {
     left_min: vec3<f32>,
@@ -28,7 +29,7 @@ fn intersect_leaf(first: u32, count: u32, ray: PreparedRay, best_in: Hit) -> Hit
         let h = intersect_triangle(i, ray);
         let closer = h.x < best.t
             || (h.x == best.t && best.prim != NO_HIT && ids[i] < ids[best.prim]);
-        if h.x >= ray.tmin && closer {
+        if h.x >= ray.tmin && closer && is_opaque(i, h.y, h.z) {
             best = Hit(h.x, i, h.y, h.z);
         }
     }

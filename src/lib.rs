@@ -5,6 +5,8 @@
 //!
 //! - [`scene`]: loading glTF/OBJ scenes, materials, BSDFs, lights, camera, [`scene::SceneFeatures`].
 //! - [`traversal`]: the [`traversal::Traversal`] trait over ray batches and its CPU backend.
+//! - [`traversal_wgpu`]: the GPU backend (WGSL compute shaders through wgpu).
+//! - [`Backend`] / [`build_traversal`]: pick a backend at run time.
 //!
 //! ```no_run
 //! use vcm_rs::traversal::{HitBatch, RayBatch, Traversal};
@@ -23,9 +25,14 @@ use std::sync::Arc;
 
 pub use vcm_scene as scene;
 pub use vcm_traversal as traversal;
+pub use vcm_traversal_wgpu as traversal_wgpu;
 
-use vcm_scene::Scene;
-use vcm_traversal::{AlphaTest, BuildError, CpuBvh, CpuBvhOptions};
+use vcm_scene::texture::WrapMode;
+use vcm_scene::{AlphaMode, Scene, Texture};
+use vcm_traversal::{AlphaTest, BuildError, CpuBvh, CpuBvhOptions, Traversal};
+use vcm_traversal_wgpu::{
+    AlphaMasks, AlphaTexture, GpuBvh, GpuBvhOptions, GpuDevice, GpuError, MaskedTriangle, Wrap,
+};
 
 /// The scene's alpha masks as seen by a traversal backend.
 struct SceneAlpha(Arc<Scene>);
@@ -51,4 +58,107 @@ pub fn cpu_traversal(scene: &Arc<Scene>) -> Result<CpuBvh, BuildError> {
     } else {
         CpuBvh::new(&triangles, options)
     }
+}
+
+/// Builds the GPU traversal backend for `scene` on the preferred adapter (a hardware GPU,
+/// else Mesa's lavapipe). Fails with instructions when there is no adapter at all. As on
+/// the CPU, the kernels carry alpha-mask code only when the scene has alpha masks.
+pub fn gpu_traversal(scene: &Arc<Scene>) -> Result<GpuBvh, GpuError> {
+    let gpu = Arc::new(GpuDevice::open()?);
+    let triangles = scene.triangle_corners();
+    let options = GpuBvhOptions::default();
+    if scene.features.alpha_masks {
+        GpuBvh::with_alpha_masks(gpu, &triangles, options, &alpha_masks(scene))
+    } else {
+        GpuBvh::new(gpu, &triangles, options)
+    }
+}
+
+/// The scene's alpha-masked triangles and the alpha channels of their textures, for the GPU.
+pub fn alpha_masks(scene: &Scene) -> AlphaMasks {
+    let mut textures = Vec::new();
+    // Scene texture index → index in `textures`, for textures that masks use.
+    let mut used = vec![None; scene.textures.len()];
+    let triangles = (0..scene.mesh.triangle_count() as u32)
+        .map(|t| {
+            let material = scene.material_of(t);
+            let AlphaMode::Mask { cutoff } = material.alpha_mode else {
+                return None;
+            };
+            let texture = material.base_color_texture.map(|r| {
+                *used[r.index].get_or_insert_with(|| {
+                    textures.push(alpha_texture(&scene.textures[r.index]));
+                    textures.len() as u32 - 1
+                })
+            });
+            let corner = |u, v| scene.mesh.uv_at(t as usize, u, v);
+            Some(MaskedTriangle {
+                uvs: [corner(0.0, 0.0), corner(1.0, 0.0), corner(0.0, 1.0)],
+                texture,
+                alpha_factor: material.base_color.w,
+                cutoff,
+            })
+        })
+        .collect();
+    AlphaMasks {
+        textures,
+        triangles,
+    }
+}
+
+/// The alpha channel of `texture` with its wrap modes.
+fn alpha_texture(texture: &Texture) -> AlphaTexture {
+    let wrap = |mode| match mode {
+        WrapMode::Repeat => Wrap::Repeat,
+        WrapMode::MirroredRepeat => Wrap::MirroredRepeat,
+        WrapMode::ClampToEdge => Wrap::ClampToEdge,
+    };
+    let (width, height) = (texture.width(), texture.height());
+    let alpha = (0..height)
+        .flat_map(|y| (0..width).map(move |x| (texture.texel(x, y).w * 255.0).round() as u8))
+        .collect();
+    AlphaTexture {
+        width,
+        height,
+        wrap: [wrap(texture.wrap_u), wrap(texture.wrap_v)],
+        alpha,
+    }
+}
+
+/// The ray traversal backends, chosen at run time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// The obvhs 8-wide BVH on rayon threads.
+    Cpu,
+    /// WGSL compute shaders through wgpu.
+    Gpu,
+}
+
+/// A built backend with a one-line description of what it runs on.
+pub struct BuiltTraversal {
+    /// The backend.
+    pub traversal: Arc<dyn Traversal>,
+    /// e.g. `cpu (2 threads)` or the GPU adapter's name and driver.
+    pub description: String,
+}
+
+/// Builds `backend` for `scene`.
+pub fn build_traversal(
+    scene: &Arc<Scene>,
+    backend: Backend,
+) -> Result<BuiltTraversal, Box<dyn std::error::Error + Send + Sync>> {
+    Ok(match backend {
+        Backend::Cpu => BuiltTraversal {
+            traversal: Arc::new(cpu_traversal(scene)?),
+            description: format!("cpu ({} threads)", rayon::current_num_threads()),
+        },
+        Backend::Gpu => {
+            let bvh = gpu_traversal(scene)?;
+            let description = format!("gpu: {}", bvh.device().describe());
+            BuiltTraversal {
+                traversal: Arc::new(bvh),
+                description,
+            }
+        }
+    })
 }

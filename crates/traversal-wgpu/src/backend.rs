@@ -13,6 +13,7 @@ use vcm_traversal::{
 };
 use wgpu::util::DeviceExt;
 
+use crate::alpha::AlphaMasks;
 use crate::device::GpuDevice;
 use crate::error::GpuError;
 use crate::layout::SceneLayout;
@@ -43,9 +44,10 @@ pub struct GpuBvh {
 struct Inner {
     gpu: Arc<GpuDevice>,
     pipelines: [wgpu::ComputePipeline; 2],
-    /// Bind group 1 (nodes, vertices, ids) per pipeline; `None` for a scene without
-    /// triangles, where every ray misses without a dispatch.
-    scene_groups: Option<[wgpu::BindGroup; 2]>,
+    /// Bind groups 1 (nodes, vertices, ids) and, with alpha masks, 2 (the masks), each per
+    /// pipeline; `None` for a scene without triangles, where every ray misses without a
+    /// dispatch.
+    scene_groups: Option<Vec<[wgpu::BindGroup; 2]>>,
     slots: Mutex<Vec<Slot>>,
     max_rays_per_slot: u64,
 }
@@ -63,13 +65,26 @@ impl GpuBvh {
         triangles: &[[Vec3; 3]],
         options: GpuBvhOptions,
     ) -> Result<Self, GpuError> {
+        Self::with_alpha_masks(gpu, triangles, options, &AlphaMasks::default())
+    }
+
+    /// Like [`new`](Self::new), with masked triangles transparent where their mask says so,
+    /// for both queries. Without any masked triangle the kernels are built without mask code.
+    pub fn with_alpha_masks(
+        gpu: Arc<GpuDevice>,
+        triangles: &[[Vec3; 3]],
+        options: GpuBvhOptions,
+        masks: &AlphaMasks,
+    ) -> Result<Self, GpuError> {
         let start = Instant::now();
         let bvh = build_bvh2(triangles, options.preset)?;
         let layout = SceneLayout::from_bvh2(&bvh, triangles);
+        let masked = masks.any();
         let device = &gpu.device;
+        let source = traversal_module(layout.stack_size, masked);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("traversal"),
-            source: wgpu::ShaderSource::Wgsl(traversal_module(layout.stack_size).into()),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
         });
         let pipeline = |entry| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -82,15 +97,37 @@ impl GpuBvh {
             })
         };
         let pipelines = [pipeline(CLOSEST_HIT_ENTRY), pipeline(ANY_HIT_ENTRY)];
+        let mut scene_bytes = layout.memory_bytes();
         let scene_groups = if layout.nodes.is_empty() {
             None
         } else {
-            Some(upload_scene(&gpu, &layout, &pipelines)?)
+            let mut buffers = vec![
+                upload(&gpu, "nodes", bytemuck::cast_slice(&layout.nodes))?,
+                upload(&gpu, "triangles", bytemuck::cast_slice(&layout.vertices))?,
+                upload(&gpu, "triangle ids", bytemuck::cast_slice(&layout.ids))?,
+            ];
+            let mut groups = vec![bind_buffers(&gpu, &pipelines, 1, &buffers)];
+            if masked {
+                let packed = masks.pack(&layout.ids);
+                buffers = vec![
+                    upload(&gpu, "leaf masks", bytemuck::cast_slice(&packed.leaf_masks))?,
+                    upload(&gpu, "masks", bytemuck::cast_slice(&packed.masks))?,
+                    upload(
+                        &gpu,
+                        "mask textures",
+                        bytemuck::cast_slice(&packed.textures),
+                    )?,
+                    upload(&gpu, "mask texels", bytemuck::cast_slice(&packed.texels))?,
+                ];
+                scene_bytes += buffers.iter().map(|b| b.size() as usize).sum::<usize>();
+                groups.push(bind_buffers(&gpu, &pipelines, 2, &buffers));
+            }
+            Some(groups)
         };
         let max_rays_per_slot = gpu.max_binding_bytes() / RAY_BYTES.max(HIT_BYTES);
         Ok(Self {
             build_time: start.elapsed(),
-            scene_bytes: layout.memory_bytes(),
+            scene_bytes,
             stack_size: layout.stack_size,
             inner: Arc::new(Inner {
                 gpu,
@@ -128,48 +165,49 @@ impl GpuBvh {
     }
 }
 
-/// Uploads the layout and makes its bind group for each pipeline.
-fn upload_scene(
-    gpu: &GpuDevice,
-    layout: &SceneLayout,
-    pipelines: &[wgpu::ComputePipeline; 2],
-) -> Result<[wgpu::BindGroup; 2], GpuError> {
+/// Uploads `bytes` as a read-only storage buffer (at least 4 bytes: empty bindings are
+/// invalid), checking the device's binding limit.
+fn upload(gpu: &GpuDevice, label: &'static str, bytes: &[u8]) -> Result<wgpu::Buffer, GpuError> {
     let limit = gpu.max_binding_bytes();
-    let upload = |label: &'static str, bytes: &[u8]| {
-        if bytes.len() as u64 > limit {
-            return Err(GpuError::SceneTooLarge {
-                buffer: label,
-                bytes: bytes.len() as u64,
-                limit,
-                adapter: gpu.info.name.clone(),
-            });
-        }
-        Ok(gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-            }))
-    };
-    let buffers = [
-        upload("nodes", bytemuck::cast_slice(&layout.nodes))?,
-        upload("triangles", bytemuck::cast_slice(&layout.vertices))?,
-        upload("triangle ids", bytemuck::cast_slice(&layout.ids))?,
-    ];
-    Ok(pipelines.each_ref().map(|pipeline| {
-        let entries: Vec<_> = (0..3)
-            .map(|binding| wgpu::BindGroupEntry {
+    if bytes.len() as u64 > limit {
+        return Err(GpuError::SceneTooLarge {
+            buffer: label,
+            bytes: bytes.len() as u64,
+            limit,
+            adapter: gpu.info.name.clone(),
+        });
+    }
+    let contents = if bytes.is_empty() { &[0; 4][..] } else { bytes };
+    Ok(gpu
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::STORAGE,
+        }))
+}
+
+/// Binds `buffers` to bindings 0, 1, … of bind group `group`, for each pipeline.
+fn bind_buffers(
+    gpu: &GpuDevice,
+    pipelines: &[wgpu::ComputePipeline; 2],
+    group: u32,
+    buffers: &[wgpu::Buffer],
+) -> [wgpu::BindGroup; 2] {
+    pipelines.each_ref().map(|pipeline| {
+        let entries: Vec<_> = (0u32..)
+            .zip(buffers)
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
                 binding,
-                resource: buffers[binding as usize].as_entire_binding(),
+                resource: buffer.as_entire_binding(),
             })
             .collect();
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),
-            layout: &pipeline.get_bind_group_layout(1),
+            layout: &pipeline.get_bind_group_layout(group),
             entries: &entries,
         })
-    }))
+    })
 }
 
 /// One dispatch in flight: its slot, the range of rays it covers and the mapping signal.
@@ -227,7 +265,9 @@ impl Inner {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
                 pass.set_pipeline(&self.pipelines[which]);
                 pass.set_bind_group(0, &slot.groups[which], &[]);
-                pass.set_bind_group(1, &scene_groups[which], &[]);
+                for (group, groups) in (1..).zip(scene_groups) {
+                    pass.set_bind_group(group, &groups[which], &[]);
+                }
                 pass.dispatch_workgroups(x, y, 1);
             }
             let bytes = count as u64 * query.output_bytes();

@@ -6,6 +6,7 @@
 
 #![warn(missing_docs)]
 
+mod alpha;
 mod backend;
 mod device;
 mod error;
@@ -13,6 +14,7 @@ pub mod layout;
 pub mod shader;
 mod slot;
 
+pub use alpha::{AlphaMasks, AlphaTexture, MaskedTriangle, Wrap};
 pub use backend::{GpuBvh, GpuBvhOptions};
 pub use device::GpuDevice;
 pub use error::{GpuError, NO_ADAPTER_HELP};

@@ -1,11 +1,17 @@
 //! Composing the traversal kernels from the WGSL sources in `shaders/`.
 //!
 //! WGSL has no includes: a module is the host-defined constants followed by `ray.wgsl`
-//! (rays, hits, the triangle test) and the layout's traversal file. The stack size is a
-//! host constant because private arrays cannot be sized by pipeline overrides.
+//! (rays, hits, the triangle test), the alpha test and the traversal file. The stack size is
+//! a host constant because private arrays cannot be sized by pipeline overrides. Scenes
+//! without alpha masks get `alpha_none.wgsl`, so their kernels carry no mask code and bind no
+//! mask buffers; scenes with masks get `alpha_masks.wgsl` (bind group 2).
 
 /// The shared ray and triangle code.
 pub const RAY_WGSL: &str = include_str!("../../../shaders/ray.wgsl");
+/// The alpha test of scenes without masks: always opaque.
+pub const ALPHA_NONE_WGSL: &str = include_str!("../../../shaders/alpha_none.wgsl");
+/// The alpha test of scenes with masks.
+pub const ALPHA_MASKS_WGSL: &str = include_str!("../../../shaders/alpha_masks.wgsl");
 /// Traversal of the binary layout.
 pub const TRAVERSE_BVH2_WGSL: &str = include_str!("../../../shaders/traverse_bvh2.wgsl");
 
@@ -16,10 +22,16 @@ pub const ANY_HIT_ENTRY: &str = "any_hit";
 /// Invocations per workgroup (`WORKGROUP_SIZE` in `ray.wgsl`).
 pub const WORKGROUP_SIZE: u32 = 64;
 
-/// The complete WGSL module for a hierarchy whose traversal needs `stack_size` entries.
-pub fn traversal_module(stack_size: u32) -> String {
+/// The complete WGSL module for a hierarchy whose traversal needs `stack_size` entries, with
+/// or without the alpha-mask test.
+pub fn traversal_module(stack_size: u32, alpha_masks: bool) -> String {
+    let alpha = if alpha_masks {
+        ALPHA_MASKS_WGSL
+    } else {
+        ALPHA_NONE_WGSL
+    };
     format!(
-        "const STACK_SIZE: u32 = {}u;\n{RAY_WGSL}\n{TRAVERSE_BVH2_WGSL}",
+        "const STACK_SIZE: u32 = {}u;\n{RAY_WGSL}\n{alpha}\n{TRAVERSE_BVH2_WGSL}",
         stack_size.max(1)
     )
 }
@@ -55,8 +67,17 @@ mod tests {
     #[test]
     fn every_shader_validates() {
         for stack_size in [1, 64] {
-            validate(&traversal_module(stack_size));
+            for alpha_masks in [false, true] {
+                validate(&traversal_module(stack_size, alpha_masks));
+            }
         }
+    }
+
+    #[test]
+    fn opaque_scenes_carry_no_mask_code() {
+        let opaque = traversal_module(8, false);
+        assert!(!opaque.contains("@group(2)") && !opaque.contains("sample_alpha"));
+        assert!(traversal_module(8, true).contains("@group(2)"));
     }
 
     #[test]

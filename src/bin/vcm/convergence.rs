@@ -6,14 +6,13 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
-use anyhow::Context;
 use vcm::Film;
 
 use crate::integrators::{self, Algorithm, IntegratorOptions};
 use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Outcome};
 use crate::render::{
-    check_writable, image_size, interrupt_flag, load_scene, read_reference, relmse_points,
+    Backend, check_writable, image_size, interrupt_flag, load_scene, read_reference, relmse_points,
     set_threads, write_text,
 };
 
@@ -42,6 +41,9 @@ pub struct ConvergenceArgs {
     /// Image height in pixels (default: from the camera's aspect ratio, else square).
     #[arg(long)]
     height: Option<u32>,
+    /// Ray traversal backend.
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    backend: Backend,
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -61,7 +63,7 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
     let scene = load_scene(&args.scene)?;
     let size = image_size(&scene, args.width, args.height);
     let reference = read_reference(&args.reference, size)?;
-    let traversal = Arc::new(vcm_rs::cpu_traversal(&scene).context("building the BVH")?);
+    let traversal = args.backend.build(&scene)?;
     let interrupted = interrupt_flag()?;
     let mut outcomes = Vec::new();
     for &algorithm in &args.algos {

@@ -11,16 +11,34 @@ use vcm::Film;
 use vcm::atomic_write::write_atomically;
 use vcm::image_io::RgbImage;
 use vcm_rs::scene::Scene;
+use vcm_rs::traversal::Traversal;
 
 use crate::integrators::{self, Algorithm, IntegratorOptions};
 use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Checkpoint, Outcome};
 
-/// Ray traversal backends (the GPU backend arrives with its crate).
+/// Ray traversal backends.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum Backend {
     /// obvhs 8-wide BVH on rayon threads.
     Cpu,
+    /// WGSL compute shaders through wgpu: a hardware GPU, else Mesa lavapipe.
+    Gpu,
+}
+
+impl Backend {
+    /// Builds the backend for `scene` and says what it runs on.
+    pub fn build(self, scene: &Arc<Scene>) -> anyhow::Result<Arc<dyn Traversal>> {
+        let kind = match self {
+            Self::Cpu => vcm_rs::Backend::Cpu,
+            Self::Gpu => vcm_rs::Backend::Gpu,
+        };
+        let built = vcm_rs::build_traversal(scene, kind)
+            .map_err(|error| anyhow::anyhow!(error))
+            .context("building the ray traversal backend")?;
+        eprintln!("traversal: {}", built.description);
+        Ok(built.traversal)
+    }
 }
 
 /// Arguments of `vcm render`.
@@ -75,7 +93,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(path) => Some(read_reference(path, (width, height))?),
         None => None,
     };
-    let traversal = Arc::new(vcm_rs::cpu_traversal(&scene).context("building the BVH")?);
+    let traversal = args.backend.build(&scene)?;
     let mut integrator = integrators::build(
         args.algo,
         &scene,

@@ -1,0 +1,142 @@
+//! `--backend gpu` from the command line: the same images as the CPU backend, and a clear
+//! message when there is no adapter. Set `VCM_REQUIRE_GPU=1` (as `.ci/run` does) to make a
+//! missing adapter a failure instead of a skip.
+
+use std::process::{Command, Output};
+
+use vcm::image_io::RgbImage;
+use vcm_rs::traversal::{HitBatch, RayBatch, Traversal};
+use vcm_rs::traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
+
+fn vcm(args: &[&str], env: &[(&str, &str)]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vcm"))
+        .args(args)
+        .envs(env.iter().copied())
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the vcm binary runs")
+}
+
+fn have_gpu() -> bool {
+    match GpuDevice::open() {
+        Ok(_) => true,
+        Err(error) if std::env::var("VCM_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("VCM_REQUIRE_GPU=1 but no GPU adapter: {error}")
+        }
+        Err(error) => {
+            eprintln!("skipping GPU test ({error})");
+            false
+        }
+    }
+}
+
+/// Both backends find the same triangle for every ray (the parity test in
+/// vcm-traversal-wgpu); their hit distances may differ in the last bits, so the images
+/// agree to rounding, far below the renders' own noise.
+#[test]
+fn gpu_renders_match_cpu_renders() {
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for algo in ["pt", "vcm"] {
+        let render = |backend: &str| {
+            let path = dir.path().join(format!("{algo}-{backend}.exr"));
+            let args = [
+                "render",
+                "--algo",
+                algo,
+                "--backend",
+                backend,
+                "--spp",
+                "4",
+                "--width",
+                "64",
+                "-o",
+                path.to_str().unwrap(),
+            ];
+            let output = vcm(&args, &[]);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(output.status.success(), "{stderr}");
+            assert!(
+                stderr.contains(&format!("traversal: {backend}")),
+                "{stderr}"
+            );
+            RgbImage::read_exr(&path).unwrap()
+        };
+        let (cpu, gpu) = (render("cpu"), render("gpu"));
+        let metrics = vcm::metrics::compare(&gpu.pixels, &cpu.pixels).unwrap();
+        let mean = cpu.pixels.iter().map(|p| p.element_sum()).sum::<f32>();
+        assert!(mean > 0.0);
+        assert!(metrics.relmse < 1e-9, "{algo}: {metrics:?}");
+    }
+}
+
+#[test]
+fn no_adapter_is_a_clear_error() {
+    // Only the Vulkan, Metal and DX12 backends are built in: asking for OpenGL finds nothing.
+    let output = vcm(
+        &["render", "--backend", "gpu", "--spp", "1", "--width", "8"],
+        &[("WGPU_BACKEND", "gl")],
+    );
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("no GPU adapter found"), "{stderr}");
+    assert!(stderr.contains("mesa-vulkan-drivers"), "{stderr}");
+}
+
+/// Alpha masks evaluated on the GPU (the scene's bilinear lookup, in single precision) cut
+/// the same holes as the CPU backend's: the same primitive for camera rays through the
+/// Khronos alpha-mode test scene, except a few rays where the filtered alpha lands within
+/// rounding of the cutoff. Without the masks many rays would differ, so the check has teeth.
+#[test]
+fn alpha_masks_match_the_cpu_backend() {
+    if !have_gpu() {
+        return;
+    }
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/scenes/khronos-samples/AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf"
+    );
+    let scene = std::sync::Arc::new(vcm_rs::scene::Scene::load(path).unwrap());
+    assert!(scene.features.alpha_masks);
+    let size = 256;
+    let mut rays = RayBatch::default();
+    for y in 0..size {
+        for x in 0..size {
+            let raster = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let direction = scene.camera.direction(size, size, raster);
+            rays.push(scene.camera.position, direction, 0.0, f32::INFINITY);
+        }
+    }
+    let trace = |traversal: &dyn Traversal| {
+        let mut hits = HitBatch::default();
+        traversal.intersect(&rays, &mut hits);
+        let mut occluded = Vec::new();
+        traversal.occluded(&rays, &mut occluded);
+        (hits.prim, occluded)
+    };
+    let (cpu_prims, cpu_occluded) = trace(&vcm_rs::cpu_traversal(&scene).unwrap());
+    let (gpu_prims, gpu_occluded) = trace(&vcm_rs::gpu_traversal(&scene).unwrap());
+    let differ = |a: &[u32], b: &[u32]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+    let differences = differ(&cpu_prims, &gpu_prims);
+    let occlusion_differences = cpu_occluded
+        .iter()
+        .zip(&gpu_occluded)
+        .filter(|(a, b)| a != b);
+    eprintln!("alpha masks: {differences} of {} rays differ", rays.len());
+    assert!(
+        differences as f64 <= 1e-3 * rays.len() as f64,
+        "{differences} rays differ"
+    );
+    assert!(occlusion_differences.count() as f64 <= 1e-3 * rays.len() as f64);
+
+    let triangles = scene.triangle_corners();
+    let unmasked = GpuBvh::open(&triangles, GpuBvhOptions::default()).unwrap();
+    let (unmasked_prims, _) = trace(&unmasked);
+    let holes = differ(&cpu_prims, &unmasked_prims);
+    assert!(
+        holes > 100 * differences.max(1),
+        "masks cut only {holes} holes"
+    );
+}
