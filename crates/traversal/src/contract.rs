@@ -385,7 +385,7 @@ pub fn many_coincident_triangles(build: Build) {
     assert!(expected.len() > 150);
     let (hits, _) = trace(bvh.as_ref(), &rays);
     for (i, &(prim, t)) in expected.iter().enumerate() {
-        assert_eq!(hits.prim[i], prim, "ray {i}");
+        assert_eq!(hits.prim[i], prim, "ray {i} towards {}", rays.direction(i));
         assert!(
             prim == NO_HIT || (hits.t[i] - t).abs() < 1e-6,
             "ray {i}: t = {}",
