@@ -5,6 +5,8 @@
 //!
 //! - [`scene`]: loading glTF/OBJ scenes, materials, BSDFs, lights, camera, [`scene::SceneFeatures`].
 //! - [`traversal`]: the [`traversal::Traversal`] trait over ray batches and its CPU backend.
+//! - [`Backend`]: the traversal backends, chosen at run time.
+//! - [`integrators`]: the light transport algorithms, their options and one builder for all.
 //!
 //! ```no_run
 //! use vcm_rs::traversal::{HitBatch, RayBatch, Traversal};
@@ -21,8 +23,13 @@
 
 use std::sync::Arc;
 
+mod backend;
+pub mod integrators;
+
 pub use vcm_scene as scene;
 pub use vcm_traversal as traversal;
+
+pub use backend::Backend;
 
 use vcm_scene::Scene;
 use vcm_traversal::{AlphaTest, BuildError, CpuBvh, CpuBvhOptions};

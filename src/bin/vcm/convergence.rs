@@ -9,13 +9,13 @@ use std::sync::atomic::Ordering;
 use anyhow::Context;
 use vcm::Film;
 
-use crate::integrators::{self, Algorithm, IntegratorOptions};
 use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Outcome};
 use crate::render::{
-    check_writable, image_size, interrupt_flag, load_scene, read_reference, relmse_points,
-    set_threads, write_text,
+    check_writable, interrupt_flag, load_scene, read_reference, relmse_points, set_threads,
+    write_text,
 };
+use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, image_size};
 
 /// Arguments of `vcm convergence`.
 #[derive(clap::Args)]

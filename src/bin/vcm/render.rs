@@ -10,18 +10,12 @@ use glam::Vec3;
 use vcm::Film;
 use vcm::atomic_write::write_atomically;
 use vcm::image_io::RgbImage;
+use vcm_rs::Backend;
 use vcm_rs::scene::Scene;
 
-use crate::integrators::{self, Algorithm, IntegratorOptions};
 use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Checkpoint, Outcome};
-
-/// Ray traversal backends (the GPU backend arrives with its crate).
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum Backend {
-    /// obvhs 8-wide BVH on rayon threads.
-    Cpu,
-}
+use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, image_size};
 
 /// Arguments of `vcm render`.
 #[derive(clap::Args)]
@@ -75,7 +69,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(path) => Some(read_reference(path, (width, height))?),
         None => None,
     };
-    let traversal = Arc::new(vcm_rs::cpu_traversal(&scene).context("building the BVH")?);
+    let traversal = args.backend.traversal(&scene).context("building the BVH")?;
     let mut integrator = integrators::build(
         args.algo,
         &scene,
@@ -140,16 +134,6 @@ pub fn load_scene(path: &Path) -> anyhow::Result<Arc<Scene>> {
         eprintln!("warning: {warning}");
     }
     Ok(Arc::new(scene))
-}
-
-/// The image size: `width`, and `height` or else the one the camera's aspect ratio gives
-/// (square without one).
-pub fn image_size(scene: &Scene, width: u32, height: Option<u32>) -> (u32, u32) {
-    let height = height.unwrap_or_else(|| {
-        let aspect = scene.camera.aspect_ratio.unwrap_or(1.0);
-        ((width as f32 / aspect).round() as u32).max(1)
-    });
-    (width, height)
 }
 
 /// Reads a reference EXR and checks that it has the render's size.
