@@ -6,7 +6,8 @@
 //! - [`scene`]: loading glTF/OBJ scenes, materials, BSDFs, lights, camera, [`scene::SceneFeatures`].
 //! - [`traversal`]: the [`traversal::Traversal`] trait over ray batches and its CPU backend.
 //! - [`traversal_wgpu`]: the GPU backend (WGSL compute shaders through wgpu).
-//! - [`Backend`] / [`build_traversal`]: pick a backend at run time.
+//! - [`Backend`]: the traversal backends, chosen at run time.
+//! - [`integrators`]: the light transport algorithms, their options and one builder for all.
 //!
 //! ```no_run
 //! use vcm_rs::traversal::{HitBatch, RayBatch, Traversal};
@@ -23,13 +24,18 @@
 
 use std::sync::Arc;
 
+mod backend;
+pub mod integrators;
+
 pub use vcm_scene as scene;
 pub use vcm_traversal as traversal;
 pub use vcm_traversal_wgpu as traversal_wgpu;
 
+pub use backend::{Backend, BackendError, BuiltTraversal};
+
 use vcm_scene::texture::WrapMode;
 use vcm_scene::{AlphaMode, Scene, Texture};
-use vcm_traversal::{AlphaTest, BuildError, CpuBvh, CpuBvhOptions, Traversal};
+use vcm_traversal::{AlphaTest, BuildError, CpuBvh, CpuBvhOptions};
 use vcm_traversal_wgpu::{
     AlphaMasks, AlphaTexture, GpuBvh, GpuBvhOptions, GpuDevice, GpuError, MaskedTriangle, Wrap,
 };
@@ -123,42 +129,4 @@ fn alpha_texture(texture: &Texture) -> AlphaTexture {
         wrap: [wrap(texture.wrap_u), wrap(texture.wrap_v)],
         alpha,
     }
-}
-
-/// The ray traversal backends, chosen at run time.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Backend {
-    /// The obvhs 8-wide BVH on rayon threads.
-    Cpu,
-    /// WGSL compute shaders through wgpu.
-    Gpu,
-}
-
-/// A built backend with a one-line description of what it runs on.
-pub struct BuiltTraversal {
-    /// The backend.
-    pub traversal: Arc<dyn Traversal>,
-    /// e.g. `cpu (2 threads)` or the GPU adapter's name and driver.
-    pub description: String,
-}
-
-/// Builds `backend` for `scene`.
-pub fn build_traversal(
-    scene: &Arc<Scene>,
-    backend: Backend,
-) -> Result<BuiltTraversal, Box<dyn std::error::Error + Send + Sync>> {
-    Ok(match backend {
-        Backend::Cpu => BuiltTraversal {
-            traversal: Arc::new(cpu_traversal(scene)?),
-            description: format!("cpu ({} threads)", rayon::current_num_threads()),
-        },
-        Backend::Gpu => {
-            let bvh = gpu_traversal(scene)?;
-            let description = format!("gpu: {}", bvh.device().describe());
-            BuiltTraversal {
-                traversal: Arc::new(bvh),
-                description,
-            }
-        }
-    })
 }

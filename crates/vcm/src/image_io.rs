@@ -121,8 +121,9 @@ pub fn linear_to_srgb_byte(linear: f32) -> u8 {
     (encoded * 255.0 + 0.5) as u8
 }
 
-/// Writes 8-bit RGB bytes as a PNG, atomically.
-fn write_rgb8_png(
+/// Writes 8-bit RGB bytes (`width` × `height` pixels, row by row from the top left) as a
+/// PNG, atomically.
+pub fn write_rgb8_png(
     path: &Path,
     width: usize,
     height: usize,

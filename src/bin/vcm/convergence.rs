@@ -7,14 +7,15 @@ use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
 use vcm::Film;
+use vcm_rs::Backend;
 
-use crate::integrators::{self, Algorithm, IntegratorOptions};
 use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Outcome};
 use crate::render::{
-    Backend, check_writable, image_size, interrupt_flag, load_scene, read_reference, relmse_points,
+    build_traversal, check_writable, interrupt_flag, load_scene, read_reference, relmse_points,
     set_threads, write_text,
 };
+use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, image_size};
 
 /// Arguments of `vcm convergence`.
 #[derive(clap::Args)]
@@ -63,7 +64,7 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
     let scene = load_scene(&args.scene)?;
     let size = image_size(&scene, args.width, args.height);
     let reference = read_reference(&args.reference, size)?;
-    let traversal = args.backend.build(&scene)?;
+    let traversal = build_traversal(args.backend, &scene)?;
     let interrupted = interrupt_flag()?;
     let mut outcomes = Vec::new();
     for &algorithm in &args.algos {

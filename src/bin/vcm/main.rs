@@ -3,7 +3,6 @@
 mod compare;
 mod convergence;
 mod info;
-mod integrators;
 mod plot;
 mod progressive;
 mod render;

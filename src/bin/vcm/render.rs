@@ -10,36 +10,13 @@ use glam::Vec3;
 use vcm::Film;
 use vcm::atomic_write::write_atomically;
 use vcm::image_io::RgbImage;
+use vcm_rs::Backend;
 use vcm_rs::scene::Scene;
 use vcm_rs::traversal::Traversal;
 
-use crate::integrators::{self, Algorithm, IntegratorOptions};
 use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Checkpoint, Outcome};
-
-/// Ray traversal backends.
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum Backend {
-    /// obvhs 8-wide BVH on rayon threads.
-    Cpu,
-    /// WGSL compute shaders through wgpu: a hardware GPU, else Mesa lavapipe.
-    Gpu,
-}
-
-impl Backend {
-    /// Builds the backend for `scene` and says what it runs on.
-    pub fn build(self, scene: &Arc<Scene>) -> anyhow::Result<Arc<dyn Traversal>> {
-        let kind = match self {
-            Self::Cpu => vcm_rs::Backend::Cpu,
-            Self::Gpu => vcm_rs::Backend::Gpu,
-        };
-        let built = vcm_rs::build_traversal(scene, kind)
-            .map_err(|error| anyhow::anyhow!(error))
-            .context("building the ray traversal backend")?;
-        eprintln!("traversal: {}", built.description);
-        Ok(built.traversal)
-    }
-}
+use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, image_size};
 
 /// Arguments of `vcm render`.
 #[derive(clap::Args)]
@@ -93,7 +70,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(path) => Some(read_reference(path, (width, height))?),
         None => None,
     };
-    let traversal = args.backend.build(&scene)?;
+    let traversal = build_traversal(args.backend, &scene)?;
     let mut integrator = integrators::build(
         args.algo,
         &scene,
@@ -140,6 +117,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Builds `backend` for `scene` and says on stderr what it runs on.
+pub fn build_traversal(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<Arc<dyn Traversal>> {
+    let built = backend
+        .build(scene)
+        .context("building the ray traversal backend")?;
+    eprintln!("traversal: {}", built.description);
+    Ok(built.traversal)
+}
+
 /// Sets the number of worker threads (default: all cores).
 pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
     if let Some(threads) = threads {
@@ -158,16 +144,6 @@ pub fn load_scene(path: &Path) -> anyhow::Result<Arc<Scene>> {
         eprintln!("warning: {warning}");
     }
     Ok(Arc::new(scene))
-}
-
-/// The image size: `width`, and `height` or else the one the camera's aspect ratio gives
-/// (square without one).
-pub fn image_size(scene: &Scene, width: u32, height: Option<u32>) -> (u32, u32) {
-    let height = height.unwrap_or_else(|| {
-        let aspect = scene.camera.aspect_ratio.unwrap_or(1.0);
-        ((width as f32 / aspect).round() as u32).max(1)
-    });
-    (width, height)
 }
 
 /// Reads a reference EXR and checks that it has the render's size.

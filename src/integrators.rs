@@ -1,4 +1,5 @@
-//! The algorithm and integrator options shared by `vcm render` and `vcm convergence`.
+//! The light transport algorithms, their options and one builder for any of them, shared by
+//! `vcm render`, `vcm convergence` and the viewer.
 
 use std::sync::Arc;
 
@@ -6,8 +7,8 @@ use vcm::{
     Algorithm as VcmAlgorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer,
     PtSettings, RenderError, Vcm, VcmSettings,
 };
-use vcm_rs::scene::Scene;
-use vcm_rs::traversal::Traversal;
+use vcm_scene::Scene;
+use vcm_traversal::Traversal;
 
 /// Light transport algorithms.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -52,7 +53,7 @@ impl Algorithm {
 }
 
 /// Options of every integrator.
-#[derive(clap::Args, Clone, Debug)]
+#[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct IntegratorOptions {
     /// Seed of all random numbers: a render is a pure function of scene, settings and seed.
     #[arg(long, default_value_t = 0)]
@@ -103,4 +104,14 @@ pub fn build(
             Box::new(Vcm::new(scene, traversal, settings)?)
         }
     })
+}
+
+/// The image size: `width`, and `height` or else the one the camera's aspect ratio gives
+/// (square without one).
+pub fn image_size(scene: &Scene, width: u32, height: Option<u32>) -> (u32, u32) {
+    let height = height.unwrap_or_else(|| {
+        let aspect = scene.camera.aspect_ratio.unwrap_or(1.0);
+        ((width as f32 / aspect).round() as u32).max(1)
+    });
+    (width, height)
 }

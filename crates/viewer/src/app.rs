@@ -1,0 +1,279 @@
+//! The eframe application: it owns the render worker, the loaded scene with its camera and
+//! resolution switch, and the image on screen, and ties them together once per UI frame.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use eframe::egui;
+use vcm::image_io::RgbImage;
+use vcm_rs::integrators::image_size;
+use vcm_scene::Scene;
+
+use crate::camera_controller::CameraController;
+use crate::image_out::tone_map;
+use crate::loader::SceneLoad;
+use crate::renderer::{Job, Renderer, Snapshot, Update};
+use crate::resolution::ResolutionSwitch;
+use crate::screenshot::ScreenshotScript;
+use crate::session::{Session, View};
+use crate::settings::RenderSettings;
+use crate::stats::ErrorHistory;
+
+/// What the app starts with.
+pub struct Startup {
+    /// The first scene to open.
+    pub scene: PathBuf,
+    /// Render settings.
+    pub settings: RenderSettings,
+    /// `--width` and `--height`.
+    pub width: u32,
+    /// Height, or from the camera's aspect ratio.
+    pub height: Option<u32>,
+    /// Exposure in stops.
+    pub exposure: f32,
+    /// The reference image for the relMSE plot, when there is one.
+    pub reference: Option<RgbImage>,
+    /// The scripted screenshot (`--frames`, `--screenshot`).
+    pub screenshot: Option<ScreenshotScript>,
+}
+
+/// A loaded scene and the interactive state that belongs to it.
+pub struct LoadedScene {
+    /// The scene as loaded (its camera is the controller's starting point).
+    pub scene: Arc<Scene>,
+    /// Serial number of this load: every opened scene is a new one.
+    pub serial: u64,
+    /// The interactive camera.
+    pub controller: CameraController,
+    /// Full or preview resolution.
+    pub resolution: ResolutionSwitch,
+}
+
+/// The image on screen and the snapshot it shows.
+pub struct Shown {
+    /// The tone-mapped snapshot as a texture.
+    pub texture: egui::TextureHandle,
+    /// The snapshot shown.
+    pub snapshot: Snapshot,
+    /// The exposure the texture was tone mapped with.
+    pub exposure: f32,
+}
+
+/// The viewer.
+pub struct ViewerApp {
+    /// The render worker.
+    pub renderer: Renderer,
+    /// Settings edited by the controls.
+    pub settings: RenderSettings,
+    /// Exposure in stops.
+    pub exposure: f32,
+    /// `--width`, `--height`.
+    pub size_option: (u32, Option<u32>),
+    /// The reference's size, if any.
+    pub reference_size: Option<(usize, usize)>,
+    /// A scene being loaded.
+    pub loading: Option<SceneLoad>,
+    /// The scene being rendered.
+    pub scene: Option<LoadedScene>,
+    /// Counts the scenes loaded (for [`LoadedScene::serial`]).
+    pub scenes_loaded: u64,
+    /// Restarts the accumulation when the view changes.
+    pub session: Session,
+    /// The image on screen.
+    pub shown: Option<Shown>,
+    /// relMSE over time of the current render.
+    pub history: ErrorHistory,
+    /// The last error (failed load, render or save), shown until the next success.
+    pub error: Option<String>,
+    /// The last thing saved, shown as a note.
+    pub note: Option<String>,
+    /// Where the image was drawn last frame (points), for the screenshot's report.
+    pub image_rect: Option<egui::Rect>,
+    /// The scripted screenshot, if any.
+    pub screenshot: Option<ScreenshotScript>,
+    /// The graphics adapter that draws the window, e.g. `llvmpipe (Vulkan)`.
+    pub adapter: Option<String>,
+}
+
+impl ViewerApp {
+    /// The app, with the render worker started and the first scene loading.
+    pub fn new(
+        creation: &eframe::CreationContext<'_>,
+        startup: Startup,
+    ) -> std::io::Result<ViewerApp> {
+        let ctx = &creation.egui_ctx;
+        let adapter = creation.wgpu_render_state.as_ref().map(|state| {
+            let info = state.adapter.get_info();
+            format!("{} ({:?})", info.name, info.backend)
+        });
+        let reference_size = startup.reference.as_ref().map(|r| (r.width, r.height));
+        let waker = ctx.clone();
+        let renderer = Renderer::spawn(startup.reference, move || waker.request_repaint())?;
+        let mut app = ViewerApp {
+            renderer,
+            settings: startup.settings,
+            exposure: startup.exposure,
+            size_option: (startup.width, startup.height),
+            reference_size,
+            loading: None,
+            scene: None,
+            scenes_loaded: 0,
+            session: Session::default(),
+            shown: None,
+            history: ErrorHistory::default(),
+            error: None,
+            note: None,
+            image_rect: None,
+            screenshot: startup.screenshot,
+            adapter,
+        };
+        app.open(ctx, &startup.scene);
+        Ok(app)
+    }
+
+    /// Starts loading `path`; the current scene keeps rendering until it has loaded.
+    pub fn open(&mut self, ctx: &egui::Context, path: &Path) {
+        let waker = ctx.clone();
+        self.loading = Some(SceneLoad::start(path, move || waker.request_repaint()));
+    }
+
+    /// Takes a finished load: a new scene replaces the current one, an error is shown.
+    fn poll_load(&mut self) {
+        let Some(result) = self.loading.as_ref().and_then(SceneLoad::poll) else {
+            return;
+        };
+        self.loading = None;
+        match result {
+            Ok(scene) => {
+                let (width, height) = self.size_option;
+                let full = image_size(&scene, width, height);
+                self.scenes_loaded += 1;
+                self.scene = Some(LoadedScene {
+                    controller: CameraController::new(scene.camera, &scene.features.bounds),
+                    resolution: ResolutionSwitch::new(full),
+                    serial: self.scenes_loaded,
+                    scene,
+                });
+                self.error = None;
+            }
+            Err(message) => {
+                if let Some(script) = &mut self.screenshot {
+                    script.fail(message.clone());
+                }
+                self.error = Some(message);
+            }
+        }
+    }
+
+    /// Takes the worker's latest update.
+    fn poll_renderer(&mut self, ctx: &egui::Context) {
+        match self.renderer.take_update() {
+            Some(Update::Frames(snapshot)) => {
+                self.history.record(&snapshot);
+                self.show(ctx, snapshot);
+            }
+            Some(Update::Failed {
+                generation,
+                message,
+            }) if generation == self.session.generation() => {
+                if let Some(script) = &mut self.screenshot {
+                    script.fail(message.clone());
+                }
+                self.error = Some(message);
+            }
+            Some(Update::Failed { .. }) | None => {}
+        }
+    }
+
+    /// Puts `snapshot` on screen.
+    fn show(&mut self, ctx: &egui::Context, snapshot: Snapshot) {
+        let image = tone_map(snapshot.size, &snapshot.mean, self.exposure);
+        let options = egui::TextureOptions::LINEAR;
+        match &mut self.shown {
+            Some(shown) => {
+                shown.texture.set(image, options);
+                shown.snapshot = snapshot;
+                shown.exposure = self.exposure;
+            }
+            None => {
+                self.shown = Some(Shown {
+                    texture: ctx.load_texture("render", image, options),
+                    snapshot,
+                    exposure: self.exposure,
+                });
+            }
+        }
+    }
+
+    /// Tone maps the shown image again when the exposure changed.
+    fn refresh_exposure(&mut self) {
+        if let Some(shown) = &mut self.shown
+            && shown.exposure != self.exposure
+        {
+            let snapshot = &shown.snapshot;
+            let image = tone_map(snapshot.size, &snapshot.mean, self.exposure);
+            shown.texture.set(image, egui::TextureOptions::LINEAR);
+            shown.exposure = self.exposure;
+        }
+    }
+
+    /// Starts a new render when settings, camera or resolution changed.
+    fn submit_view(&mut self, now: Instant) {
+        let Some(loaded) = &self.scene else { return };
+        let view = View {
+            scene: loaded.serial,
+            settings: self.settings.clone(),
+            camera: loaded.controller.camera(),
+            size: loaded.resolution.size(now),
+        };
+        if let Some(generation) = self.session.restart_if_changed(&view) {
+            self.error = None;
+            self.renderer.submit(Job {
+                generation,
+                scene: Arc::clone(&loaded.scene),
+                view,
+                frame_limit: self.screenshot.as_ref().map(ScreenshotScript::frames),
+            });
+        }
+    }
+
+    /// Whether the shown image is the current render at full resolution.
+    pub fn shows_current_full_render(&self) -> Option<&Snapshot> {
+        let shown = self.shown.as_ref()?;
+        let loaded = self.scene.as_ref()?;
+        let current = shown.snapshot.generation == self.session.generation()
+            && shown.snapshot.size == loaded.resolution.full();
+        current.then_some(&shown.snapshot)
+    }
+
+    /// Opens the first file dropped on the window.
+    fn take_dropped_file(&mut self, ctx: &egui::Context) {
+        let dropped = ctx.input(|i| i.raw.dropped_files.first().map(|f| f.path().to_path_buf()));
+        if let Some(path) = dropped {
+            self.open(ctx, &path);
+        }
+    }
+}
+
+impl eframe::App for ViewerApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        let now = Instant::now();
+        self.poll_load();
+        self.poll_renderer(&ctx);
+        self.take_dropped_file(&ctx);
+        crate::panels::controls(self, ui);
+        crate::viewport::show(self, ui, now);
+        self.refresh_exposure();
+        self.submit_view(now);
+        if let Some(wait) = self
+            .scene
+            .as_ref()
+            .and_then(|s| s.resolution.settles_in(now))
+        {
+            ctx.request_repaint_after(wait);
+        }
+        crate::screenshot::step(self, &ctx);
+    }
+}

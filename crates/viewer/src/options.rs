@@ -1,0 +1,122 @@
+//! The command line of `vcm-viewer`.
+
+use std::path::PathBuf;
+
+use clap::Parser;
+use vcm_rs::Backend;
+use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+
+use crate::settings::RenderSettings;
+
+/// vcm-viewer: watch a scene converge, move the camera, switch algorithms.
+#[derive(Debug, Parser)]
+#[command(name = "vcm-viewer", version, about)]
+pub struct Options {
+    /// The scene file (.gltf, .glb or .obj).
+    #[arg(default_value = "scenes/cornell-box.gltf")]
+    pub scene: PathBuf,
+    /// The light transport algorithm to start with.
+    #[arg(long, value_enum, default_value_t = Algorithm::Pt)]
+    pub algo: Algorithm,
+    /// Ray traversal backend.
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    pub backend: Backend,
+    /// Frames (one sample per pixel each) rendered between two updates of the image.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub samples_per_frame: u32,
+    /// Image width in pixels at full resolution.
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub width: u32,
+    /// Image height in pixels (default: from the camera's aspect ratio, else square).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub height: Option<u32>,
+    #[command(flatten)]
+    pub integrator: IntegratorOptions,
+    /// Exposure in stops (the image is scaled by 2^exposure before tone mapping).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// Reference EXR (same size as the render): plots relMSE against time while rendering.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// With --screenshot: render this many frames at full resolution, save the screenshot and
+    /// quit.
+    #[arg(long, requires = "screenshot", value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: Option<u32>,
+    /// Save a PNG of the window once --frames frames are rendered, then quit (for tests and
+    /// documentation).
+    #[arg(long, requires = "frames")]
+    pub screenshot: Option<PathBuf>,
+}
+
+impl Options {
+    /// The render settings the viewer starts with.
+    pub fn settings(&self) -> RenderSettings {
+        RenderSettings {
+            algorithm: self.algo,
+            backend: self.backend,
+            integrator: self.integrator.clone(),
+            samples_per_frame: self.samples_per_frame,
+        }
+    }
+
+    /// The scripted screenshot: (frames, file), when asked for.
+    pub fn screenshot(&self) -> Option<(u32, PathBuf)> {
+        Some((self.frames?, self.screenshot.clone()?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<Options, clap::Error> {
+        Options::try_parse_from(std::iter::once("vcm-viewer").chain(args.iter().copied()))
+    }
+
+    #[test]
+    fn defaults_render_the_cornell_box_with_the_path_tracer() {
+        let options = parse(&[]).unwrap();
+        assert_eq!(options.scene, PathBuf::from("scenes/cornell-box.gltf"));
+        assert_eq!(options.settings().algorithm, Algorithm::Pt);
+        assert_eq!(options.settings().samples_per_frame, 1);
+        assert_eq!(options.screenshot(), None);
+    }
+
+    #[test]
+    fn integrator_options_are_those_of_vcm_render() {
+        let options = parse(&[
+            "s.obj",
+            "--algo",
+            "vcm",
+            "--max-depth",
+            "5",
+            "--radius",
+            "0.01",
+        ])
+        .unwrap();
+        let settings = options.settings();
+        assert_eq!(settings.algorithm, Algorithm::Vcm);
+        assert_eq!(settings.integrator.max_depth, Some(5));
+        assert_eq!(settings.integrator.radius, 0.01);
+        assert_eq!(options.exposure, 0.0);
+        assert_eq!(parse(&["--exposure", "-1.5"]).unwrap().exposure, -1.5);
+    }
+
+    #[test]
+    fn bad_options_are_clear_errors() {
+        for (args, says) in [
+            (&["--bogus"][..], "--bogus"),
+            (&["--algo", "mlt"], "mlt"),
+            (&["--backend", "tpu"], "tpu"),
+            (&["--width", "0"], "0"),
+            (&["--samples-per-frame", "0"], "0"),
+            (&["--frames", "4"], "--screenshot"),
+            (&["--screenshot", "a.png"], "--frames"),
+        ] {
+            let error = parse(args).unwrap_err().to_string();
+            assert!(error.contains(says), "{args:?}: {error}");
+        }
+        let both = parse(&["--frames", "4", "--screenshot", "a.png"]).unwrap();
+        assert_eq!(both.screenshot(), Some((4, PathBuf::from("a.png"))));
+    }
+}

@@ -1,0 +1,236 @@
+//! The control panel: scene, render settings, exposure, saving, live statistics and the
+//! relMSE plot. Widgets edit [`ViewerApp::settings`] directly; the session notices the change
+//! and restarts the accumulation.
+
+use eframe::egui;
+use egui_plot::{Line, Plot, PlotPoints};
+use vcm_rs::Backend;
+use vcm_rs::integrators::Algorithm;
+
+use crate::app::ViewerApp;
+use crate::camera_controller::CameraController;
+use crate::settings::{ALGORITHMS, RenderSettings};
+use crate::stats::LiveStats;
+
+/// Longest path offered by the max depth control (segments).
+const MAX_DEPTH_LIMIT: u32 = 64;
+
+/// Draws the control panel on the left of the window.
+pub fn controls(app: &mut ViewerApp, ui: &mut egui::Ui) {
+    egui::Panel::left("controls")
+        .resizable(false)
+        .default_size(290.0)
+        .show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                scene_section(app, ui);
+                ui.separator();
+                render_section(&mut app.settings, ui);
+                ui.separator();
+                image_section(app, ui);
+                ui.separator();
+                stats_section(app, ui);
+                if app.reference_size.is_some() {
+                    ui.separator();
+                    error_plot(app, ui);
+                }
+                messages(app, ui);
+            });
+        });
+}
+
+fn scene_section(app: &mut ViewerApp, ui: &mut egui::Ui) {
+    ui.heading("Scene");
+    if let Some(loading) = &app.loading {
+        ui.label(format!("loading {} …", loading.path().display()));
+    } else if let Some(loaded) = &app.scene {
+        ui.label(loaded.scene.path.display().to_string());
+    }
+    ui.horizontal(|ui| {
+        if ui.button("Open…").clicked() {
+            let picked = rfd::FileDialog::new()
+                .add_filter("scenes", &["gltf", "glb", "obj"])
+                .pick_file();
+            if let Some(path) = picked {
+                app.open(ui.ctx(), &path);
+            }
+        }
+        if let Some(loaded) = &mut app.scene
+            && ui.button("Reset camera").clicked()
+        {
+            let scene = &loaded.scene;
+            loaded.controller = CameraController::new(scene.camera, &scene.features.bounds);
+        }
+    });
+    ui.small("or drop a .gltf, .glb or .obj file on the window");
+    if let Some(loaded) = &app.scene
+        && !loaded.scene.warnings.is_empty()
+    {
+        ui.collapsing(format!("{} warnings", loaded.scene.warnings.len()), |ui| {
+            for warning in &loaded.scene.warnings {
+                ui.small(warning);
+            }
+        });
+    }
+}
+
+fn render_section(settings: &mut RenderSettings, ui: &mut egui::Ui) {
+    ui.heading("Render");
+    egui::Grid::new("render settings")
+        .num_columns(2)
+        .show(ui, |ui| {
+            ui.label("Algorithm");
+            egui::ComboBox::from_id_salt("algorithm")
+                .selected_text(settings.algorithm.name())
+                .show_ui(ui, |ui| {
+                    for algorithm in ALGORITHMS {
+                        ui.selectable_value(&mut settings.algorithm, algorithm, algorithm.name());
+                    }
+                });
+            ui.end_row();
+
+            ui.label("Backend");
+            egui::ComboBox::from_id_salt("backend")
+                .selected_text(settings.backend.name())
+                .show_ui(ui, |ui| {
+                    for &backend in Backend::ALL {
+                        ui.selectable_value(&mut settings.backend, backend, backend.name());
+                    }
+                });
+            ui.end_row();
+
+            ui.label("Max depth");
+            ui.horizontal(|ui| {
+                let options = &mut settings.integrator;
+                let mut limited = options.max_depth.is_some();
+                ui.checkbox(&mut limited, "limit");
+                let mut depth = options.max_depth.unwrap_or(8);
+                ui.add_enabled(
+                    limited,
+                    egui::DragValue::new(&mut depth).range(1..=MAX_DEPTH_LIMIT),
+                );
+                options.max_depth = limited.then_some(depth);
+            });
+            ui.end_row();
+
+            ui.label("Merge radius");
+            let merges = matches!(
+                settings.algorithm,
+                Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm
+            );
+            ui.add_enabled(
+                merges,
+                egui::Slider::new(&mut settings.integrator.radius, 1e-4..=0.1)
+                    .logarithmic(true)
+                    .text("× scene radius"),
+            );
+            ui.end_row();
+
+            ui.label("Samples/frame");
+            ui.add(egui::Slider::new(&mut settings.samples_per_frame, 1..=64));
+            ui.end_row();
+        });
+}
+
+fn image_section(app: &mut ViewerApp, ui: &mut egui::Ui) {
+    ui.heading("Image");
+    ui.add(egui::Slider::new(&mut app.exposure, -10.0..=10.0).text("exposure (stops)"));
+    let save = ui.add_enabled(app.shown.is_some(), egui::Button::new("Save EXR + PNG…"));
+    if save.clicked() {
+        let picked = rfd::FileDialog::new()
+            .add_filter("OpenEXR", &["exr"])
+            .set_file_name("render.exr")
+            .save_file();
+        if let (Some(path), Some(shown)) = (picked, &app.shown) {
+            let snapshot = &shown.snapshot;
+            match crate::image_out::save(&path, snapshot.size, &snapshot.mean, app.exposure) {
+                Ok([exr, png]) => {
+                    app.note = Some(format!("saved {} and {}", exr.display(), png.display()));
+                }
+                Err(e) => app.error = Some(e.to_string()),
+            }
+        }
+    }
+}
+
+fn stats_section(app: &ViewerApp, ui: &mut egui::Ui) {
+    ui.heading("Statistics");
+    if let Some(adapter) = &app.adapter {
+        ui.small(format!("window drawn by {adapter}"));
+    }
+    let Some(shown) = &app.shown else {
+        ui.label(if app.scene.is_some() || app.loading.is_some() {
+            "waiting for the first frame …"
+        } else {
+            "no render"
+        });
+        return;
+    };
+    let snapshot = &shown.snapshot;
+    let stats = LiveStats::of(snapshot);
+    egui::Grid::new("statistics").num_columns(2).show(ui, |ui| {
+        let mut row = |name: &str, value: String| {
+            ui.label(name);
+            ui.label(value);
+            ui.end_row();
+        };
+        row(
+            "resolution",
+            format!("{} × {}", snapshot.size.0, snapshot.size.1),
+        );
+        row("samples/pixel", stats.spp.to_string());
+        row("frames/s", format!("{:.2}", stats.frames_per_second));
+        row("rays/s", format!("{:.2} M", stats.rays_per_second / 1e6));
+        row("elapsed", format!("{:.1} s", stats.elapsed.as_secs_f64()));
+        row("dropped samples", stats.dropped.to_string());
+        if let Some(relmse) = snapshot.relmse {
+            row("relMSE", format!("{relmse:.3e}"));
+        }
+    });
+}
+
+/// relMSE against render time on log-log axes (egui_plot has linear axes: the plot shows
+/// log₁₀ of both and labels each tick with the value it stands for).
+fn error_plot(app: &ViewerApp, ui: &mut egui::Ui) {
+    ui.heading("relMSE over time");
+    if let (Some((w, h)), Some(loaded)) = (app.reference_size, &app.scene) {
+        let (width, height) = loaded.resolution.full();
+        if (w, h) != (width as usize, height as usize) {
+            ui.colored_label(
+                ui.visuals().warn_fg_color,
+                format!("the reference is {w} × {h}, the render {width} × {height}: no relMSE"),
+            );
+            return;
+        }
+    }
+    let points: PlotPoints = app
+        .history
+        .points()
+        .iter()
+        .filter(|(seconds, relmse)| *seconds > 0.0 && *relmse > 0.0)
+        .map(|&(seconds, relmse)| [seconds.log10(), relmse.log10()])
+        .collect();
+    let power_of_ten = |mark: egui_plot::GridMark, _: &std::ops::RangeInclusive<f64>| {
+        format!("{:.0e}", 10f64.powf(mark.value))
+    };
+    Plot::new("relmse")
+        .height(200.0)
+        .x_axis_label("seconds")
+        .y_axis_label("relMSE")
+        .x_axis_formatter(power_of_ten)
+        .y_axis_formatter(power_of_ten)
+        .allow_drag(false)
+        .allow_zoom(false)
+        .allow_scroll(false)
+        .show(ui, |plot| plot.line(Line::new("relMSE", points)));
+}
+
+fn messages(app: &ViewerApp, ui: &mut egui::Ui) {
+    if let Some(error) = &app.error {
+        ui.separator();
+        ui.colored_label(ui.visuals().error_fg_color, error);
+    }
+    if let Some(note) = &app.note {
+        ui.separator();
+        ui.label(note);
+    }
+}

@@ -1,0 +1,451 @@
+//! The render worker: a thread that renders the current [`Job`] frame after frame into a film
+//! and publishes the running mean, so the UI thread never waits for a frame. A new job
+//! replaces the current one between two frames: the accumulation restarts.
+
+use std::sync::mpsc::{Receiver, Sender, TryRecvError};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use vcm::image_io::RgbImage;
+use vcm::{Film, FrameStats, Integrator};
+use vcm_rs::Backend;
+use vcm_rs::integrators;
+use vcm_scene::Scene;
+use vcm_traversal::Traversal;
+
+use crate::session::View;
+
+/// A render to run until it is replaced.
+pub struct Job {
+    /// The session's generation of this render (see [`crate::session::Session`]).
+    pub generation: u64,
+    /// The scene as loaded; the view's camera replaces its camera.
+    pub scene: Arc<Scene>,
+    /// Settings, camera and image size.
+    pub view: View,
+    /// Stop after this many frames (samples per pixel); `None`: render until replaced.
+    pub frame_limit: Option<u32>,
+}
+
+/// The state of a render after some frames.
+#[derive(Clone, Debug)]
+pub struct Snapshot {
+    /// The job's generation.
+    pub generation: u64,
+    /// Image (width, height) in pixels.
+    pub size: (u32, u32),
+    /// Mean radiance per pixel (W·sr⁻¹·m⁻², RGB), row by row from the top left.
+    pub mean: Vec<Vec3>,
+    /// Frames rendered: samples per pixel.
+    pub spp: u32,
+    /// Time spent rendering frames since the job started.
+    pub elapsed: Duration,
+    /// Rays and times summed over the frames.
+    pub totals: FrameStats,
+    /// Non-finite samples dropped.
+    pub dropped: u64,
+    /// relMSE of the mean against the reference, when there is one of this size.
+    pub relmse: Option<f64>,
+}
+
+/// What the worker reports.
+#[derive(Clone, Debug)]
+pub enum Update {
+    /// New frames of a render.
+    Frames(Snapshot),
+    /// A render could not start (the BVH or the integrator could not be built).
+    Failed {
+        /// The job's generation.
+        generation: u64,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+/// The handle of the render worker thread; dropping it stops the thread after its frame.
+pub struct Renderer {
+    jobs: Option<Sender<Job>>,
+    latest: Arc<Mutex<Option<Update>>>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Renderer {
+    /// Starts the worker. It measures relMSE against `reference` when a render has its size,
+    /// and calls `notify` after every update (to wake the UI).
+    pub fn spawn(
+        reference: Option<RgbImage>,
+        notify: impl Fn() + Send + 'static,
+    ) -> std::io::Result<Renderer> {
+        let (jobs, inbox) = std::sync::mpsc::channel();
+        let latest = Arc::new(Mutex::new(None));
+        let worker = Worker {
+            latest: Arc::clone(&latest),
+            notify: Box::new(notify),
+            reference,
+            traversal: None,
+        };
+        let thread = std::thread::Builder::new()
+            .name("render worker".into())
+            .spawn(move || worker.run(&inbox))?;
+        Ok(Renderer {
+            jobs: Some(jobs),
+            latest,
+            thread: Some(thread),
+        })
+    }
+
+    /// Replaces the current render with `job` (after the frame in progress).
+    pub fn submit(&self, job: Job) {
+        if let Some(jobs) = &self.jobs {
+            // Sending fails only when the worker has ended, which it does only when dropped.
+            let _ = jobs.send(job);
+        }
+    }
+
+    /// The latest update since the last call, if any.
+    pub fn take_update(&self) -> Option<Update> {
+        self.latest
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .take()
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        self.jobs = None;
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+/// The scene's BVH, kept while jobs render the same scene on the same backend.
+struct CachedTraversal {
+    scene: Arc<Scene>,
+    backend: Backend,
+    traversal: Arc<dyn Traversal>,
+}
+
+/// The worker thread's state.
+struct Worker {
+    latest: Arc<Mutex<Option<Update>>>,
+    notify: Box<dyn Fn() + Send>,
+    reference: Option<RgbImage>,
+    traversal: Option<CachedTraversal>,
+}
+
+/// Why a render stopped.
+enum Next {
+    /// A new job replaced it.
+    Job(Job),
+    /// The renderer was dropped.
+    Quit,
+}
+
+impl Worker {
+    fn run(mut self, inbox: &Receiver<Job>) {
+        let mut next = wait_for_job(inbox);
+        while let Next::Job(job) = next {
+            next = match self.start(&job) {
+                Ok(integrator) => self.render(&job, integrator, inbox),
+                Err(message) => {
+                    self.publish(Update::Failed {
+                        generation: job.generation,
+                        message,
+                    });
+                    wait_for_job(inbox)
+                }
+            };
+        }
+    }
+
+    /// Builds (or reuses) the BVH and the integrator of `job`.
+    fn start(&mut self, job: &Job) -> Result<Box<dyn Integrator>, String> {
+        let settings = &job.view.settings;
+        let traversal = self.traversal(&job.scene, settings.backend)?;
+        let scene = if job.scene.camera == job.view.camera {
+            Arc::clone(&job.scene)
+        } else {
+            Arc::new(Scene {
+                camera: job.view.camera,
+                ..Scene::clone(&job.scene)
+            })
+        };
+        integrators::build(
+            settings.algorithm,
+            &scene,
+            traversal,
+            job.view.size,
+            &settings.integrator,
+        )
+        .map_err(|e| format!("cannot start {}: {e}", settings.algorithm.name()))
+    }
+
+    fn traversal(
+        &mut self,
+        scene: &Arc<Scene>,
+        backend: Backend,
+    ) -> Result<Arc<dyn Traversal>, String> {
+        if let Some(cached) = &self.traversal
+            && Arc::ptr_eq(&cached.scene, scene)
+            && cached.backend == backend
+        {
+            return Ok(Arc::clone(&cached.traversal));
+        }
+        self.traversal = None;
+        let traversal = backend.traversal(scene).map_err(|e| {
+            format!(
+                "{}: cannot build the {} BVH: {e}",
+                scene.path.display(),
+                backend.name()
+            )
+        })?;
+        self.traversal = Some(CachedTraversal {
+            scene: Arc::clone(scene),
+            backend,
+            traversal: Arc::clone(&traversal),
+        });
+        Ok(traversal)
+    }
+
+    /// Renders frames of `job` until another job arrives, the renderer is dropped or the
+    /// frame limit is reached (then it waits for the next job).
+    fn render(
+        &self,
+        job: &Job,
+        mut integrator: Box<dyn Integrator>,
+        inbox: &Receiver<Job>,
+    ) -> Next {
+        let (width, height) = job.view.size;
+        let mut film = Film::new(width, height);
+        let mut totals = FrameStats::default();
+        let mut elapsed = Duration::ZERO;
+        let per_update = job.view.settings.samples_per_frame.max(1);
+        let mut spp = 0;
+        loop {
+            match inbox.try_recv() {
+                Ok(newer) => return latest_job(newer, inbox),
+                Err(TryRecvError::Disconnected) => return Next::Quit,
+                Err(TryRecvError::Empty) => {}
+            }
+            if job.frame_limit.is_some_and(|limit| spp >= limit) {
+                return wait_for_job(inbox);
+            }
+            let start = Instant::now();
+            totals.accumulate(&integrator.render_frame(&mut film, spp));
+            elapsed += start.elapsed();
+            spp += 1;
+            if spp % per_update == 0 || job.frame_limit == Some(spp) {
+                let mean = film.mean();
+                let relmse = self.relmse(job.view.size, &mean);
+                self.publish(Update::Frames(Snapshot {
+                    generation: job.generation,
+                    size: job.view.size,
+                    mean,
+                    spp,
+                    elapsed,
+                    totals,
+                    dropped: film.dropped(),
+                    relmse,
+                }));
+            }
+        }
+    }
+
+    /// relMSE of `mean` against the reference, if there is one of the same size.
+    fn relmse(&self, (width, height): (u32, u32), mean: &[Vec3]) -> Option<f64> {
+        let reference = self.reference.as_ref()?;
+        let same_size = (reference.width, reference.height) == (width as usize, height as usize);
+        if !same_size {
+            return None;
+        }
+        vcm::metrics::compare(mean, &reference.pixels).map(|m| m.relmse)
+    }
+
+    fn publish(&self, update: Update) {
+        *self.latest.lock().unwrap_or_else(PoisonError::into_inner) = Some(update);
+        (self.notify)();
+    }
+}
+
+/// Blocks until a job arrives (the latest one, if several are queued).
+fn wait_for_job(inbox: &Receiver<Job>) -> Next {
+    match inbox.recv() {
+        Ok(job) => latest_job(job, inbox),
+        Err(_) => Next::Quit,
+    }
+}
+
+/// `job`, or the newest job queued behind it: older ones are outdated.
+fn latest_job(mut job: Job, inbox: &Receiver<Job>) -> Next {
+    loop {
+        match inbox.try_recv() {
+            Ok(newer) => job = newer,
+            Err(TryRecvError::Empty) => return Next::Job(job),
+            Err(TryRecvError::Disconnected) => return Next::Quit,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+    use std::sync::mpsc;
+
+    use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+
+    use crate::settings::RenderSettings;
+
+    fn cornell_box() -> Arc<Scene> {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.gltf");
+        Arc::new(Scene::load(path).unwrap())
+    }
+
+    fn settings(algorithm: Algorithm) -> RenderSettings {
+        RenderSettings {
+            algorithm,
+            backend: Backend::Cpu,
+            integrator: IntegratorOptions {
+                seed: 3,
+                max_depth: Some(6),
+                connections: 1,
+                radius: 0.01,
+                alpha: 0.75,
+            },
+            samples_per_frame: 2,
+        }
+    }
+
+    fn job(generation: u64, scene: &Arc<Scene>, size: (u32, u32), limit: Option<u32>) -> Job {
+        Job {
+            generation,
+            scene: Arc::clone(scene),
+            view: View {
+                scene: 1,
+                settings: settings(Algorithm::Vcm),
+                camera: scene.camera,
+                size,
+            },
+            frame_limit: limit,
+        }
+    }
+
+    /// A renderer whose updates also arrive on a channel.
+    fn spawn(reference: Option<RgbImage>) -> (Renderer, mpsc::Receiver<()>) {
+        let (sender, woken) = mpsc::channel();
+        let renderer = Renderer::spawn(reference, move || {
+            let _ = sender.send(());
+        })
+        .unwrap();
+        (renderer, woken)
+    }
+
+    /// Waits (up to a minute) for an update that `accept` takes.
+    fn wait_for<T>(
+        renderer: &Renderer,
+        woken: &mpsc::Receiver<()>,
+        mut accept: impl FnMut(Update) -> Option<T>,
+    ) -> T {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+            let _ = woken.recv_timeout(left);
+            if let Some(found) = renderer.take_update().and_then(&mut accept) {
+                return found;
+            }
+        }
+        panic!("no such update within a minute");
+    }
+
+    fn frames(update: Update, generation: u64, spp: u32) -> Option<Snapshot> {
+        match update {
+            Update::Frames(s) if s.generation == generation && s.spp >= spp => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The mean of `frames` frames rendered directly by the integrator.
+    fn direct_render(scene: &Arc<Scene>, size: (u32, u32), frames: u32) -> Vec<Vec3> {
+        let settings = settings(Algorithm::Vcm);
+        let traversal = Backend::Cpu.traversal(scene).unwrap();
+        let mut integrator =
+            integrators::build(Algorithm::Vcm, scene, traversal, size, &settings.integrator)
+                .unwrap();
+        let mut film = Film::new(size.0, size.1);
+        for iteration in 0..frames {
+            integrator.render_frame(&mut film, iteration);
+        }
+        film.mean()
+    }
+
+    #[test]
+    fn the_worker_renders_what_the_integrator_renders() {
+        let scene = cornell_box();
+        let (renderer, woken) = spawn(None);
+        renderer.submit(job(1, &scene, (24, 16), Some(4)));
+        let snapshot = wait_for(&renderer, &woken, |u| frames(u, 1, 4));
+        assert_eq!(snapshot.size, (24, 16));
+        assert_eq!(snapshot.mean, direct_render(&scene, (24, 16), 4));
+        assert!(snapshot.totals.camera_rays == 4 * 24 * 16);
+        assert_eq!(snapshot.relmse, None, "no reference");
+    }
+
+    #[test]
+    fn a_new_job_replaces_the_running_one() {
+        let scene = cornell_box();
+        let (renderer, woken) = spawn(None);
+        renderer.submit(job(1, &scene, (32, 32), None));
+        wait_for(&renderer, &woken, |u| frames(u, 1, 2));
+        let mut moved = job(2, &scene, (8, 8), Some(2));
+        moved.view.camera.position.y += 0.1;
+        renderer.submit(moved);
+        let snapshot = wait_for(&renderer, &woken, |u| frames(u, 2, 2));
+        assert_eq!(snapshot.size, (8, 8));
+        assert_eq!(
+            snapshot.totals.camera_rays,
+            2 * 8 * 8,
+            "accumulation restarted"
+        );
+    }
+
+    #[test]
+    fn a_render_that_cannot_start_is_reported() {
+        let scene = cornell_box();
+        let (renderer, woken) = spawn(None);
+        renderer.submit(job(5, &scene, (0, 4), None));
+        let message = wait_for(&renderer, &woken, |u| match u {
+            Update::Failed {
+                generation: 5,
+                message,
+            } => Some(message),
+            _ => None,
+        });
+        assert!(
+            message.contains("vcm") && message.contains("0×4"),
+            "{message}"
+        );
+        // The worker goes on with the next job.
+        renderer.submit(job(6, &scene, (4, 4), Some(2)));
+        wait_for(&renderer, &woken, |u| frames(u, 6, 2));
+    }
+
+    #[test]
+    fn relmse_is_measured_against_a_reference_of_the_same_size() {
+        let scene = cornell_box();
+        let reference = RgbImage {
+            width: 16,
+            height: 12,
+            pixels: direct_render(&scene, (16, 12), 2),
+        };
+        let (renderer, woken) = spawn(Some(reference));
+        renderer.submit(job(1, &scene, (16, 12), Some(2)));
+        let same = wait_for(&renderer, &woken, |u| frames(u, 1, 2));
+        assert_eq!(same.relmse, Some(0.0), "the same frames give zero error");
+        renderer.submit(job(2, &scene, (12, 16), Some(2)));
+        let other = wait_for(&renderer, &woken, |u| frames(u, 2, 2));
+        assert_eq!(other.relmse, None, "another size has no error");
+    }
+}

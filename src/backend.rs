@@ -1,0 +1,72 @@
+//! The ray traversal backends a render can run on, chosen at run time: the one place where a
+//! backend is named and built, shared by `vcm render`, `vcm convergence` and the viewer.
+
+use std::sync::Arc;
+
+use vcm_scene::Scene;
+use vcm_traversal::{BuildError, Traversal};
+use vcm_traversal_wgpu::GpuError;
+
+/// Ray traversal backends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Backend {
+    /// obvhs 8-wide BVH on rayon threads.
+    Cpu,
+    /// WGSL compute shaders through wgpu: a hardware GPU, else Mesa lavapipe.
+    Gpu,
+}
+
+/// Why a backend could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum BackendError {
+    /// The scene's triangles are invalid.
+    #[error(transparent)]
+    Build(#[from] BuildError),
+    /// No GPU adapter, or the scene does not fit it.
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+/// A built backend with a one-line description of what it runs on.
+pub struct BuiltTraversal {
+    /// The backend.
+    pub traversal: Arc<dyn Traversal>,
+    /// e.g. `cpu (2 threads)`, or `gpu: ` and the adapter's name and driver.
+    pub description: String,
+}
+
+impl Backend {
+    /// Every backend, in the order user interfaces list them.
+    pub const ALL: &'static [Backend] = &[Backend::Cpu, Backend::Gpu];
+
+    /// The lower-case name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Cpu => "cpu",
+            Backend::Gpu => "gpu",
+        }
+    }
+
+    /// Builds this backend's traversal over `scene` (its BVH, once per scene).
+    pub fn traversal(self, scene: &Arc<Scene>) -> Result<Arc<dyn Traversal>, BackendError> {
+        self.build(scene).map(|built| built.traversal)
+    }
+
+    /// Like [`traversal`](Self::traversal), and says what the backend runs on.
+    pub fn build(self, scene: &Arc<Scene>) -> Result<BuiltTraversal, BackendError> {
+        Ok(match self {
+            Backend::Cpu => BuiltTraversal {
+                traversal: Arc::new(crate::cpu_traversal(scene)?),
+                description: format!("cpu ({} threads)", rayon::current_num_threads()),
+            },
+            Backend::Gpu => {
+                let bvh = crate::gpu_traversal(scene)?;
+                let description = format!("gpu: {}", bvh.device().describe());
+                BuiltTraversal {
+                    traversal: Arc::new(bvh),
+                    description,
+                }
+            }
+        })
+    }
+}
