@@ -36,7 +36,13 @@ pub fn trace(bvh: &dyn Traversal, rays: &RayBatch) -> (HitBatch, Vec<bool>) {
     bvh.intersect(rays, &mut hits);
     bvh.occluded(rays, &mut occluded);
     assert_eq!(hits.len(), rays.len());
-    assert_eq!(occluded.len(), rays.len());
+    assert_occlusion_matches_hits(&hits, &occluded);
+    (hits, occluded)
+}
+
+/// Occlusion must report exactly the rays that have a closest hit.
+pub fn assert_occlusion_matches_hits(hits: &HitBatch, occluded: &[bool]) {
+    assert_eq!(hits.len(), occluded.len());
     for (i, &occluded) in occluded.iter().enumerate() {
         assert_eq!(
             occluded,
@@ -44,7 +50,6 @@ pub fn trace(bvh: &dyn Traversal, rays: &RayBatch) -> (HitBatch, Vec<bool>) {
             "ray {i}: occlusion disagrees with closest hit"
         );
     }
-    (hits, occluded)
 }
 
 /// Rays `(origin, direction)` over `[0, ∞)`.

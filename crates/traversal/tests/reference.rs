@@ -63,7 +63,7 @@ fn check_preset(preset: BuildPreset, kernel: CpuKernel, seed: u64) {
     // Occlusion must agree with closest hit on the same rays.
     let mut occluded = Vec::new();
     bvh.occluded(&rays, &mut occluded);
-    common::assert_occlusion_matches_hits(&hits, &occluded);
+    vcm_traversal::contract::assert_occlusion_matches_hits(&hits, &occluded);
 }
 
 /// One test per build preset and kernel, each on its own seed.

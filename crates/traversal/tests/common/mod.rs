@@ -193,18 +193,6 @@ pub fn assert_matches_reference(tris: &[[Vec3; 3]], rays: &RayBatch, hits: &HitB
     ties
 }
 
-/// Occlusion must report exactly the rays that have a closest hit.
-pub fn assert_occlusion_matches_hits(hits: &HitBatch, occluded: &[bool]) {
-    assert_eq!(hits.len(), occluded.len());
-    for (i, &occluded) in occluded.iter().enumerate() {
-        assert_eq!(
-            occluded,
-            hits.is_hit(i),
-            "ray {i}: occlusion disagrees with closest hit"
-        );
-    }
-}
-
 /// The point at barycentrics `(u, v)` of `tri`, in f64.
 pub fn point_at(tri: &[Vec3; 3], u: f32, v: f32) -> DVec3 {
     let [p0, p1, p2] = tri.map(|p| p.as_dvec3());
