@@ -3,8 +3,9 @@
 //! procedural scene, plus BVH build time and memory.
 //!
 //! Run with `cargo bench --bench traversal`. Rays/s are reported by criterion as element
-//! throughput (`cpu/…` and `gpu/…` in each scene's group); the build statistics and the GPU
-//! adapter are printed before the measurements. Without a GPU adapter only the CPU runs.
+//! throughput (`cpu/…`, `gpu-binary/…` and `gpu-wide/…`, the two GPU node layouts, in each
+//! scene's group); the build statistics and the GPU adapter are printed before the
+//! measurements. Without a GPU adapter only the CPU runs.
 
 mod common;
 
@@ -14,7 +15,7 @@ use common::{Scene, SurfacePoints, cornell_box, million_triangles, primary_rays}
 use criterion::{Criterion, Throughput};
 use vcm_scene::sampling::Rng;
 use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
-use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions};
+use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, NodeLayout};
 
 /// Image resolution of the primary rays (one ray per pixel).
 const RESOLUTION: u32 = 512;
@@ -79,19 +80,28 @@ fn bench_scene(criterion: &mut Criterion, scene: &Scene, build_repeats: usize) {
         started.elapsed().as_secs_f64(),
     );
     let mut backends: Vec<(&str, Box<dyn Traversal>)> = vec![("cpu", Box::new(bvh))];
-    match GpuBvh::open(&scene.triangles, GpuBvhOptions::default()) {
-        Ok(gpu) => {
-            println!(
-                "{}: GPU {} built in {:.3} s, {:.1} bytes/triangle, stack {}",
-                scene.name,
-                gpu.device().describe(),
-                gpu.build_time().as_secs_f64(),
-                gpu.memory_bytes() as f64 / scene.triangles.len() as f64,
-                gpu.stack_size(),
-            );
-            backends.push(("gpu", Box::new(gpu)));
+    for (name, layout) in [
+        ("gpu-binary", NodeLayout::Binary),
+        ("gpu-wide", NodeLayout::Wide),
+    ] {
+        let options = GpuBvhOptions {
+            layout,
+            ..GpuBvhOptions::default()
+        };
+        match GpuBvh::open(&scene.triangles, options) {
+            Ok(gpu) => {
+                println!(
+                    "{}: {name} on {} built in {:.3} s, {:.1} bytes/triangle, stack {}",
+                    scene.name,
+                    gpu.device().describe(),
+                    gpu.build_time().as_secs_f64(),
+                    gpu.memory_bytes() as f64 / scene.triangles.len() as f64,
+                    gpu.stack_size(),
+                );
+                backends.push((name, Box::new(gpu)));
+            }
+            Err(error) => println!("{}: no GPU backend: {error}", scene.name),
         }
-        Err(error) => println!("{}: no GPU backend: {error}", scene.name),
     }
     let mut hits = HitBatch::default();
     let mut occluded = Vec::new();

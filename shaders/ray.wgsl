@@ -112,3 +112,16 @@ fn ray_index(id: vec3<u32>) -> u32 {
     let index = id.x + id.y * params.row_threads;
     return select(params.ray_count, index, index < params.ray_count);
 }
+
+// Tests leaf-order triangle `leaf` against the closest hit so far; `best.prim` is a leaf
+// position until the end of the traversal. At equal t the smaller caller id wins, as on the
+// CPU backend, so the answer does not depend on the traversal order.
+fn closer_hit(leaf: u32, ray: PreparedRay, best: Hit) -> Hit {
+    let h = intersect_triangle(leaf, ray);
+    let closer = h.x < best.t
+        || (h.x == best.t && best.prim != NO_HIT && ids[leaf] < ids[best.prim]);
+    if h.x >= ray.tmin && closer && is_opaque(leaf, h.y, h.z) {
+        return Hit(h.x, leaf, h.y, h.z);
+    }
+    return best;
+}

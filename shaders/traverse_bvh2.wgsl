@@ -20,22 +20,6 @@ struct Node {
 @group(0) @binding(1) var<storage, read_write> hits: array<Hit>;
 @group(0) @binding(3) var<storage, read_write> occluded: array<u32>;
 
-// Intersects the leaf of `count` triangles from leaf position `first`; `best.prim` is a leaf
-// position until the end of the traversal. At equal t the smaller caller id wins, as on the
-// CPU backend.
-fn intersect_leaf(first: u32, count: u32, ray: PreparedRay, best_in: Hit) -> Hit {
-    var best = best_in;
-    for (var i = first; i < first + count; i++) {
-        let h = intersect_triangle(i, ray);
-        let closer = h.x < best.t
-            || (h.x == best.t && best.prim != NO_HIT && ids[i] < ids[best.prim]);
-        if h.x >= ray.tmin && closer && is_opaque(i, h.y, h.z) {
-            best = Hit(h.x, i, h.y, h.z);
-        }
-    }
-    return best;
-}
-
 // Traces `ray`; with `any_hit` it returns the first hit found instead of the closest.
 fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     var best = Hit(ray_in.tmax, NO_HIT, 0.0, 0.0);
@@ -52,11 +36,15 @@ fn trace(ray_in: Ray, any_hit: bool) -> Hit {
         var t_left = box_entry(n.left_min, n.left_max, ray, best.t);
         var t_right = box_entry(n.right_min, n.right_max, ray, best.t);
         if n.left_count > 0u && t_left < MISSED {
-            best = intersect_leaf(n.left_index, n.left_count, ray, best);
+            for (var i = n.left_index; i < n.left_index + n.left_count; i++) {
+                best = closer_hit(i, ray, best);
+            }
             t_left = MISSED;
         }
         if n.right_count > 0u && t_right < MISSED {
-            best = intersect_leaf(n.right_index, n.right_count, ray, best);
+            for (var i = n.right_index; i < n.right_index + n.right_count; i++) {
+                best = closer_hit(i, ray, best);
+            }
             t_right = MISSED;
         }
         if any_hit && best.prim != NO_HIT {

@@ -16,7 +16,7 @@ use wgpu::util::DeviceExt;
 use crate::alpha::AlphaMasks;
 use crate::device::GpuDevice;
 use crate::error::GpuError;
-use crate::layout::SceneLayout;
+use crate::layout::{NodeLayout, SceneLayout};
 use crate::shader::{ANY_HIT_ENTRY, CLOSEST_HIT_ENTRY, traversal_module};
 use crate::slot::{HIT_BYTES, Params, Query, RAY_BYTES, Slot, dispatch_shape};
 
@@ -25,10 +25,12 @@ use crate::slot::{HIT_BYTES, Params, Query, RAY_BYTES, Slot, dispatch_shape};
 pub struct GpuBvhOptions {
     /// Hierarchy build quality (the same presets as the CPU backend).
     pub preset: BuildPreset,
+    /// The node format the kernels traverse.
+    pub layout: NodeLayout,
 }
 
-/// GPU ray traversal: a binary BVH built on the CPU, uploaded once and traversed by WGSL
-/// compute kernels, one invocation per ray.
+/// GPU ray traversal: a BVH built on the CPU, laid out in one of the [`NodeLayout`]s,
+/// uploaded once and traversed by WGSL compute kernels, one invocation per ray.
 ///
 /// Ray and output buffers live in slots that grow to the largest batch submitted and are
 /// reused; batches in flight at the same time (from [`Traversal::submit`] or from several
@@ -78,10 +80,11 @@ impl GpuBvh {
     ) -> Result<Self, GpuError> {
         let start = Instant::now();
         let bvh = build_bvh2(triangles, options.preset)?;
-        let layout = SceneLayout::from_bvh2(&bvh, triangles);
+        let leaf_size = options.preset.params().max_prims_per_leaf;
+        let layout = SceneLayout::new(&bvh, triangles, options.layout, leaf_size);
         let masked = masks.any();
         let device = &gpu.device;
-        let source = traversal_module(layout.stack_size, masked);
+        let source = traversal_module(layout.layout, layout.stack_size, masked);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("traversal"),
             source: wgpu::ShaderSource::Wgsl(source.into()),

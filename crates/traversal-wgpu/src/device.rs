@@ -66,6 +66,15 @@ impl GpuDevice {
         )
     }
 
+    /// Whether the adapter is a CPU implementation such as lavapipe. llvmpipe, lavapipe's
+    /// compiler, stops every loop of a kernel invocation after 65,535 iterations in all
+    /// (`LP_MAX_TGSI_LOOP_ITERATIONS`), so there a ray that needs more node visits and
+    /// triangle tests than that (tens of thousands of coincident triangles) is cut short;
+    /// real scenes need a few hundred at most.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// The largest storage buffer binding the device accepts, in bytes.
     pub fn max_binding_bytes(&self) -> u64 {
         let limits = self.device.limits();

@@ -4,7 +4,21 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use obvhs::bvh2::Bvh2;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 
+/// The node formats the kernels can traverse.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum NodeLayout {
+    /// Binary nodes of 64 bytes holding both children's boxes ([`Bvh2Node`],
+    /// `traverse_bvh2.wgsl`).
+    Binary,
+    /// obvhs's compressed 8-wide nodes of 80 bytes (`traverse_cwbvh.wgsl`), the layout of
+    /// the CPU backend and of Ylitie et al. 2017. The default: on lavapipe it traces 1.8–2.1×
+    /// more rays/s than the binary layout (README, traversal benchmark) in half the memory.
+    #[default]
+    Wide,
+}
 /// A binary BVH node that holds the boxes of both children, so one 64-byte fetch decides
 /// which children a ray enters (Aila and Laine 2009).
 ///
@@ -34,8 +48,10 @@ pub struct Bvh2Node {
 /// Everything the traversal kernels read, ready to upload.
 #[derive(Clone, Debug, Default)]
 pub struct SceneLayout {
-    /// Nodes, root first.
-    pub nodes: Vec<Bvh2Node>,
+    /// The node format.
+    pub layout: NodeLayout,
+    /// Nodes, root first, as 32-bit words.
+    pub nodes: Vec<u32>,
     /// Triangle vertices in leaf order, three `[x, y, z, 0]` entries per triangle.
     pub vertices: Vec<[f32; 4]>,
     /// The caller's id of each leaf-order triangle.
@@ -45,71 +61,53 @@ pub struct SceneLayout {
 }
 
 impl SceneLayout {
-    /// Lays out `bvh` (built over `triangles`) depth first, each node's left subtree right
-    /// after it. A root that is itself a leaf becomes a node whose two children are that leaf.
-    pub fn from_bvh2(bvh: &Bvh2, triangles: &[[Vec3; 3]]) -> Self {
-        let ids = bvh.primitive_indices.clone();
+    /// Lays out `bvh` (built over `triangles`) in `layout`; `leaf_size` bounds the
+    /// triangles per wide leaf (1 to 3).
+    pub fn new(bvh: &Bvh2, triangles: &[[Vec3; 3]], layout: NodeLayout, leaf_size: u32) -> Self {
+        match layout {
+            NodeLayout::Binary => {
+                let (nodes, stack_size) = binary_nodes(bvh);
+                Self::with_leaf_order(
+                    layout,
+                    bytemuck::cast_slice(&nodes).to_vec(),
+                    &bvh.primitive_indices,
+                    triangles,
+                    stack_size,
+                )
+            }
+            NodeLayout::Wide if bvh.nodes.is_empty() => Self::default(),
+            NodeLayout::Wide => {
+                let wide = bvh2_to_cwbvh(bvh, leaf_size.clamp(1, 3), true, false);
+                let stack_size = wide_depth(&wide) + 1;
+                Self::with_leaf_order(
+                    layout,
+                    bytemuck::cast_slice(&wide.nodes).to_vec(),
+                    &wide.primitive_indices,
+                    triangles,
+                    stack_size,
+                )
+            }
+        }
+    }
+
+    fn with_leaf_order(
+        layout: NodeLayout,
+        nodes: Vec<u32>,
+        ids: &[u32],
+        triangles: &[[Vec3; 3]],
+        stack_size: u32,
+    ) -> Self {
         let vertices = ids
             .iter()
             .flat_map(|&id| triangles[id as usize].map(|p| [p.x, p.y, p.z, 0.0]))
             .collect();
-        let mut layout = Self {
-            nodes: Vec::with_capacity(bvh.nodes.len() / 2),
+        Self {
+            layout,
+            nodes,
             vertices,
-            ids,
-            stack_size: 1,
-        };
-        let Some(root) = bvh.nodes.first() else {
-            return layout;
-        };
-        if root.is_leaf() {
-            let (index, count) = (root.first_index, root.prim_count);
-            let (min, max) = (root.aabb.min.into(), root.aabb.max.into());
-            layout.nodes.push(Bvh2Node {
-                left_min: min,
-                left_index: index,
-                left_max: max,
-                right_index: index,
-                right_min: min,
-                left_count: count,
-                right_max: max,
-                right_count: count,
-            });
-            return layout;
+            ids: ids.to_vec(),
+            stack_size,
         }
-        layout.nodes.push(Bvh2Node::default());
-        // (obvhs inner node, its slot in `nodes`, its level)
-        let mut pending = vec![(0usize, 0usize, 1u32)];
-        while let Some((source, slot, level)) = pending.pop() {
-            layout.stack_size = layout.stack_size.max(level);
-            let first = bvh.nodes[source].first_index as usize;
-            let mut child_ref = |child: usize, layout: &mut Self| {
-                let node = &bvh.nodes[child];
-                if node.is_leaf() {
-                    (node.first_index, node.prim_count)
-                } else {
-                    let index = layout.nodes.len();
-                    layout.nodes.push(Bvh2Node::default());
-                    // Push the right subtree first so the left one is laid out next.
-                    pending.push((child, index, level + 1));
-                    (index as u32, 0)
-                }
-            };
-            let (right_index, right_count) = child_ref(first + 1, &mut layout);
-            let (left_index, left_count) = child_ref(first, &mut layout);
-            let (left, right) = (&bvh.nodes[first].aabb, &bvh.nodes[first + 1].aabb);
-            layout.nodes[slot] = Bvh2Node {
-                left_min: left.min.into(),
-                left_index,
-                left_max: left.max.into(),
-                right_index,
-                right_min: right.min.into(),
-                left_count,
-                right_max: right.max.into(),
-                right_count,
-            };
-        }
-        layout
     }
 
     /// Bytes of node, triangle and id data.
@@ -118,6 +116,87 @@ impl SceneLayout {
             + size_of_val(self.vertices.as_slice())
             + size_of_val(self.ids.as_slice())
     }
+}
+
+/// The number of node levels of a wide BVH (1 for a lone root).
+fn wide_depth(bvh: &CwBvh) -> u32 {
+    let mut deepest = 0;
+    let mut pending = vec![(0u32, 1u32)];
+    while let Some((index, level)) = pending.pop() {
+        deepest = deepest.max(level);
+        let node = &bvh.nodes[index as usize];
+        for child in (0..8).filter(|&c| !node.is_leaf(c)) {
+            pending.push((node.child_node_index(child), level + 1));
+        }
+    }
+    deepest
+}
+
+/// Lays out `bvh`'s inner nodes depth first, each node's left subtree right after it, and
+/// returns them with the deepest level. A root that is itself a leaf becomes a node whose
+/// two children are that leaf.
+fn binary_nodes(bvh: &Bvh2) -> (Vec<Bvh2Node>, u32) {
+    let mut layout = BinaryNodes {
+        nodes: Vec::with_capacity(bvh.nodes.len() / 2),
+        stack_size: 1,
+    };
+    let Some(root) = bvh.nodes.first() else {
+        return (layout.nodes, layout.stack_size);
+    };
+    if root.is_leaf() {
+        let (index, count) = (root.first_index, root.prim_count);
+        let (min, max) = (root.aabb.min.into(), root.aabb.max.into());
+        layout.nodes.push(Bvh2Node {
+            left_min: min,
+            left_index: index,
+            left_max: max,
+            right_index: index,
+            right_min: min,
+            left_count: count,
+            right_max: max,
+            right_count: count,
+        });
+        return (layout.nodes, layout.stack_size);
+    }
+    layout.nodes.push(Bvh2Node::default());
+    // (obvhs inner node, its slot in `nodes`, its level)
+    let mut pending = vec![(0usize, 0usize, 1u32)];
+    while let Some((source, slot, level)) = pending.pop() {
+        layout.stack_size = layout.stack_size.max(level);
+        let first = bvh.nodes[source].first_index as usize;
+        let mut child_ref = |child: usize, layout: &mut BinaryNodes| {
+            let node = &bvh.nodes[child];
+            if node.is_leaf() {
+                (node.first_index, node.prim_count)
+            } else {
+                let index = layout.nodes.len();
+                layout.nodes.push(Bvh2Node::default());
+                // Push the right subtree first so the left one is laid out next.
+                pending.push((child, index, level + 1));
+                (index as u32, 0)
+            }
+        };
+        let (right_index, right_count) = child_ref(first + 1, &mut layout);
+        let (left_index, left_count) = child_ref(first, &mut layout);
+        let (left, right) = (&bvh.nodes[first].aabb, &bvh.nodes[first + 1].aabb);
+        layout.nodes[slot] = Bvh2Node {
+            left_min: left.min.into(),
+            left_index,
+            left_max: left.max.into(),
+            right_index,
+            right_min: right.min.into(),
+            left_count,
+            right_max: right.max.into(),
+            right_count,
+        };
+    }
+    (layout.nodes, layout.stack_size)
+}
+
+/// Binary nodes under construction.
+struct BinaryNodes {
+    nodes: Vec<Bvh2Node>,
+    stack_size: u32,
 }
 
 #[cfg(test)]
@@ -141,12 +220,14 @@ mod tests {
         for n in [1, 2, 3, 100, 1000] {
             let triangles = grid_triangles(n);
             let bvh = build_bvh2(&triangles, BuildPreset::Fast).unwrap();
-            let layout = SceneLayout::from_bvh2(&bvh, &triangles);
+            let (nodes, stack_size) = binary_nodes(&bvh);
+            let layout = SceneLayout::new(&bvh, &triangles, NodeLayout::Binary, 1);
+            assert_eq!(bytemuck::cast_slice::<_, u32>(&nodes), layout.nodes);
             let mut seen = vec![0u32; n];
             let mut pending = vec![(0u32, 1u32)];
             while let Some((node, level)) = pending.pop() {
-                assert!(level <= layout.stack_size);
-                let node = layout.nodes[node as usize];
+                assert!(level <= stack_size);
+                let node = nodes[node as usize];
                 let children = [
                     (
                         node.left_index,
@@ -184,7 +265,19 @@ mod tests {
 
     #[test]
     fn empty_scene_has_no_nodes() {
-        let layout = SceneLayout::from_bvh2(&Bvh2::default(), &[]);
-        assert!(layout.nodes.is_empty() && layout.vertices.is_empty());
+        for layout in [NodeLayout::Binary, NodeLayout::Wide] {
+            let layout = SceneLayout::new(&Bvh2::default(), &[], layout, 3);
+            assert!(layout.nodes.is_empty() && layout.vertices.is_empty());
+        }
+    }
+
+    #[test]
+    fn wide_nodes_are_twenty_words() {
+        let triangles = grid_triangles(100);
+        let bvh = build_bvh2(&triangles, BuildPreset::Fast).unwrap();
+        let layout = SceneLayout::new(&bvh, &triangles, NodeLayout::Wide, 3);
+        assert_eq!(layout.nodes.len() % 20, 0);
+        assert_eq!(layout.vertices.len(), 3 * layout.ids.len());
+        assert!(layout.stack_size >= 2);
     }
 }

@@ -18,3 +18,4 @@ pub use alpha::{AlphaMasks, AlphaTexture, MaskedTriangle, Wrap};
 pub use backend::{GpuBvh, GpuBvhOptions};
 pub use device::GpuDevice;
 pub use error::{GpuError, NO_ADAPTER_HELP};
+pub use layout::NodeLayout;

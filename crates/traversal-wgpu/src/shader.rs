@@ -6,6 +6,8 @@
 //! without alpha masks get `alpha_none.wgsl`, so their kernels carry no mask code and bind no
 //! mask buffers; scenes with masks get `alpha_masks.wgsl` (bind group 2).
 
+use crate::layout::NodeLayout;
+
 /// The shared ray and triangle code.
 pub const RAY_WGSL: &str = include_str!("../../../shaders/ray.wgsl");
 /// The alpha test of scenes without masks: always opaque.
@@ -14,6 +16,8 @@ pub const ALPHA_NONE_WGSL: &str = include_str!("../../../shaders/alpha_none.wgsl
 pub const ALPHA_MASKS_WGSL: &str = include_str!("../../../shaders/alpha_masks.wgsl");
 /// Traversal of the binary layout.
 pub const TRAVERSE_BVH2_WGSL: &str = include_str!("../../../shaders/traverse_bvh2.wgsl");
+/// Traversal of the wide layout.
+pub const TRAVERSE_CWBVH_WGSL: &str = include_str!("../../../shaders/traverse_cwbvh.wgsl");
 
 /// Entry point that writes one [`Hit`](vcm_traversal::HitBatch) per ray.
 pub const CLOSEST_HIT_ENTRY: &str = "closest_hit";
@@ -22,16 +26,20 @@ pub const ANY_HIT_ENTRY: &str = "any_hit";
 /// Invocations per workgroup (`WORKGROUP_SIZE` in `ray.wgsl`).
 pub const WORKGROUP_SIZE: u32 = 64;
 
-/// The complete WGSL module for a hierarchy whose traversal needs `stack_size` entries, with
+/// The complete WGSL module for `layout`, whose traversal needs `stack_size` entries, with
 /// or without the alpha-mask test.
-pub fn traversal_module(stack_size: u32, alpha_masks: bool) -> String {
+pub fn traversal_module(layout: NodeLayout, stack_size: u32, alpha_masks: bool) -> String {
     let alpha = if alpha_masks {
         ALPHA_MASKS_WGSL
     } else {
         ALPHA_NONE_WGSL
     };
+    let traverse = match layout {
+        NodeLayout::Binary => TRAVERSE_BVH2_WGSL,
+        NodeLayout::Wide => TRAVERSE_CWBVH_WGSL,
+    };
     format!(
-        "const STACK_SIZE: u32 = {}u;\n{RAY_WGSL}\n{alpha}\n{TRAVERSE_BVH2_WGSL}",
+        "const STACK_SIZE: u32 = {}u;\n{RAY_WGSL}\n{alpha}\n{traverse}",
         stack_size.max(1)
     )
 }
@@ -66,18 +74,22 @@ mod tests {
 
     #[test]
     fn every_shader_validates() {
-        for stack_size in [1, 64] {
-            for alpha_masks in [false, true] {
-                validate(&traversal_module(stack_size, alpha_masks));
+        for layout in [NodeLayout::Binary, NodeLayout::Wide] {
+            for stack_size in [1, 64] {
+                for alpha_masks in [false, true] {
+                    validate(&traversal_module(layout, stack_size, alpha_masks));
+                }
             }
         }
     }
 
     #[test]
     fn opaque_scenes_carry_no_mask_code() {
-        let opaque = traversal_module(8, false);
-        assert!(!opaque.contains("@group(2)") && !opaque.contains("sample_alpha"));
-        assert!(traversal_module(8, true).contains("@group(2)"));
+        for layout in [NodeLayout::Binary, NodeLayout::Wide] {
+            let opaque = traversal_module(layout, 8, false);
+            assert!(!opaque.contains("@group(2)") && !opaque.contains("sample_alpha"));
+            assert!(traversal_module(layout, 8, true).contains("@group(2)"));
+        }
     }
 
     #[test]

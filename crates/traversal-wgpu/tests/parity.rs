@@ -8,7 +8,7 @@ use glam::{Vec2, Vec3};
 use vcm_scene::Scene;
 use vcm_scene::sampling::{Rng, sample_uniform_sphere};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
-use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions};
+use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, NodeLayout};
 
 const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes");
 
@@ -85,7 +85,16 @@ fn every_scene_matches_the_cpu_backend() {
         let scene = Scene::load(&path).unwrap();
         let triangles = scene.triangle_corners();
         let cpu = CpuBvh::new(&triangles, CpuBvhOptions::default()).unwrap();
-        let gpu = GpuBvh::new(device.clone(), &triangles, GpuBvhOptions::default()).unwrap();
+        let gpus = [NodeLayout::Binary, NodeLayout::Wide].map(|layout| {
+            let options = GpuBvhOptions {
+                layout,
+                ..GpuBvhOptions::default()
+            };
+            (
+                layout,
+                GpuBvh::new(device.clone(), &triangles, options).unwrap(),
+            )
+        });
         let bounds = scene.mesh.bounds();
         let mut rng = Rng::new(7, 0);
         let camera = camera_rays(&scene, &mut rng, 192);
@@ -94,24 +103,27 @@ fn every_scene_matches_the_cpu_backend() {
         cpu.intersect(&camera, &mut cpu_hits);
         let [bounces, shadows] =
             secondary_rays(&camera, &cpu_hits, &mut rng, bounds.min, bounds.max);
-        for (kind, rays) in [
-            ("camera", &camera),
-            ("incoherent", &incoherent),
-            ("bounce", &bounces),
-        ] {
-            let (mut a, mut b) = (HitBatch::default(), HitBatch::default());
-            cpu.intersect(rays, &mut a);
-            gpu.intersect(rays, &mut b);
-            assert_parity(&name, kind, &compare(&a, &b), rays.len());
+        for (layout, gpu) in &gpus {
+            let name = format!("{name} ({layout:?})");
+            for (kind, rays) in [
+                ("camera", &camera),
+                ("incoherent", &incoherent),
+                ("bounce", &bounces),
+            ] {
+                let (mut a, mut b) = (HitBatch::default(), HitBatch::default());
+                cpu.intersect(rays, &mut a);
+                gpu.intersect(rays, &mut b);
+                assert_parity(&name, kind, &compare(&a, &b), rays.len());
+            }
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            cpu.occluded(&shadows, &mut a);
+            gpu.occluded(&shadows, &mut b);
+            let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+            eprintln!("{name} shadow: {differ} of {} differ", shadows.len());
+            assert!(
+                differ as f64 <= 1e-4 * shadows.len() as f64,
+                "{name}: {differ} shadow rays differ"
+            );
         }
-        let (mut a, mut b) = (Vec::new(), Vec::new());
-        cpu.occluded(&shadows, &mut a);
-        gpu.occluded(&shadows, &mut b);
-        let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
-        eprintln!("{name} shadow: {differ} of {} differ", shadows.len());
-        assert!(
-            differ as f64 <= 1e-4 * shadows.len() as f64,
-            "{name}: {differ} shadow rays differ"
-        );
     }
 }

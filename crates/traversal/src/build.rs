@@ -38,7 +38,7 @@ pub enum BuildPreset {
 
 impl BuildPreset {
     /// The obvhs parameters of this preset.
-    pub(crate) fn params(self) -> BvhBuildParams {
+    pub fn params(self) -> BvhBuildParams {
         match self {
             Self::Fastest => BvhBuildParams::fastest_build(),
             Self::VeryFast => BvhBuildParams::very_fast_build(),
