@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use vcm::{
     Algorithm as VcmAlgorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer,
-    PtSettings, RenderError, Vcm, VcmSettings,
+    PtSettings, RenderError, Schedule, Scheduler, Vcm, VcmSettings,
 };
 use vcm_scene::Scene;
 use vcm_traversal::Traversal;
@@ -71,6 +71,56 @@ pub struct IntegratorOptions {
     /// Radius reduction exponent: frame i merges within r₀ · i^((α − 1) / 2) (ppm, bpm, vcm).
     #[arg(long, default_value_t = DEFAULT_ALPHA)]
     pub alpha: f32,
+}
+
+/// How paths are grouped into batches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SchedulerKind {
+    /// One batch of all active paths per pass.
+    None,
+    /// Worker threads trace tiles to completion, merging in the next tile when few paths
+    /// are left.
+    Tile,
+}
+
+/// How frames are scheduled; the image a seed gives does not depend on it. Options left out
+/// keep the integrator's own schedule (the path tracer: tiles; the others: one batch per
+/// pass, the only schedule they run so far).
+#[derive(clap::Args, Clone, Copy, Debug, Default, PartialEq)]
+pub struct ScheduleOptions {
+    /// How paths are grouped into batches (pt; default tile).
+    #[arg(long, value_enum)]
+    pub scheduler: Option<SchedulerKind>,
+    /// Tile side in pixels (--scheduler tile; default 32).
+    #[arg(long)]
+    pub tile_size: Option<u32>,
+    /// Fraction of a tile's paths below which a worker merges in the next tile
+    /// (--scheduler tile; 0 disables merging; default 0.5).
+    #[arg(long)]
+    pub tile_merge: Option<f32>,
+    /// Samples per pixel each frame renders (pt; default 1).
+    #[arg(long)]
+    pub spp_per_frame: Option<u32>,
+}
+
+impl ScheduleOptions {
+    /// The schedule these options ask for, or `None` when they ask for nothing.
+    pub fn schedule(&self) -> Option<Schedule> {
+        if *self == Self::default() {
+            return None;
+        }
+        let scheduler = match self.scheduler {
+            Some(SchedulerKind::None) => Scheduler::None,
+            Some(SchedulerKind::Tile) | None => Scheduler::Tile {
+                size: self.tile_size.unwrap_or(Scheduler::DEFAULT_TILE_SIZE),
+                merge_below: self.tile_merge.unwrap_or(Scheduler::DEFAULT_MERGE_BELOW),
+            },
+        };
+        Some(Schedule {
+            scheduler,
+            samples_per_frame: self.spp_per_frame.unwrap_or(1),
+        })
+    }
 }
 
 /// The integrator of `algorithm` for a `width` × `height` image.

@@ -161,7 +161,7 @@ fn every_algorithm_renders_from_the_command_line() {
 
 #[test]
 fn bad_input_is_a_clear_error_with_non_zero_status() {
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 10] = [
         (&["render", "no/such/scene.gltf"], "scene.gltf"),
         (&["render", "--spp", "0"], "--spp"),
         (
@@ -172,6 +172,15 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
         (&["render", "--algo", "bpm", "--alpha", "1.5"], "alpha"),
         (&["render", "-o", "/nonexistent-folder/out.exr"], "out.exr"),
         (&["render", "--bogus-option"], "--bogus-option"),
+        (&["render", "--spp-per-frame", "0"], "samples per frame"),
+        (
+            &["render", "--scheduler", "tile", "--tile-size", "0"],
+            "tile size",
+        ),
+        (
+            &["render", "--algo", "vcm", "--scheduler", "tile"],
+            "one batch per pass",
+        ),
     ];
     for (args, needle) in cases {
         let output = vcm(args);
@@ -180,4 +189,32 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
         assert!(message.contains(needle), "{args:?}: {message}");
     }
     assert!(!Path::new("/nonexistent-folder").exists());
+}
+
+/// The tile scheduler with several samples per frame renders the same image as one batch per
+/// pass with the same samples per frame: scheduling changes speed, not results.
+#[test]
+fn schedulers_render_the_same_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, extra: &[&str]| {
+        let exr = dir.path().join(format!("{name}.exr"));
+        let mut args = vec![
+            "render",
+            "--spp",
+            "4",
+            "--spp-per-frame",
+            "2",
+            "--width",
+            "40",
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", exr.to_str().unwrap()]);
+        let output = vcm(&args);
+        assert!(output.status.success(), "{name}: {}", stderr(&output));
+        vcm::image_io::RgbImage::read_exr(&exr).unwrap().pixels
+    };
+    let none = render("none", &["--scheduler", "none"]);
+    let tiles = render("tile", &["--scheduler", "tile", "--tile-size", "8"]);
+    assert!(none.iter().any(|p| p.max_element() > 0.0));
+    assert_eq!(none, tiles);
 }

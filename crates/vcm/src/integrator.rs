@@ -2,6 +2,8 @@
 
 use std::time::Duration;
 
+use vcm_scheduler::Scheduler;
+
 use crate::error::RenderError;
 use crate::film::Film;
 
@@ -16,6 +18,69 @@ pub trait Integrator: Send {
 
     /// (width, height) of the image in pixels: the size of the films it renders into.
     fn image_size(&self) -> (u32, u32);
+
+    /// Renders with `schedule` from the next frame on. Integrators that only run
+    /// [`Schedule::ONE_BATCH`] reject any other with [`RenderError::InvalidSetting`].
+    fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
+        if schedule == Schedule::ONE_BATCH {
+            Ok(())
+        } else {
+            Err(RenderError::InvalidSetting(
+                "this algorithm runs only one batch per pass and one sample per pixel per \
+                 frame so far"
+                    .into(),
+            ))
+        }
+    }
+
+    /// Samples per pixel each frame adds to the film.
+    fn samples_per_frame(&self) -> u32 {
+        1
+    }
+}
+
+/// How a frame's paths are scheduled: the grouping into batches and the samples per pixel
+/// each frame renders. Neither changes the image a seed gives, only how fast it comes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Schedule {
+    /// How paths are grouped into batches.
+    pub scheduler: Scheduler,
+    /// Samples per pixel per frame (at least 1).
+    pub samples_per_frame: u32,
+}
+
+impl Schedule {
+    /// One batch of all active paths per pass, one sample per pixel per frame: what every
+    /// integrator runs.
+    pub const ONE_BATCH: Schedule = Schedule {
+        scheduler: Scheduler::None,
+        samples_per_frame: 1,
+    };
+
+    /// The schedule, or why it cannot run.
+    pub fn validated(self) -> Result<Schedule, RenderError> {
+        if self.samples_per_frame == 0 {
+            return Err(RenderError::InvalidSetting(
+                "samples per frame must be at least 1".into(),
+            ));
+        }
+        if let Scheduler::Tile { size: 0, .. } = self.scheduler {
+            return Err(RenderError::InvalidSetting(
+                "the tile size must be at least 1".into(),
+            ));
+        }
+        Ok(self)
+    }
+}
+
+impl Default for Schedule {
+    /// The default [`Scheduler`] (tiles), one sample per pixel per frame.
+    fn default() -> Self {
+        Self {
+            scheduler: Scheduler::default(),
+            samples_per_frame: 1,
+        }
+    }
 }
 
 /// Work done by one [`Integrator::render_frame`] call.

@@ -60,5 +60,6 @@ mod surface_hit;
 pub use bidir::{Algorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Vcm, VcmSettings};
 pub use error::RenderError;
 pub use film::Film;
-pub use integrator::{FrameStats, Integrator};
+pub use integrator::{FrameStats, Integrator, Schedule};
 pub use path_tracer::{PathTracer, PtSettings};
+pub use vcm_scheduler::{Scheduler, SchedulerStats};

@@ -35,6 +35,8 @@ pub(crate) struct ShadowRay {
 pub(crate) struct PathState {
     /// The pixel the path started from (`y · width + x`).
     pub pixel: u32,
+    /// Which of the frame's samples of that pixel it is (from 0).
+    pub sample: u32,
     /// The path's own random stream.
     pub rng: Rng,
     /// Origin of the current segment.
@@ -57,9 +59,10 @@ pub(crate) struct PathState {
 
 impl PathState {
     /// A path at the camera: unit throughput, no radiance yet.
-    pub fn new(pixel: u32, rng: Rng, origin: Vec3, direction: Vec3) -> PathState {
+    pub fn new(pixel: u32, sample: u32, rng: Rng, origin: Vec3, direction: Vec3) -> PathState {
         PathState {
             pixel,
+            sample,
             rng,
             origin,
             direction,

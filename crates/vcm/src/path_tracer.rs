@@ -1,17 +1,18 @@
-//! The wavefront path tracer: all paths of a frame advance together, one segment per wave.
+//! The wavefront path tracer: paths advance together, one segment per pass, grouped into
+//! batches by a [`Scheduler`].
 
 use std::sync::Arc;
-use std::time::{Duration, Instant};
 
-use glam::{UVec2, Vec2};
+use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use vcm_scene::Scene;
 use vcm_scene::sampling::Rng;
+use vcm_scheduler::{SchedulerStats, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch, Traversal};
 
 use crate::error::RenderError;
 use crate::film::Film;
-use crate::integrator::{FrameStats, Integrator, check_image_size};
+use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
 use crate::path_state::PathState;
 use crate::shade::{ShadeContext, shade};
 use crate::surface_hit::Hit;
@@ -30,22 +31,21 @@ pub struct PtSettings {
     pub max_depth: Option<u32>,
 }
 
-/// Unidirectional path tracer with next event estimation and MIS, one sample per pixel and
-/// frame, run as waves of ray batches over a [`Traversal`] backend.
+/// Unidirectional path tracer with next event estimation and MIS, run as waves of ray
+/// batches over a [`Traversal`] backend, grouped by its [`Schedule`]
+/// ([`Integrator::set_schedule`]).
 pub struct PathTracer {
     scene: Arc<Scene>,
     traversal: Arc<dyn Traversal>,
     settings: PtSettings,
-    paths: Vec<PathState>,
-    rays: RayBatch,
-    hits: HitBatch,
-    shadow_rays: RayBatch,
-    occluded: Vec<bool>,
+    schedule: Schedule,
+    last_schedule_stats: SchedulerStats,
 }
 
 impl PathTracer {
     /// A path tracer for `scene`, traced with `traversal` (built over
-    /// [`Scene::triangle_corners`], primitive id = triangle index).
+    /// [`Scene::triangle_corners`], primitive id = triangle index), with the default
+    /// [`Schedule`].
     pub fn new(
         scene: Arc<Scene>,
         traversal: Arc<dyn Traversal>,
@@ -56,11 +56,8 @@ impl PathTracer {
             scene,
             traversal,
             settings,
-            paths: Vec::new(),
-            rays: RayBatch::default(),
-            hits: HitBatch::default(),
-            shadow_rays: RayBatch::default(),
-            occluded: Vec::new(),
+            schedule: Schedule::default(),
+            last_schedule_stats: SchedulerStats::default(),
         })
     }
 
@@ -68,10 +65,16 @@ impl PathTracer {
     pub fn settings(&self) -> &PtSettings {
         &self.settings
     }
+
+    /// What the scheduler measured in the last frame (worker time, idle time, queue sizes).
+    pub fn schedule_stats(&self) -> &SchedulerStats {
+        &self.last_schedule_stats
+    }
 }
 
 impl Integrator for PathTracer {
-    /// Renders frame `iteration`: one path per pixel, each added to `film` once it ends.
+    /// Renders frame `iteration`: `samples_per_frame` paths per pixel, each added to `film`
+    /// once it ends, in pixel and sample order whatever the scheduler.
     fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats {
         let PtSettings { width, height, .. } = self.settings;
         assert_eq!(
@@ -79,102 +82,150 @@ impl Integrator for PathTracer {
             (width, height),
             "film size differs from the settings"
         );
-        let start = Instant::now();
-        let mut stats = FrameStats::default();
-        self.generate_camera_paths(iteration);
-        stats.camera_rays = self.paths.len() as u64;
-        while !self.paths.is_empty() {
-            stats.traversal_time += self.trace();
-            self.shade();
-            stats.shadow_rays += self.shadow_rays.len() as u64;
-            stats.traversal_time += self.trace_shadows();
-            self.retire_finished_paths(film);
-            stats.continuation_rays += self.paths.len() as u64;
+        let samples = self.schedule.samples_per_frame;
+        let new_wavefront = || PtWavefront {
+            scene: &self.scene,
+            settings: &self.settings,
+            iteration,
+            samples,
+            paths: Vec::new(),
+            finished: Vec::new(),
+        };
+        let (outputs, stats) = vcm_scheduler::run(
+            self.schedule.scheduler,
+            (width, height),
+            self.traversal.as_ref(),
+            new_wavefront,
+        );
+        let mut finished: Vec<_> = outputs.into_iter().flatten().collect();
+        // With several samples per pixel, the order of a pixel's additions must not depend
+        // on the scheduler; with one, every pixel gets a single addition anyway.
+        if samples > 1 {
+            finished.par_sort_unstable_by_key(|&(key, _)| key);
         }
-        stats.shading_time = start.elapsed().saturating_sub(stats.traversal_time);
-        stats
+        for (key, radiance) in finished {
+            film.add((key / u64::from(samples)) as usize, radiance);
+        }
+        self.last_schedule_stats = stats;
+        let camera_rays = u64::from(width) * u64::from(height) * u64::from(samples);
+        let workers = stats.workers.max(1) as u32;
+        let traversal_time = stats.traversal / workers;
+        FrameStats {
+            camera_rays,
+            continuation_rays: stats.closest_rays - camera_rays,
+            shadow_rays: stats.shadow_rays,
+            traversal_time,
+            shading_time: stats.wall.saturating_sub(traversal_time),
+            ..FrameStats::default()
+        }
     }
 
     fn image_size(&self) -> (u32, u32) {
         (self.settings.width, self.settings.height)
     }
+
+    fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
+        self.schedule = schedule.validated()?;
+        Ok(())
+    }
+
+    fn samples_per_frame(&self) -> u32 {
+        self.schedule.samples_per_frame
+    }
 }
 
-impl PathTracer {
-    /// One path per pixel in pixel order, its position jittered uniformly over the pixel.
-    fn generate_camera_paths(&mut self, iteration: u32) {
+/// The paths one scheduler worker has in flight, and the results of those that ended, keyed
+/// by `pixel · samples + sample`.
+struct PtWavefront<'a> {
+    scene: &'a Scene,
+    settings: &'a PtSettings,
+    iteration: u32,
+    samples: u32,
+    paths: Vec<PathState>,
+    finished: Vec<(u64, Vec3)>,
+}
+
+impl Wavefront for PtWavefront<'_> {
+    type Output = Vec<(u64, Vec3)>;
+
+    /// `samples` paths per pixel of `tile`, each through a uniformly jittered point of its
+    /// pixel, with random numbers keyed by (seed, frame, pixel, sample).
+    fn start(&mut self, tile: Tile) {
         let PtSettings {
             width,
             height,
             seed,
             ..
-        } = self.settings;
+        } = *self.settings;
+        let (iteration, samples) = (u64::from(self.iteration), self.samples);
         let camera = &self.scene.camera;
-        (0..width * height)
+        let starts: Vec<(u32, u32)> = tile
+            .pixels(width)
+            .flat_map(|pixel| (0..samples).map(move |sample| (pixel, sample)))
+            .collect();
+        let new_paths = starts
             .into_par_iter()
-            .map(|pixel| {
-                let mut rng = Rng::from_key(&[seed, u64::from(iteration), u64::from(pixel), 0]);
+            .with_min_len(256)
+            .map(|(pixel, sample)| {
+                let key = [seed, iteration, u64::from(pixel), u64::from(sample)];
+                let mut rng = Rng::from_key(&key);
                 let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
                 let raster: Vec2 = xy + rng.uniform2();
                 let direction = camera.direction(width, height, raster);
-                PathState::new(pixel, rng, camera.position, direction)
-            })
-            .collect_into_vec(&mut self.paths);
+                PathState::new(pixel, sample, rng, camera.position, direction)
+            });
+        self.paths.par_extend(new_paths);
     }
 
-    /// Closest hits of every active path's current segment; returns the time taken.
-    fn trace(&mut self) -> Duration {
-        self.rays.clear();
+    fn active(&self) -> usize {
+        self.paths.len()
+    }
+
+    fn extension_rays(&self, rays: &mut RayBatch) {
+        rays.clear();
         for path in &self.paths {
-            self.rays
-                .push(path.origin, path.direction, 0.0, f32::INFINITY);
+            rays.push(path.origin, path.direction, 0.0, f32::INFINITY);
         }
-        let start = Instant::now();
-        self.traversal.intersect(&self.rays, &mut self.hits);
-        start.elapsed()
     }
 
     /// Shades every path at its hit in parallel and queues the shadow rays in path order.
-    fn shade(&mut self) {
+    fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let ctx = ShadeContext {
-            scene: &self.scene,
+            scene: self.scene,
             max_segments: self.settings.max_depth.unwrap_or(u32::MAX),
         };
-        let hits = &self.hits;
-        self.paths.par_iter_mut().enumerate().for_each(|(i, path)| {
-            shade(&ctx, path, Hit::from_batch(hits, i));
-        });
-        self.shadow_rays.clear();
+        self.paths
+            .par_iter_mut()
+            .with_min_len(64)
+            .enumerate()
+            .for_each(|(i, path)| shade(&ctx, path, Hit::from_batch(hits, i)));
+        shadow_rays.clear();
         for shadow in self.paths.iter().filter_map(|p| p.shadow.as_ref()) {
-            self.shadow_rays
-                .push(shadow.origin, shadow.direction, 0.0, shadow.tmax);
+            shadow_rays.push(shadow.origin, shadow.direction, 0.0, shadow.tmax);
         }
     }
 
-    /// Tests the queued shadow rays and adds the unoccluded contributions to their paths;
-    /// returns the traversal time.
-    fn trace_shadows(&mut self) -> Duration {
-        let start = Instant::now();
-        self.traversal
-            .occluded(&self.shadow_rays, &mut self.occluded);
-        let elapsed = start.elapsed();
+    /// Adds the unoccluded shadow contributions and retires the paths that ended.
+    fn resolve(&mut self, occluded: &[bool]) {
         let with_shadow = self.paths.iter_mut().filter(|p| p.shadow.is_some());
-        for (path, &blocked) in with_shadow.zip(&self.occluded) {
+        for (path, &blocked) in with_shadow.zip(occluded) {
             let shadow = path.shadow.take().expect("filtered on a queued shadow ray");
             if !blocked {
                 path.radiance += shadow.contribution;
             }
         }
-        elapsed
-    }
-
-    /// Adds the radiance of ended paths to `film` and keeps the others, in order.
-    fn retire_finished_paths(&mut self, film: &mut Film) {
+        let samples = u64::from(self.samples);
+        let finished = &mut self.finished;
         self.paths.retain(|path| {
             if !path.alive {
-                film.add(path.pixel as usize, path.radiance);
+                let key = u64::from(path.pixel) * samples + u64::from(path.sample);
+                finished.push((key, path.radiance));
             }
             path.alive
         });
+    }
+
+    fn finish(self) -> Self::Output {
+        self.finished
     }
 }

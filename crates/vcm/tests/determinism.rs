@@ -1,16 +1,16 @@
 //! A render is a pure function of (scene, settings, seed, iteration): the same film, bit for
-//! bit, for any number of threads.
+//! bit, for any number of threads and any scheduler.
 
 mod common;
 
 use glam::Vec3;
-use vcm::{Algorithm, Film, Integrator, PtSettings, VcmSettings};
+use vcm::{Algorithm, Film, Integrator, PtSettings, Schedule, Scheduler, VcmSettings};
 use vcm_scene::Material;
 use vcm_scene::light::{Light, PointLight};
 
 /// A diffuse floor, a rough metal wall, a one-sided area light facing down and a point light,
-/// rendered by `algorithm` (`None`: the path tracer) on `threads` threads.
-fn render(threads: usize, algorithm: Option<Algorithm>) -> Film {
+/// rendered by `algorithm` (`None`: the path tracer) on `threads` threads with `schedule`.
+fn render(threads: usize, algorithm: Option<Algorithm>, schedule: Schedule) -> Film {
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     let quads = [
         [
@@ -80,6 +80,7 @@ fn render(threads: usize, algorithm: Option<Algorithm>) -> Film {
                 Box::new(common::vcm(scene, settings))
             }
         };
+        integrator.set_schedule(schedule).unwrap();
         let mut film = Film::new(settings.width, settings.height);
         for iteration in 0..4 {
             integrator.render_frame(&mut film, iteration);
@@ -99,9 +100,59 @@ fn films_are_bit_identical_for_one_and_two_threads() {
         Some(Algorithm::Vcm),
     ];
     for algorithm in algorithms {
-        let (one, two) = (render(1, algorithm), render(2, algorithm));
+        let schedule = match algorithm {
+            None => Schedule::default(),
+            Some(_) => Schedule::ONE_BATCH,
+        };
+        let (one, two) = (
+            render(1, algorithm, schedule),
+            render(2, algorithm, schedule),
+        );
         assert!(one.mean().iter().any(|rgb| rgb.max_element() > 0.0));
         // Film equality compares the f64 sums exactly.
         assert!(one == two, "{algorithm:?} differs between 1 and 2 threads");
+    }
+}
+
+#[test]
+fn path_tracer_films_are_bit_identical_under_every_scheduler() {
+    let schedule = |scheduler| Schedule {
+        scheduler,
+        samples_per_frame: 3,
+    };
+    let reference = render(1, None, schedule(Scheduler::None));
+    assert!(reference.mean().iter().any(|rgb| rgb.max_element() > 0.0));
+    let tiles = [(5, 0.5), (7, 0.0), (64, 0.9), (1, 0.5)];
+    for threads in [1, 2] {
+        for (size, merge_below) in tiles {
+            let scheduler = Scheduler::Tile { size, merge_below };
+            let film = render(threads, None, schedule(scheduler));
+            assert!(
+                film == reference,
+                "{scheduler:?} on {threads} threads differs"
+            );
+        }
+    }
+    // More samples per frame is a different (equally valid) set of samples, not the same one.
+    assert!(render(1, None, schedule(Scheduler::None)) != render(1, None, Schedule::ONE_BATCH));
+}
+
+#[test]
+fn invalid_schedules_are_rejected() {
+    let bad = [
+        Schedule {
+            samples_per_frame: 0,
+            ..Schedule::default()
+        },
+        Schedule {
+            scheduler: Scheduler::Tile {
+                size: 0,
+                merge_below: 0.5,
+            },
+            ..Schedule::default()
+        },
+    ];
+    for schedule in bad {
+        assert!(schedule.validated().is_err(), "{schedule:?}");
     }
 }

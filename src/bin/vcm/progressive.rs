@@ -12,7 +12,7 @@ use vcm::{Film, FrameStats, Integrator};
 /// When to stop rendering.
 #[derive(Clone, Copy, Debug)]
 pub enum Budget {
-    /// This many samples per pixel (frames).
+    /// This many samples per pixel (rounded up to whole frames).
     Samples(u32),
     /// This many seconds of wall-clock time.
     Seconds(f64),
@@ -77,7 +77,7 @@ impl Checkpoint {
 
 /// What a progressive render did.
 pub struct Outcome {
-    /// Samples per pixel (frames) rendered.
+    /// Samples per pixel rendered.
     pub spp: u32,
     /// Wall-clock seconds.
     pub seconds: f64,
@@ -100,10 +100,11 @@ pub fn render(
     let mut checkpoints = Vec::new();
     let mut next_checkpoint = 1.0;
     let start = Instant::now();
-    let mut spp = 0;
+    let (mut spp, mut frame) = (0, 0);
     while !budget.done(spp, start.elapsed()) && !interrupted.load(Ordering::SeqCst) {
-        totals.accumulate(&integrator.render_frame(film, spp));
-        spp += 1;
+        totals.accumulate(&integrator.render_frame(film, frame));
+        frame += 1;
+        spp += integrator.samples_per_frame();
         let seconds = start.elapsed().as_secs_f64();
         progress.set_position(match budget {
             Budget::Samples(_) => u64::from(spp),

@@ -16,7 +16,7 @@ use vcm_rs::traversal::Traversal;
 
 use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Checkpoint, Outcome};
-use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, image_size};
+use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, ScheduleOptions, image_size};
 
 /// Arguments of `vcm render`.
 #[derive(clap::Args)]
@@ -47,6 +47,8 @@ pub struct RenderArgs {
     threads: Option<usize>,
     #[command(flatten)]
     integrator: IntegratorOptions,
+    #[command(flatten)]
+    schedule: ScheduleOptions,
     /// Output EXR (linear radiance); a tone-mapped PNG is written beside it.
     #[arg(short, long, default_value = "out.exr")]
     output: PathBuf,
@@ -78,6 +80,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         (width, height),
         &args.integrator,
     )?;
+    let schedule = args.schedule.schedule();
+    if let Some(schedule) = schedule.or(args.backend.preferred_schedule()) {
+        integrator.set_schedule(schedule)?;
+    }
     let interrupted = interrupt_flag()?;
     let mut film = Film::new(width, height);
     let outcome = progressive::render(

@@ -1,0 +1,25 @@
+//! Schedulers for wavefront integrators: they decide which paths are traced and shaded
+//! together, so that no core idles while a pass runs out of rays.
+//!
+//! An integrator describes its paths as a [`Wavefront`]: something that starts the paths of
+//! a [`Tile`], hands out the rays of its active paths, shades their hits and resolves its
+//! shadow rays. A [`Scheduler`] drives wavefronts over a [`Traversal`](vcm_traversal::Traversal)
+//! backend:
+//! - [`Scheduler::None`]: one wavefront over the whole image, every pass one big batch;
+//! - [`Scheduler::Tile`]: the worker threads take tiles from an atomic counter and trace each
+//!   to completion; when a worker's active paths drop below a fraction of a tile, it pulls in
+//!   the next tile's camera paths (tile merging).
+//!
+//! Paths' random numbers must not depend on which wavefront traces them (the integrators seed
+//! them from the pixel and sample), and results are gathered per path and added in a fixed
+//! order, so every scheduler and thread count gives the same image.
+
+#![warn(missing_docs)]
+
+mod drive;
+mod stats;
+mod tiles;
+
+pub use drive::{Scheduler, Wavefront, run};
+pub use stats::SchedulerStats;
+pub use tiles::{Tile, TileGrid};
