@@ -90,14 +90,7 @@ fn render(threads: usize, algorithm: Option<Algorithm>) -> Film {
 
 #[test]
 fn films_are_bit_identical_for_one_and_two_threads() {
-    let algorithms = [
-        None,
-        Some(Algorithm::LightTracing),
-        Some(Algorithm::Bpt),
-        Some(Algorithm::Ppm),
-        Some(Algorithm::Bpm),
-        Some(Algorithm::Vcm),
-    ];
+    let algorithms = common::EVERY_ALGORITHM;
     for algorithm in algorithms {
         let (one, two) = (render(1, algorithm), render(2, algorithm));
         assert!(one.mean().iter().any(|rgb| rgb.max_element() > 0.0));

@@ -7,10 +7,20 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DVec3, Vec2, Vec3, Vec4};
-use vcm::{Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
+use vcm::{Algorithm, Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
 use vcm_scene::light::Light;
 use vcm_scene::{Camera, Material, Mesh, Scene};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};
+
+/// The path tracer (`None`) and every algorithm of the VCM integrator.
+pub const EVERY_ALGORITHM: [Option<Algorithm>; 6] = [
+    None,
+    Some(Algorithm::LightTracing),
+    Some(Algorithm::Bpt),
+    Some(Algorithm::Ppm),
+    Some(Algorithm::Bpm),
+    Some(Algorithm::Vcm),
+];
 
 /// A camera at `position` looking down -Z with +Y up and vertical field of view `yfov` (rad).
 pub fn camera(position: Vec3, yfov: f32) -> Camera {

@@ -234,15 +234,10 @@ fn coincident_degenerate_and_sliver_triangles_keep_the_furnace_value() {
 
 /// Adds a closed box between corners `lo` and `hi` (faces outward) made of `material`.
 fn add_box(parts: &mut SceneParts, lo: Vec3, hi: Vec3, material: u32) {
-    let corner = |i: u32| {
-        Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
+    let corner =
+        |i: u32| Vec3::select(glam::BVec3::new(i & 1 != 0, i & 2 != 0, i & 4 != 0), hi, lo);
     let positions: Vec<Vec3> = (0..8).map(corner).collect();
-    // Each face counter-clockwise seen from outside.
+    // Each face counter-clockwise seen from outside: -z, +z, -y, +y, -x, +x.
     let faces = [
         [0, 2, 3, 1],
         [4, 5, 7, 6],

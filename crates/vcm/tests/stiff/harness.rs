@@ -11,16 +11,6 @@ pub const SIZE: u32 = 16;
 /// Images are compared in REGIONS × REGIONS blocks of 4 × 4 pixels.
 pub const REGIONS: usize = 4;
 
-/// The path tracer (`None`) and every algorithm of the VCM integrator.
-pub const EVERY_ALGORITHM: [Option<Algorithm>; 6] = [
-    None,
-    Some(Algorithm::LightTracing),
-    Some(Algorithm::Bpt),
-    Some(Algorithm::Ppm),
-    Some(Algorithm::Bpm),
-    Some(Algorithm::Vcm),
-];
-
 /// Every algorithm but light tracing, which cannot see what the camera sees through a
 /// specular (delta) surface: it only splats light vertices, and a pinhole camera cannot be
 /// connected to through a mirror or glass.

@@ -8,7 +8,8 @@ use vcm_scene::Material;
 use vcm_scene::light::{Light, PointLight};
 
 use crate::common;
-use crate::harness::{self, EVERY_ALGORITHM, REGIONS, Setup};
+use crate::common::EVERY_ALGORITHM;
+use crate::harness::{self, REGIONS, Setup};
 use crate::scenes::{Placement, SceneParts, camera_looking, emitter};
 
 /// Radiance of the large light; the tiny one emits a million times more.

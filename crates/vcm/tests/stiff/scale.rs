@@ -7,7 +7,8 @@ use glam::Vec3;
 use vcm_scene::Material;
 
 use crate::common;
-use crate::harness::{self, EVERY_ALGORITHM, REGIONS, Setup};
+use crate::common::EVERY_ALGORITHM;
+use crate::harness::{self, REGIONS, Setup};
 use crate::scenes::{Placement, SceneParts, emitter};
 
 const FRAMES: u32 = 200;
