@@ -141,4 +141,32 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn segments_to_offset_points_are_not_blocked_by_their_triangle_at_any_scale() {
+        let mut rng = Rng::from_key(&[13]);
+        for exponent in -4..=5 {
+            let scale = 10f32.powi(exponent);
+            for tri in triangles(scale) {
+                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+                let bvh = CpuBvh::new(&[tri], CpuBvhOptions::default()).unwrap();
+                let mut rays = RayBatch::default();
+                for _ in 0..2000 {
+                    let b = sample_uniform_triangle(rng.uniform2());
+                    let p = tri[0] * b.x + tri[1] * b.y + tri[2] * b.z;
+                    // Shadow rays arriving from grazing to steep, from near and far.
+                    let Vec2 { x: lift, y: reach } = rng.uniform2();
+                    let away = ((tri[1] - tri[0]).normalize() + n * (1e-4 + lift)).normalize();
+                    let origin = p + away * scale * (1e-3 + 10.0 * reach);
+                    let target = offset_ray_origin(p, barycentric_error(&tri, b), n, origin - p);
+                    let (direction, tmax) = crate::shadow::segment_to(origin, target);
+                    rays.push(origin, direction, 0.0, tmax);
+                }
+                let mut occluded = Vec::new();
+                bvh.occluded(&rays, &mut occluded);
+                let blocked = occluded.iter().filter(|&&o| o).count();
+                assert_eq!(blocked, 0, "scale {scale}, triangle {tri:?}");
+            }
+        }
+    }
 }

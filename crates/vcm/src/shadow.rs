@@ -67,19 +67,13 @@ impl LightSample<'_> {
     }
 }
 
-/// Fraction of a finite shadow ray left out at the light's end, so that the light's own
-/// surface (or a point light's position) never counts as a blocker. Relative to the ray
-/// length, hence scale independent.
-const SHADOW_END_EPSILON: f32 = 1e-4;
-
 /// Direction and `tmax` of a shadow ray from `origin` (already offset off the
 /// receiving surface) toward the light sample `illumination` of `light`, seen from the
 /// un-offset receiving point `receiver`.
 ///
-/// Finite lights: the direction reaches the light sample at t = 1 and the ray stops at
-/// t = 1 − [`SHADOW_END_EPSILON`]; an area light's sample point is first offset off the
-/// emitting triangle toward the receiver by its own error bound. Distant lights: a unit
-/// direction and an unbounded ray.
+/// Finite lights: the direction reaches the light sample at t = 1, where the ray stops; an
+/// area light's sample point is first offset off the emitting triangle toward the receiver by
+/// its own error bound. Distant lights: a unit direction and an unbounded ray.
 fn shadow_segment(
     light: &Light,
     illumination: &Illumination,
@@ -110,8 +104,13 @@ pub(crate) fn offset_off_light(light: &Light, point: Vec3, w: Vec3) -> Vec3 {
 }
 
 /// Direction and `tmax` of an occlusion ray from `origin` to `target` (both already offset
-/// off their surfaces): the direction reaches `target` at t = 1 and the ray stops at
-/// t = 1 − [`SHADOW_END_EPSILON`].
+/// off their surfaces, or points in space such as a point light or the camera): the direction
+/// reaches `target` at t = 1 and the ray stops γ(16) ≈ 10⁻⁶ before it.
+///
+/// The target's offset keeps its surface beyond t = 1, but the hit distance a traversal
+/// computes for that surface carries a rounding error relative to the whole segment, which the
+/// offset (relative to the coordinates) does not cover on long rays; γ(16) does. A fixed
+/// 10⁻⁴ of the segment used to let light through a wall 10⁻⁵ from a point light.
 pub(crate) fn segment_to(origin: Vec3, target: Vec3) -> (Vec3, f32) {
-    (target - origin, 1.0 - SHADOW_END_EPSILON)
+    (target - origin, 1.0 - crate::ray_offset::gamma(16))
 }

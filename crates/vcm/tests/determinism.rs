@@ -91,14 +91,7 @@ fn render(threads: usize, algorithm: Option<Algorithm>, schedule: Schedule) -> F
 
 #[test]
 fn films_are_bit_identical_for_one_and_two_threads() {
-    let algorithms = [
-        None,
-        Some(Algorithm::LightTracing),
-        Some(Algorithm::Bpt),
-        Some(Algorithm::Ppm),
-        Some(Algorithm::Bpm),
-        Some(Algorithm::Vcm),
-    ];
+    let algorithms = common::EVERY_ALGORITHM;
     for algorithm in algorithms {
         let schedule = match algorithm {
             None => Schedule::default(),

@@ -2,14 +2,25 @@
 
 #![allow(dead_code)] // each test binary uses a different part
 
+use std::ops::Range;
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DVec3, Vec2, Vec3, Vec4};
-use vcm::{Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
+use vcm::{Algorithm, Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
 use vcm_scene::light::Light;
 use vcm_scene::{Camera, Material, Mesh, Scene};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};
+
+/// The path tracer (`None`) and every algorithm of the VCM integrator.
+pub const EVERY_ALGORITHM: [Option<Algorithm>; 6] = [
+    None,
+    Some(Algorithm::LightTracing),
+    Some(Algorithm::Bpt),
+    Some(Algorithm::Ppm),
+    Some(Algorithm::Bpm),
+    Some(Algorithm::Vcm),
+];
 
 /// A camera at `position` looking down -Z with +Y up and vertical field of view `yfov` (rad).
 pub fn camera(position: Vec3, yfov: f32) -> Camera {
@@ -162,10 +173,20 @@ pub struct RegionSeries {
 /// Renders `frames` frames (iterations 0, 1, …) and measures the image split into
 /// `regions` × `regions` blocks. Asserts that no sample was dropped.
 pub fn region_means(integrator: &mut dyn Integrator, frames: u32, regions: usize) -> RegionSeries {
+    region_means_from(integrator, 0..frames, regions)
+}
+
+/// [`region_means`] over the frames of `iterations` (late iterations of progressive photon
+/// mapping merge within a smaller radius).
+pub fn region_means_from(
+    integrator: &mut dyn Integrator,
+    iterations: Range<u32>,
+    regions: usize,
+) -> RegionSeries {
     let (width, height) = integrator.image_size();
     let (block_w, block_h) = (width as usize / regions, height as usize / regions);
     let mut per_frame = Vec::new();
-    for iteration in 0..frames {
+    for iteration in iterations {
         let mut film = Film::new(width, height);
         integrator.render_frame(&mut film, iteration);
         assert_eq!(film.dropped(), 0);
