@@ -34,7 +34,9 @@ const SLAB_SLACK: f32 = 4e-7;
 const WORKGROUP_SIZE: u32 = 64u;
 
 @group(0) @binding(0) var<storage, read> rays: array<Ray>;
+@group(0) @binding(1) var<storage, read_write> hits: array<Hit>;
 @group(0) @binding(2) var<uniform> params: Params;
+@group(0) @binding(3) var<storage, read_write> occluded: array<u32>;
 
 @group(1) @binding(1) var<storage, read> vertices: array<vec4<f32>>;
 @group(1) @binding(2) var<storage, read> ids: array<u32>;
@@ -124,4 +126,22 @@ fn closer_hit(leaf: u32, ray: PreparedRay, best: Hit) -> Hit {
         return Hit(h.x, leaf, h.y, h.z);
     }
     return best;
+}
+
+// The entry points: `trace(ray, any_hit)` comes from the layout's traversal file.
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn closest_hit(@builtin(global_invocation_id) id: vec3<u32>) {
+    let index = ray_index(id);
+    if index < params.ray_count {
+        hits[index] = trace(rays[index], false);
+    }
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn any_hit(@builtin(global_invocation_id) id: vec3<u32>) {
+    let index = ray_index(id);
+    if index < params.ray_count {
+        occluded[index] = u32(trace(rays[index], true).prim != NO_HIT);
+    }
 }

@@ -17,9 +17,6 @@ struct Node {
 
 @group(1) @binding(0) var<storage, read> nodes: array<Node>;
 
-@group(0) @binding(1) var<storage, read_write> hits: array<Hit>;
-@group(0) @binding(3) var<storage, read_write> occluded: array<u32>;
-
 // Traces `ray`; with `any_hit` it returns the first hit found instead of the closest.
 fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     var best = Hit(ray_in.tmax, NO_HIT, 0.0, 0.0);
@@ -84,20 +81,4 @@ fn trace(ray_in: Ray, any_hit: bool) -> Hit {
         best.prim = ids[best.prim];
     }
     return best;
-}
-
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn closest_hit(@builtin(global_invocation_id) id: vec3<u32>) {
-    let index = ray_index(id);
-    if index < params.ray_count {
-        hits[index] = trace(rays[index], false);
-    }
-}
-
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn any_hit(@builtin(global_invocation_id) id: vec3<u32>) {
-    let index = ray_index(id);
-    if index < params.ray_count {
-        occluded[index] = u32(trace(rays[index], true).prim != NO_HIT);
-    }
 }

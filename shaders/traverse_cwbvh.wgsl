@@ -8,9 +8,6 @@
 // child_meta[0..4], child_meta[4..8]; then min/max x, y, z planes, four bytes per word.
 @group(1) @binding(0) var<storage, read> nodes: array<vec4<u32>>;
 
-@group(0) @binding(1) var<storage, read_write> hits: array<Hit>;
-@group(0) @binding(3) var<storage, read_write> occluded: array<u32>;
-
 // Relative error bound on a quantised slab distance, in units of its largest term (as on
 // the CPU backend): covers obvhs's rounding of the grid.
 const GRID_SLACK: f32 = 9.5367432e-7; // 8 ε
@@ -124,20 +121,4 @@ fn trace(ray_in: Ray, any_hit: bool) -> Hit {
         best.prim = ids[best.prim];
     }
     return best;
-}
-
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn closest_hit(@builtin(global_invocation_id) id: vec3<u32>) {
-    let index = ray_index(id);
-    if index < params.ray_count {
-        hits[index] = trace(rays[index], false);
-    }
-}
-
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn any_hit(@builtin(global_invocation_id) id: vec3<u32>) {
-    let index = ray_index(id);
-    if index < params.ray_count {
-        occluded[index] = u32(trace(rays[index], true).prim != NO_HIT);
-    }
 }

@@ -4,8 +4,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use obvhs::bvh2::Bvh2;
-use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use vcm_traversal::build::cwbvh_levels;
 
 /// The node formats the kernels can traverse.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -78,7 +78,7 @@ impl SceneLayout {
             NodeLayout::Wide if bvh.nodes.is_empty() => Self::default(),
             NodeLayout::Wide => {
                 let wide = bvh2_to_cwbvh(bvh, leaf_size.clamp(1, 3), true, false);
-                let stack_size = wide_depth(&wide) + 1;
+                let stack_size = cwbvh_levels(&wide) as u32 + 1;
                 Self::with_leaf_order(
                     layout,
                     bytemuck::cast_slice(&wide.nodes).to_vec(),
@@ -116,20 +116,6 @@ impl SceneLayout {
             + size_of_val(self.vertices.as_slice())
             + size_of_val(self.ids.as_slice())
     }
-}
-
-/// The number of node levels of a wide BVH (1 for a lone root).
-fn wide_depth(bvh: &CwBvh) -> u32 {
-    let mut deepest = 0;
-    let mut pending = vec![(0u32, 1u32)];
-    while let Some((index, level)) = pending.pop() {
-        deepest = deepest.max(level);
-        let node = &bvh.nodes[index as usize];
-        for child in (0..8).filter(|&c| !node.is_leaf(c)) {
-            pending.push((node.child_node_index(child), level + 1));
-        }
-    }
-    deepest
 }
 
 /// Lays out `bvh`'s inner nodes depth first, each node's left subtree right after it, and

@@ -6,6 +6,7 @@ use obvhs::{
     BvhBuildParams,
     aabb::Aabb,
     bvh2::{Bvh2, reinsertion::ReinsertionOptimizer},
+    cwbvh::CwBvh,
     ploc::PlocBuilder,
     splits::split_aabbs_preset,
     triangle::Triangle,
@@ -134,4 +135,22 @@ fn hash(mut x: u32) -> u32 {
     x ^= x >> 15;
     x = x.wrapping_mul(0x846c_a68b);
     x ^ (x >> 16)
+}
+
+/// The number of node levels of a compressed wide BVH, root included (0 when empty): a
+/// traversal that pushes at most one node group per level needs no deeper stack.
+pub fn cwbvh_levels(bvh: &CwBvh) -> usize {
+    if bvh.nodes.is_empty() {
+        return 0;
+    }
+    let mut deepest = 0;
+    let mut pending = vec![(0u32, 1usize)];
+    while let Some((index, level)) = pending.pop() {
+        deepest = deepest.max(level);
+        let node = &bvh.nodes[index as usize];
+        for child in (0..8).filter(|&c| !node.is_leaf(c)) {
+            pending.push((node.child_node_index(child), level + 1));
+        }
+    }
+    deepest
 }

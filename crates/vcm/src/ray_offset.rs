@@ -58,7 +58,7 @@ mod tests {
     use super::*;
     use glam::{DVec3, Vec2};
     use vcm_scene::sampling::{Rng, sample_uniform_triangle};
-    use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
+    use vcm_traversal::{CpuBvh, CpuBvhOptions, RayBatch, Traversal};
 
     /// Triangles of size `scale`: a slanted one translated by 3·`scale` (coordinates larger
     /// than the triangle) and one in the plane z = 0 (exact z coordinates).
@@ -114,52 +114,36 @@ mod tests {
         }
     }
 
-    #[test]
-    fn rays_leaving_an_offset_origin_do_not_hit_their_own_triangle() {
-        let mut rng = Rng::from_key(&[11]);
-        for exponent in -4..=5 {
-            let scale = 10f32.powi(exponent);
-            for tri in triangles(scale) {
-                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
-                let bvh = CpuBvh::new(&[tri], CpuBvhOptions::default()).unwrap();
-                let mut rays = RayBatch::default();
-                for _ in 0..2000 {
-                    let b = sample_uniform_triangle(rng.uniform2());
-                    let p = tri[0] * b.x + tri[1] * b.y + tri[2] * b.z;
-                    // Grazing and steep directions on both sides.
-                    let tangent = (tri[1] - tri[0]).normalize();
-                    let Vec2 { x: lift, y: sign } = rng.uniform2();
-                    let side = if sign < 0.5 { -n } else { n };
-                    let w = (tangent + side * (1e-4 + lift)).normalize();
-                    let origin = offset_ray_origin(p, barycentric_error(&tri, b), n, w);
-                    rays.push(origin, w, 0.0, f32::INFINITY);
-                }
-                let mut hits = HitBatch::default();
-                bvh.intersect(&rays, &mut hits);
-                let self_hits = (0..hits.len()).filter(|&i| hits.is_hit(i)).count();
-                assert_eq!(self_hits, 0, "scale {scale}, triangle {tri:?}");
-            }
-        }
+    /// A point on a triangle: the point, its barycentrics and the unit normal.
+    struct SurfacePoint {
+        point: Vec3,
+        barycentrics: Vec3,
+        normal: Vec3,
     }
 
-    #[test]
-    fn segments_to_offset_points_are_not_blocked_by_their_triangle_at_any_scale() {
-        let mut rng = Rng::from_key(&[13]);
+    /// For every test triangle at scales 10⁻⁴ … 10⁵, 2000 rays from `ray` at random points of
+    /// the triangle, traced against the lone triangle: asserts that none is occluded by it.
+    fn assert_triangle_never_blocks(
+        seed: u64,
+        mut ray: impl FnMut(&[Vec3; 3], &SurfacePoint, f32, &mut Rng) -> (Vec3, Vec3, f32),
+    ) {
+        let mut rng = Rng::from_key(&[seed]);
         for exponent in -4..=5 {
             let scale = 10f32.powi(exponent);
             for tri in triangles(scale) {
-                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+                let normal = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
                 let bvh = CpuBvh::new(&[tri], CpuBvhOptions::default()).unwrap();
                 let mut rays = RayBatch::default();
                 for _ in 0..2000 {
-                    let b = sample_uniform_triangle(rng.uniform2());
-                    let p = tri[0] * b.x + tri[1] * b.y + tri[2] * b.z;
-                    // Shadow rays arriving from grazing to steep, from near and far.
-                    let Vec2 { x: lift, y: reach } = rng.uniform2();
-                    let away = ((tri[1] - tri[0]).normalize() + n * (1e-4 + lift)).normalize();
-                    let origin = p + away * scale * (1e-3 + 10.0 * reach);
-                    let target = offset_ray_origin(p, barycentric_error(&tri, b), n, origin - p);
-                    let (direction, tmax) = crate::shadow::segment_to(origin, target);
+                    let barycentrics = sample_uniform_triangle(rng.uniform2());
+                    let point =
+                        tri[0] * barycentrics.x + tri[1] * barycentrics.y + tri[2] * barycentrics.z;
+                    let surface = SurfacePoint {
+                        point,
+                        barycentrics,
+                        normal,
+                    };
+                    let (origin, direction, tmax) = ray(&tri, &surface, scale, &mut rng);
                     rays.push(origin, direction, 0.0, tmax);
                 }
                 let mut occluded = Vec::new();
@@ -168,5 +152,38 @@ mod tests {
                 assert_eq!(blocked, 0, "scale {scale}, triangle {tri:?}");
             }
         }
+    }
+
+    #[test]
+    fn rays_leaving_an_offset_origin_do_not_hit_their_own_triangle() {
+        assert_triangle_never_blocks(11, |tri, surface, _, rng| {
+            // Grazing and steep directions on both sides.
+            let tangent = (tri[1] - tri[0]).normalize();
+            let Vec2 { x: lift, y: sign } = rng.uniform2();
+            let side = if sign < 0.5 {
+                -surface.normal
+            } else {
+                surface.normal
+            };
+            let w = (tangent + side * (1e-4 + lift)).normalize();
+            let error = barycentric_error(tri, surface.barycentrics);
+            let origin = offset_ray_origin(surface.point, error, surface.normal, w);
+            (origin, w, f32::INFINITY)
+        });
+    }
+
+    #[test]
+    fn segments_to_offset_points_are_not_blocked_by_their_triangle_at_any_scale() {
+        assert_triangle_never_blocks(13, |tri, surface, scale, rng| {
+            // Shadow rays arriving from grazing to steep, from near and far.
+            let Vec2 { x: lift, y: reach } = rng.uniform2();
+            let p = surface.point;
+            let away = ((tri[1] - tri[0]).normalize() + surface.normal * (1e-4 + lift)).normalize();
+            let origin = p + away * scale * (1e-3 + 10.0 * reach);
+            let error = barycentric_error(tri, surface.barycentrics);
+            let target = offset_ray_origin(p, error, surface.normal, origin - p);
+            let (direction, tmax) = crate::shadow::segment_to(origin, target);
+            (origin, direction, tmax)
+        });
     }
 }

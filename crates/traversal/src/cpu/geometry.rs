@@ -4,15 +4,15 @@ use glam::Vec3;
 use obvhs::cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh};
 
 use super::triangle::LeafTriangle;
-use crate::build::{BuildPreset, build_bvh2};
+use crate::build::{BuildPreset, build_bvh2, cwbvh_levels};
 use crate::error::BuildError;
 
 /// A CWBVH whose leaves index `triangles` directly.
 pub(crate) struct LeafGeometry {
     /// The hierarchy; its `primitive_indices` are moved into `ids`.
     pub bvh: CwBvh,
-    /// Number of internal-node levels below the root: bounds the traversal stack.
-    pub depth: usize,
+    /// Node levels, root included: bounds the traversal stack.
+    pub levels: usize,
     /// Triangles in leaf order (a triangle split by the builder appears once per leaf).
     pub triangles: Vec<LeafTriangle>,
     /// The caller's id of each leaf-order triangle.
@@ -35,7 +35,7 @@ impl LeafGeometry {
             .map(|&id| LeafTriangle::new(triangles[id as usize]))
             .collect();
         Ok(Self {
-            depth: depth(&bvh),
+            levels: cwbvh_levels(&bvh),
             bvh,
             triangles,
             ids,
@@ -48,21 +48,4 @@ impl LeafGeometry {
             + size_of_val(self.triangles.as_slice())
             + size_of_val(self.ids.as_slice())
     }
-}
-
-/// The number of internal-node levels below the root (0 for an empty or one-node tree).
-fn depth(bvh: &CwBvh) -> usize {
-    if bvh.nodes.is_empty() {
-        return 0;
-    }
-    let mut deepest = 0;
-    let mut pending = vec![(0u32, 0usize)];
-    while let Some((index, level)) = pending.pop() {
-        deepest = deepest.max(level);
-        let node = &bvh.nodes[index as usize];
-        for child in (0..8).filter(|&c| !node.is_leaf(c)) {
-            pending.push((node.child_node_index(child), level + 1));
-        }
-    }
-    deepest
 }

@@ -30,7 +30,7 @@ impl TraversalState {
     /// State able to traverse `geometry`.
     pub fn new(geometry: &LeafGeometry) -> Self {
         Self {
-            stack: HeapStack::new_with_capacity(geometry.depth + 1),
+            stack: HeapStack::new_with_capacity(geometry.levels.max(1)),
             current_group: UVec2::ZERO,
             primitive_group: UVec2::ZERO,
             oct_inv4: 0,
