@@ -7,15 +7,14 @@ use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
 use vcm::Film;
-use vcm_rs::Backend;
 
 use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Outcome};
 use crate::render::{
-    build_traversal, check_writable, interrupt_flag, load_scene, read_reference, relmse_points,
-    set_threads, write_text,
+    RenderSetup, build_traversal, check_writable, interrupt_flag, load_scene, read_reference,
+    relmse_points, set_threads, write_text,
 };
-use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, image_size};
+use vcm_rs::integrators::{self, Algorithm, image_size};
 
 /// Arguments of `vcm convergence`.
 #[derive(clap::Args)]
@@ -36,20 +35,8 @@ pub struct ConvergenceArgs {
     /// Reference EXR (of the same size) that errors are measured against.
     #[arg(long)]
     reference: PathBuf,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 512)]
-    width: u32,
-    /// Image height in pixels (default: from the camera's aspect ratio, else square).
-    #[arg(long)]
-    height: Option<u32>,
-    /// Ray traversal backend.
-    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
-    backend: Backend,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    threads: Option<usize>,
     #[command(flatten)]
-    integrator: IntegratorOptions,
+    setup: RenderSetup,
     /// The plot (PNG); the CSV of every checkpoint (algorithm,seconds,spp,rmse,relmse,mae) is
     /// written beside it.
     #[arg(short, long, default_value = "convergence.png")]
@@ -58,20 +45,20 @@ pub struct ConvergenceArgs {
 
 /// Renders with every algorithm, then writes the CSV and the plot and prints the table.
 pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
-    set_threads(args.threads)?;
+    set_threads(args.setup.threads)?;
     let budget = Budget::from_options(None, Some(args.time))?;
     check_writable(&args.output)?;
     let scene = load_scene(&args.scene)?;
-    let size = image_size(&scene, args.width, args.height);
+    let size = image_size(&scene, args.setup.width, args.setup.height);
     let reference = read_reference(&args.reference, size)?;
-    let traversal = build_traversal(args.backend, &scene)?;
+    let traversal = build_traversal(args.setup.backend, &scene)?;
     let interrupted = interrupt_flag()?;
     let mut outcomes = Vec::new();
     for &algorithm in &args.algos {
         eprintln!("rendering with {} for {} s", algorithm.name(), args.time);
         let traversal = Arc::clone(&traversal) as _;
         let mut integrator =
-            integrators::build(algorithm, &scene, traversal, size, &args.integrator)?;
+            integrators::build(algorithm, &scene, traversal, size, &args.setup.integrator)?;
         let mut film = Film::new(size.0, size.1);
         let outcome = progressive::render(
             integrator.as_mut(),

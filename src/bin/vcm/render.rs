@@ -18,6 +18,25 @@ use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Checkpoint, Outcome};
 use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, ScheduleOptions, image_size};
 
+/// What `vcm render` and `vcm convergence` both need to set up a render.
+#[derive(clap::Args)]
+pub struct RenderSetup {
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512)]
+    pub width: u32,
+    /// Image height in pixels (default: from the camera's aspect ratio, else square).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Ray traversal backend.
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    pub backend: Backend,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub integrator: IntegratorOptions,
+}
+
 /// Arguments of `vcm render`.
 #[derive(clap::Args)]
 pub struct RenderArgs {
@@ -33,20 +52,8 @@ pub struct RenderArgs {
     /// Render for this many seconds instead of a fixed sample count.
     #[arg(long)]
     time: Option<f64>,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 512)]
-    width: u32,
-    /// Image height in pixels (default: from the camera's aspect ratio, else square).
-    #[arg(long)]
-    height: Option<u32>,
-    /// Ray traversal backend.
-    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
-    backend: Backend,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    threads: Option<usize>,
     #[command(flatten)]
-    integrator: IntegratorOptions,
+    setup: RenderSetup,
     #[command(flatten)]
     schedule: ScheduleOptions,
     /// Output EXR (linear radiance); a tone-mapped PNG is written beside it.
@@ -63,25 +70,25 @@ pub struct RenderArgs {
 
 /// Renders as the arguments say.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    set_threads(args.threads)?;
+    set_threads(args.setup.threads)?;
     let budget = Budget::from_options(args.spp, args.time)?;
     check_writable(&args.output)?;
     let scene = load_scene(&args.scene)?;
-    let (width, height) = image_size(&scene, args.width, args.height);
+    let (width, height) = image_size(&scene, args.setup.width, args.setup.height);
     let reference = match &args.reference {
         Some(path) => Some(read_reference(path, (width, height))?),
         None => None,
     };
-    let traversal = build_traversal(args.backend, &scene)?;
+    let traversal = build_traversal(args.setup.backend, &scene)?;
     let mut integrator = integrators::build(
         args.algo,
         &scene,
         traversal,
         (width, height),
-        &args.integrator,
+        &args.setup.integrator,
     )?;
     let schedule = args.schedule.schedule();
-    if let Some(schedule) = schedule.or(args.backend.preferred_schedule()) {
+    if let Some(schedule) = schedule.or(args.setup.backend.preferred_schedule()) {
         integrator.set_schedule(schedule)?;
     }
     let interrupted = interrupt_flag()?;
