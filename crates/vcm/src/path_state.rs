@@ -2,6 +2,7 @@
 
 use glam::Vec3;
 use vcm_scene::sampling::Rng;
+use vcm_traversal::RayBatch;
 
 /// How the direction of a path's current segment was chosen, which decides the MIS weight of
 /// emission found at its end.
@@ -28,6 +29,16 @@ pub(crate) struct ShadowRay {
     pub tmax: f32,
     /// MIS-weighted radiance (RGB) added to the path's pixel when the ray is unoccluded.
     pub contribution: Vec3,
+}
+
+impl ShadowRay {
+    /// Refills `batch` with `shadows`, in order, for one occlusion query.
+    pub fn fill_batch<'a>(batch: &mut RayBatch, shadows: impl Iterator<Item = &'a ShadowRay>) {
+        batch.clear();
+        for shadow in shadows {
+            batch.push(shadow.origin, shadow.direction, 0.0, shadow.tmax);
+        }
+    }
 }
 
 /// One camera path (thesis Fig. 4.4, without the bidirectional MIS quantities).

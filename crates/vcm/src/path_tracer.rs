@@ -13,7 +13,7 @@ use vcm_traversal::{HitBatch, RayBatch, Traversal};
 use crate::error::RenderError;
 use crate::film::Film;
 use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
-use crate::path_state::PathState;
+use crate::path_state::{PathState, ShadowRay};
 use crate::shade::{ShadeContext, shade};
 use crate::surface_hit::Hit;
 
@@ -199,10 +199,8 @@ impl Wavefront for PtWavefront<'_> {
             .with_min_len(64)
             .enumerate()
             .for_each(|(i, path)| shade(&ctx, path, Hit::from_batch(hits, i)));
-        shadow_rays.clear();
-        for shadow in self.paths.iter().filter_map(|p| p.shadow.as_ref()) {
-            shadow_rays.push(shadow.origin, shadow.direction, 0.0, shadow.tmax);
-        }
+        let shadows = self.paths.iter().filter_map(|p| p.shadow.as_ref());
+        ShadowRay::fill_batch(shadow_rays, shadows);
     }
 
     /// Adds the unoccluded shadow contributions and retires the paths that ended.

@@ -101,11 +101,8 @@ impl CameraPass {
 
     /// Tests every queued occlusion ray and adds the unoccluded contributions to their paths.
     fn add_unoccluded(&mut self, ctx: &CameraContext, stats: &mut FrameStats) {
-        self.shadow_rays.clear();
-        for shadow in self.paths.iter().flat_map(|p| &p.shadows) {
-            self.shadow_rays
-                .push(shadow.origin, shadow.direction, 0.0, shadow.tmax);
-        }
+        let shadows = self.paths.iter().flat_map(|p| &p.shadows);
+        ShadowRay::fill_batch(&mut self.shadow_rays, shadows);
         stats.shadow_rays += self.shadow_rays.len() as u64;
         let (rays, occluded) = (&self.shadow_rays, &mut self.occluded);
         timed(&mut stats.traversal_time, || {

@@ -154,12 +154,11 @@ impl LightPass {
         film: &mut Film,
         stats: &mut FrameStats,
     ) {
-        self.shadow_rays.clear();
-        for splat in self.paths.iter().filter_map(|p| p.splat.as_ref()) {
-            let ray = &splat.ray;
-            self.shadow_rays
-                .push(ray.origin, ray.direction, 0.0, ray.tmax);
-        }
+        let rays = self
+            .paths
+            .iter()
+            .filter_map(|p| Some(&p.splat.as_ref()?.ray));
+        ShadowRay::fill_batch(&mut self.shadow_rays, rays);
         stats.shadow_rays += self.shadow_rays.len() as u64;
         let (rays, occluded) = (&self.shadow_rays, &mut self.occluded);
         timed(&mut stats.traversal_time, || {
