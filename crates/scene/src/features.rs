@@ -17,8 +17,27 @@ pub struct MaterialClasses {
     pub glossy: bool,
     /// Some material has a delta (perfectly specular) lobe: mirrors, smooth glass or coats.
     pub specular: bool,
+    /// Some glossy lobe is near-specular: roughness below [`NEAR_SPECULAR_ROUGHNESS`].
+    pub near_specular: bool,
     /// Some material transmits light (transmission > 0).
     pub transmission: bool,
+}
+
+/// Glossy lobes with a smaller roughness (GGX α = roughness² below 0.04) are near-specular:
+/// connections sample paths through them with high variance, so merging is kept for them.
+pub const NEAR_SPECULAR_ROUGHNESS: f32 = 0.2;
+
+impl MaterialClasses {
+    /// Some surface has a diffuse or glossy lobe (one that connections can sample).
+    pub fn non_specular(&self) -> bool {
+        self.diffuse || self.glossy
+    }
+
+    /// Some surface is specular or near-specular: paths through it may have no vertex that
+    /// connections sample well, which only merging finds (specular–diffuse–specular chains).
+    pub fn specular_or_near(&self) -> bool {
+        self.specular || self.near_specular
+    }
 }
 
 /// Counts of each light type.
@@ -92,6 +111,8 @@ impl MaterialClasses {
             // Lobes with α below the BSDF's threshold are perfect (delta) reflectors.
             self.specular |= alpha.0 < SMOOTH_ALPHA;
             self.glossy |= alpha.1 >= SMOOTH_ALPHA;
+            let near_specular = NEAR_SPECULAR_ROUGHNESS * NEAR_SPECULAR_ROUGHNESS;
+            self.near_specular |= alpha.1 >= SMOOTH_ALPHA && alpha.0 < near_specular;
         }
     }
 }
@@ -147,8 +168,8 @@ impl fmt::Display for SceneFeatures {
         writeln!(f, "bounds: {} .. {}", self.bounds.min, self.bounds.max)?;
         writeln!(
             f,
-            "materials: diffuse {}, glossy {}, specular {}, transmission {}",
-            m.diffuse, m.glossy, m.specular, m.transmission
+            "materials: diffuse {}, glossy {} (near-specular {}), specular {}, transmission {}",
+            m.diffuse, m.glossy, m.near_specular, m.specular, m.transmission
         )?;
         writeln!(
             f,
@@ -160,5 +181,39 @@ impl fmt::Display for SceneFeatures {
             "textures {}, alpha masks {}, normal maps {}",
             self.textures, self.alpha_masks, self.normal_maps
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn classes(material: Material) -> MaterialClasses {
+        let mut classes = MaterialClasses::default();
+        classes.add(&material, &[]);
+        classes
+    }
+
+    fn metal(roughness: f32) -> Material {
+        Material {
+            metallic: 1.0,
+            roughness,
+            ..Material::default()
+        }
+    }
+
+    #[test]
+    fn lobes_below_the_near_specular_roughness_are_near_specular() {
+        let just_below = classes(metal(NEAR_SPECULAR_ROUGHNESS * 0.99));
+        assert!(just_below.glossy && just_below.near_specular && !just_below.specular);
+        assert!(just_below.specular_or_near() && just_below.non_specular());
+        let just_above = classes(metal(NEAR_SPECULAR_ROUGHNESS * 1.01));
+        assert!(just_above.glossy && !just_above.near_specular);
+        assert!(!just_above.specular_or_near());
+        let mirror = classes(metal(0.0));
+        assert!(mirror.specular && !mirror.near_specular && !mirror.non_specular());
+        let diffuse = classes(Material::diffuse("white", Vec3::ONE));
+        assert!(diffuse.diffuse && !diffuse.specular_or_near());
     }
 }

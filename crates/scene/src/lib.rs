@@ -3,7 +3,7 @@
 //! Everything a renderer needs to know about a scene: loading glTF 2.0 and Wavefront OBJ/MTL
 //! files, triangle geometry in world space, materials and their BSDFs, textures, lights with
 //! their sampling routines, the camera, and [`SceneFeatures`] (what the scene contains, so that
-//! renderers can leave out what it does not need).
+//! renderers can leave out what it does not need; [`ShadingPlan`] leaves out per-hit work).
 //!
 //! The mapping from file contents to physics follows the project's scene conventions: linear
 //! Rec.709 RGB, sRGB-decoded color textures, glTF metallic-roughness materials with the
@@ -22,6 +22,7 @@
 
 pub mod bsdf;
 pub mod camera;
+pub mod decision;
 pub mod error;
 pub mod features;
 pub mod frame;
@@ -31,15 +32,18 @@ pub mod material;
 pub mod mesh;
 pub mod sampling;
 pub mod scene;
+pub mod shading_plan;
 pub mod shapes;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod texture;
 
 pub use camera::Camera;
+pub use decision::Decision;
 pub use error::SceneError;
 pub use features::SceneFeatures;
 pub use material::{AlphaMode, Material};
 pub use mesh::{Bounds, Mesh, SurfacePoint};
 pub use scene::Scene;
+pub use shading_plan::ShadingPlan;
 pub use texture::{Texture, TextureRef};

@@ -106,35 +106,45 @@ impl Mesh {
         self.uvs[i0] * (1.0 - u - v) + self.uvs[i1] * u + self.uvs[i2] * v
     }
 
-    /// The interpolated vertex normal and tangent at (u, v), without normal mapping.
-    fn interpolated_frame(&self, t: usize, u: f32, v: f32) -> (Vec3, Vec4) {
+    /// The unit-length interpolated vertex normal at (u, v), or `fallback` where the
+    /// interpolation vanishes.
+    fn interpolated_normal(&self, t: usize, u: f32, v: f32, fallback: Vec3) -> Vec3 {
         let [i0, i1, i2] = self.triangles[t].map(|i| i as usize);
-        let w = 1.0 - u - v;
-        let n = self.normals[i0] * w + self.normals[i1] * u + self.normals[i2] * v;
-        let tan = self.tangents[i0] * w + self.tangents[i1] * u + self.tangents[i2] * v;
-        (n, tan)
+        let n = self.normals[i0] * (1.0 - u - v) + self.normals[i1] * u + self.normals[i2] * v;
+        n.try_normalize().unwrap_or(fallback)
     }
 
-    /// The surface point at barycentrics (u, v) on triangle `t`.
+    /// The interpolated vertex tangent at (u, v) (handedness in w).
+    fn interpolated_tangent(&self, t: usize, u: f32, v: f32) -> Vec4 {
+        let [i0, i1, i2] = self.triangles[t].map(|i| i as usize);
+        self.tangents[i0] * (1.0 - u - v) + self.tangents[i1] * u + self.tangents[i2] * v
+    }
+
+    /// The surface point at barycentrics (u, v) on triangle `t`, with texture coordinates
+    /// `uv` (computed by the caller, who may need them first).
     ///
-    /// `normal_map` is the tangent-space normal from the material's normal map, if any.
+    /// `normal_map` is the tangent-space normal from the material's normal map, if any; only
+    /// then are tangents interpolated.
     pub fn surface_point(
         &self,
         t: usize,
         u: f32,
         v: f32,
+        uv: Vec2,
         normal_map: Option<Vec3>,
     ) -> SurfacePoint {
         let [a, b, c] = self.corners(t);
         let geometric_normal = self.geometric_normal(t);
-        let (interpolated, tangent) = self.interpolated_frame(t, u, v);
-        let mut shading = interpolated.try_normalize().unwrap_or(geometric_normal);
-        if let (Some(m), Some(tan)) = (normal_map, tangent.truncate().try_normalize()) {
-            let sign = if tangent.w < 0.0 { -1.0 } else { 1.0 };
-            let tan = (tan - shading * shading.dot(tan)).normalize_or_zero();
-            let bitangent = shading.cross(tan) * sign;
-            let mapped = tan * m.x + bitangent * m.y + shading * m.z;
-            shading = mapped.try_normalize().unwrap_or(shading);
+        let mut shading = self.interpolated_normal(t, u, v, geometric_normal);
+        if let Some(m) = normal_map {
+            let tangent = self.interpolated_tangent(t, u, v);
+            if let Some(tan) = tangent.truncate().try_normalize() {
+                let sign = if tangent.w < 0.0 { -1.0 } else { 1.0 };
+                let tan = (tan - shading * shading.dot(tan)).normalize_or_zero();
+                let bitangent = shading.cross(tan) * sign;
+                let mapped = tan * m.x + bitangent * m.y + shading * m.z;
+                shading = mapped.try_normalize().unwrap_or(shading);
+            }
         }
         if shading.dot(geometric_normal) < 0.0 {
             shading = -shading;
@@ -143,7 +153,7 @@ impl Mesh {
             position: a * (1.0 - u - v) + b * u + c * v,
             geometric_normal,
             shading_normal: shading,
-            uv: self.uv_at(t, u, v),
+            uv,
             material: self.material_ids[t],
             triangle: t as u32,
         }
@@ -222,7 +232,7 @@ mod tests {
         let m = quad();
         assert_eq!(m.geometric_normal(0), Vec3::Z);
         assert!((m.area(0) - 0.5).abs() < 1e-6);
-        let p = m.surface_point(0, 0.5, 0.25, None);
+        let p = m.surface_point(0, 0.5, 0.25, m.uv_at(0, 0.5, 0.25), None);
         assert!((p.position - Vec3::new(0.75, 0.25, 0.0)).length() < 1e-6);
         assert_eq!(m.bounds().max, Vec3::new(1.0, 1.0, 0.0));
     }
@@ -236,7 +246,7 @@ mod tests {
             assert_eq!(t.w, 1.0);
         }
         let tilted = Vec3::new(0.6, 0.0, 0.8);
-        let p = m.surface_point(0, 0.3, 0.3, Some(tilted));
+        let p = m.surface_point(0, 0.3, 0.3, m.uv_at(0, 0.3, 0.3), Some(tilted));
         assert!((p.shading_normal - tilted).length() < 1e-5);
     }
 
@@ -244,7 +254,7 @@ mod tests {
     fn shading_normal_is_flipped_into_the_geometric_hemisphere() {
         let mut m = quad();
         m.normals = vec![-Vec3::Z; 4];
-        let p = m.surface_point(1, 0.2, 0.2, None);
+        let p = m.surface_point(1, 0.2, 0.2, m.uv_at(1, 0.2, 0.2), None);
         assert_eq!(p.shading_normal, Vec3::Z);
     }
 }

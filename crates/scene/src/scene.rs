@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
@@ -11,6 +11,7 @@ use crate::features::SceneFeatures;
 use crate::light::{AreaLight, HitEmission, Light, LightSampler};
 use crate::material::{AlphaMode, Material};
 use crate::mesh::{Mesh, SurfacePoint};
+use crate::shading_plan::ShadingPlan;
 use crate::texture::Texture;
 
 /// A scene ready to render. Immutable once built; share it by reference across threads.
@@ -32,6 +33,9 @@ pub struct Scene {
     pub camera: Camera,
     /// What the scene contains, for integrators and pipelines to leave out what it does not need.
     pub features: SceneFeatures,
+    /// The per-hit work shading does, chosen from `features`; set it to [`ShadingPlan::FULL`]
+    /// to compare against a render that leaves nothing out.
+    pub shading: ShadingPlan,
     /// Unsupported features and dropped data, each reported once, naming the file.
     pub warnings: Vec<String>,
     /// Zero-area triangles dropped while loading.
@@ -83,6 +87,7 @@ impl Scene {
             light_sampler,
             camera,
             features,
+            shading: ShadingPlan::for_features(&features),
             warnings,
             dropped_triangles: 0,
         }
@@ -93,14 +98,25 @@ impl Scene {
         &self.materials[self.mesh.material_ids[triangle as usize] as usize]
     }
 
-    /// The surface point at barycentrics (u, v) of `triangle`, with the normal map applied.
+    /// The surface point at barycentrics (u, v) of `triangle`, with the normal map applied
+    /// (texture coordinates and normal maps as far as [`Scene::shading`] plans them).
     pub fn surface_point(&self, triangle: u32, u: f32, v: f32) -> SurfacePoint {
         let t = triangle as usize;
-        let material = self.material_of(triangle);
-        let normal_map = material
-            .normal_texture
-            .and_then(|_| material.tangent_space_normal(&self.textures, self.mesh.uv_at(t, u, v)));
-        self.mesh.surface_point(t, u, v, normal_map)
+        let plan = &self.shading;
+        let uv = if plan.texture_coordinates || plan.normal_maps {
+            self.mesh.uv_at(t, u, v)
+        } else {
+            Vec2::ZERO
+        };
+        let normal_map = if plan.normal_maps {
+            let material = self.material_of(triangle);
+            material
+                .normal_texture
+                .and_then(|_| material.tangent_space_normal(&self.textures, uv))
+        } else {
+            None
+        };
+        self.mesh.surface_point(t, u, v, uv, normal_map)
     }
 
     /// The BSDF at a surface point.
@@ -124,6 +140,9 @@ impl Scene {
         v: f32,
         ray_dir: Vec3,
     ) -> Option<HitEmission> {
+        if !self.shading.emitter_lookups {
+            return None;
+        }
         let light = self.light_sampler.light_of_triangle(triangle)?;
         match &self.lights[light] {
             Light::Area(area) => area.radiance_on_hit(&self.textures, ray_dir, u, v),
