@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use vcm::Schedule;
-use vcm_scene::Scene;
+use vcm_scene::{Decision, Scene};
 use vcm_traversal::{BuildError, Traversal};
 use vcm_traversal_wgpu::GpuError;
 
@@ -57,6 +57,21 @@ impl Backend {
             Backend::Cpu => None,
             Backend::Gpu => Some(Schedule::ONE_BATCH),
         }
+    }
+
+    /// Whether this backend's traversal tests alpha masks for `scene`, and why: the test
+    /// (on the CPU a callback, on the GPU the `alpha_masks.wgsl` module and its buffers)
+    /// exists only where some material is alpha-masked.
+    pub fn decisions(self, scene: &Scene) -> Vec<Decision> {
+        let part = match self {
+            Backend::Cpu => "alpha test in the cpu traversal",
+            Backend::Gpu => "alpha test in the gpu kernels",
+        };
+        vec![if scene.features.alpha_masks {
+            Decision::runs(part, "some material is alpha-masked")
+        } else {
+            Decision::left_out(part, "no material is alpha-masked")
+        }]
     }
 
     /// Builds this backend's traversal over `scene` (its BVH, once per scene).

@@ -7,7 +7,7 @@ use vcm::{
     Algorithm as VcmAlgorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer,
     PtSettings, RenderError, Schedule, Scheduler, Vcm, VcmSettings,
 };
-use vcm_scene::Scene;
+use vcm_scene::{Scene, ShadingPlan};
 use vcm_traversal::Traversal;
 
 /// Light transport algorithms.
@@ -71,6 +71,23 @@ pub struct IntegratorOptions {
     /// Radius reduction exponent: frame i merges within r₀ · i^((α − 1) / 2) (ppm, bpm, vcm).
     #[arg(long, default_value_t = DEFAULT_ALPHA)]
     pub alpha: f32,
+    /// Run every part of the algorithm and of shading, even those the scene does not need
+    /// (`vcm render --explain` lists them); the image's expectation is the same.
+    #[arg(long)]
+    pub no_prune: bool,
+}
+
+impl Default for IntegratorOptions {
+    fn default() -> Self {
+        IntegratorOptions {
+            seed: 0,
+            max_depth: None,
+            connections: 1,
+            radius: DEFAULT_RADIUS_FRACTION,
+            alpha: DEFAULT_ALPHA,
+            no_prune: false,
+        }
+    }
 }
 
 /// How paths are grouped into batches.
@@ -123,7 +140,8 @@ impl ScheduleOptions {
     }
 }
 
-/// The integrator of `algorithm` for a `width` × `height` image.
+/// The integrator of `algorithm` for a `width` × `height` image. With `options.no_prune`
+/// it renders a copy of the scene whose shading runs every part ([`ShadingPlan::FULL`]).
 pub fn build(
     algorithm: Algorithm,
     scene: &Arc<Scene>,
@@ -131,7 +149,14 @@ pub fn build(
     (width, height): (u32, u32),
     options: &IntegratorOptions,
 ) -> Result<Box<dyn Integrator>, RenderError> {
-    let scene = Arc::clone(scene);
+    let scene = if options.no_prune && scene.shading != ShadingPlan::FULL {
+        Arc::new(Scene {
+            shading: ShadingPlan::FULL,
+            ..Scene::clone(scene)
+        })
+    } else {
+        Arc::clone(scene)
+    };
     Ok(match algorithm.vcm_algorithm() {
         None => {
             let settings = PtSettings {
@@ -149,6 +174,7 @@ pub fn build(
                 connections: options.connections,
                 radius_fraction: options.radius,
                 alpha: options.alpha,
+                prune: !options.no_prune,
                 ..VcmSettings::new(vcm_algorithm, width, height)
             };
             Box::new(Vcm::new(scene, traversal, settings)?)

@@ -2,6 +2,7 @@
 
 use std::time::Duration;
 
+use vcm_scene::Decision;
 use vcm_scheduler::Scheduler;
 
 use crate::error::RenderError;
@@ -37,6 +38,10 @@ pub trait Integrator: Send {
     fn samples_per_frame(&self) -> u32 {
         1
     }
+
+    /// The integrator's parts and why each runs or is left out for its scene (what
+    /// `vcm render --explain` prints besides the scene's [`vcm_scene::ShadingPlan`]).
+    fn decisions(&self) -> Vec<Decision>;
 }
 
 /// How a frame's paths are scheduled: the grouping into batches and the samples per pixel

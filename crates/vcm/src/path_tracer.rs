@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
-use vcm_scene::Scene;
 use vcm_scene::sampling::Rng;
+use vcm_scene::{Decision, Scene};
 use vcm_scheduler::{SchedulerStats, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch, Traversal};
 
@@ -127,6 +127,15 @@ impl Integrator for PathTracer {
     fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
         self.schedule = schedule.validated()?;
         Ok(())
+    }
+
+    fn decisions(&self) -> Vec<Decision> {
+        let reason = "path tracing neither connects nor merges";
+        vec![
+            Decision::left_out("light paths", reason),
+            Decision::left_out("light vertex cache", reason),
+            Decision::left_out("merging and hash grid", reason),
+        ]
     }
 
     fn samples_per_frame(&self) -> u32 {

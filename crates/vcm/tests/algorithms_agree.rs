@@ -47,32 +47,9 @@ fn vcm_family(name: &str, algorithm: Algorithm, radius_fraction: f32) -> Box<dyn
 }
 
 /// z-scores of the region means of `integrator` against the reference, and last that of the
-/// image mean (its standard error is about a quarter of a region's, so it sees a small bias
-/// that the regions would not).
+/// image mean.
 fn z_scores(reference: &RegionSeries, integrator: &mut dyn Integrator, frames: u32) -> Vec<f64> {
-    let series = common::region_means(integrator, frames, REGIONS);
-    let z = |m: f64, e: f64, rm: f64, re: f64| (m - rm) / (e * e + re * re).sqrt();
-    let mut scores: Vec<f64> = (0..REGIONS * REGIONS)
-        .map(|r| {
-            assert!(
-                reference.means[r] > 0.0,
-                "region {r} of the reference is black"
-            );
-            z(
-                series.means[r],
-                series.errors[r],
-                reference.means[r],
-                reference.errors[r],
-            )
-        })
-        .collect();
-    scores.push(z(
-        series.image_mean,
-        series.image_error,
-        reference.image_mean,
-        reference.image_error,
-    ));
-    scores
+    common::region_means(integrator, frames, REGIONS).z_scores(reference)
 }
 
 #[test]

@@ -315,6 +315,7 @@ mod tests {
                 connections: 1,
                 radius: 0.01,
                 alpha: 0.75,
+                ..IntegratorOptions::default()
             },
             samples_per_frame: 2,
         }

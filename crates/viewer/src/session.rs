@@ -66,6 +66,7 @@ mod tests {
                     connections: 1,
                     radius: 0.003,
                     alpha: 0.75,
+                    ..IntegratorOptions::default()
                 },
                 samples_per_frame: 1,
             },

@@ -84,6 +84,7 @@ fn library_render(scene: &Arc<Scene>, seed: u64) -> Srgb {
         connections: 1,
         radius: vcm::DEFAULT_RADIUS_FRACTION,
         alpha: vcm::DEFAULT_ALPHA,
+        ..IntegratorOptions::default()
     };
     let traversal = Backend::Cpu.traversal(scene).unwrap();
     let mut integrator =

@@ -7,11 +7,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context, bail};
 use glam::Vec3;
-use vcm::Film;
 use vcm::atomic_write::write_atomically;
 use vcm::image_io::RgbImage;
+use vcm::{Film, Integrator};
 use vcm_rs::Backend;
-use vcm_rs::scene::Scene;
+use vcm_rs::scene::{Scene, ShadingPlan};
 use vcm_rs::traversal::Traversal;
 
 use crate::plot::{Series, plot_relmse};
@@ -66,6 +66,10 @@ pub struct RenderArgs {
     /// the end; a log-log plot of relMSE against seconds is drawn beside it (PNG).
     #[arg(long, requires = "reference")]
     report: Option<PathBuf>,
+    /// Print what the scene contains and, for each part of the render (light paths, cache,
+    /// merging, shading, alpha test), whether it runs or is left out and why.
+    #[arg(long)]
+    explain: bool,
 }
 
 /// Renders as the arguments say.
@@ -87,6 +91,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         (width, height),
         &args.setup.integrator,
     )?;
+    if args.explain {
+        print_explanation(&scene, &args.setup, integrator.as_ref());
+    }
     let schedule = args.schedule.schedule();
     if let Some(schedule) = schedule.or(args.setup.backend.preferred_schedule()) {
         integrator.set_schedule(schedule)?;
@@ -128,6 +135,28 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     print_summary(&film, &outcome);
     println!("wrote {} and {}", args.output.display(), png.display());
     Ok(())
+}
+
+/// Prints the scene's features and every part of the render with whether it runs and why.
+fn print_explanation(scene: &Scene, setup: &RenderSetup, integrator: &dyn Integrator) {
+    println!("scene {}:", scene.path.display());
+    for line in scene.features.to_string().lines() {
+        println!("  {line}");
+    }
+    let shading = if setup.integrator.no_prune {
+        ShadingPlan::FULL
+    } else {
+        scene.shading
+    };
+    let decisions = integrator
+        .decisions()
+        .into_iter()
+        .chain(shading.decisions(&scene.features))
+        .chain(setup.backend.decisions(scene));
+    println!("plan:");
+    for decision in decisions {
+        println!("  {decision}");
+    }
 }
 
 /// Builds `backend` for `scene` and says on stderr what it runs on.

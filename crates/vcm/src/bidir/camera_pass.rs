@@ -173,13 +173,13 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     }
     let bsdf = scene.bsdf(&surface.point);
     if bsdf.has_non_delta() {
-        if algorithm.connects() {
+        if ctx.plan.connects {
             if let Some(shadow) = light_sample(ctx, path, &surface, &bsdf, wo) {
                 path.shadows.push(shadow);
             }
             connect_to_cache(ctx, path, &surface, &bsdf, wo);
         }
-        if algorithm.merges() {
+        if ctx.plan.merges {
             path.radiance += path.walk.throughput * merge(ctx, path, &surface, &bsdf, wo);
             // Photon mapping proper stops at the first diffuse or glossy vertex.
             if algorithm == Algorithm::Ppm {
@@ -210,7 +210,7 @@ fn emission(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> Vec3 {
     let weight = if path.walk.segments == 1 {
         // No other technique samples a light seen directly through a pinhole.
         1.0
-    } else if !ctx.settings.algorithm.connects() {
+    } else if !ctx.plan.connects {
         // Without connections, merging finds every path with a non-specular vertex.
         if path.specular_path { 1.0 } else { 0.0 }
     } else {

@@ -20,12 +20,13 @@
 mod camera_pass;
 mod light_pass;
 pub(crate) mod mis;
+mod plan;
 mod walk;
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use vcm_scene::Scene;
+use vcm_scene::{Decision, Scene};
 use vcm_traversal::Traversal;
 
 use crate::error::RenderError;
@@ -36,6 +37,7 @@ use crate::light_vertex_cache::LightVertexCache;
 use camera_pass::CameraPass;
 use light_pass::{LightPass, LightPassOutputs};
 use mis::MisFactors;
+use plan::BidirPlan;
 
 /// Light paths traced by the preprocess that sizes the light vertex cache.
 const PREPROCESS_LIGHT_PATHS: u32 = 10_000;
@@ -62,6 +64,17 @@ pub enum Algorithm {
 }
 
 impl Algorithm {
+    /// The lower-case short name (lt, bpt, ppm, bpm, vcm).
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::LightTracing => "lt",
+            Algorithm::Bpt => "bpt",
+            Algorithm::Ppm => "ppm",
+            Algorithm::Bpm => "bpm",
+            Algorithm::Vcm => "vcm",
+        }
+    }
+
     /// Whether camera vertices connect to light samples and light vertices, and light vertices
     /// to the camera.
     pub fn connects(self) -> bool {
@@ -106,6 +119,9 @@ pub struct VcmSettings {
     pub radius_fraction: f32,
     /// Radius reduction: frame i (from 1) merges within r₀ · i^((α − 1) / 2).
     pub alpha: f32,
+    /// Leave out what the scene does not need (see [`Integrator::decisions`]); `false` runs every
+    /// part of the algorithm, for comparisons.
+    pub prune: bool,
 }
 
 impl VcmSettings {
@@ -120,6 +136,7 @@ impl VcmSettings {
             connections: 1,
             radius_fraction: DEFAULT_RADIUS_FRACTION,
             alpha: DEFAULT_ALPHA,
+            prune: true,
         }
     }
 }
@@ -132,6 +149,8 @@ pub(crate) struct FrameContext<'a> {
     /// The frame (seeds the paths).
     pub iteration: u32,
     pub factors: &'a MisFactors,
+    /// The parts of the frame that run.
+    pub plan: &'a BidirPlan,
 }
 
 impl FrameContext<'_> {
@@ -146,6 +165,7 @@ pub struct Vcm {
     scene: Arc<Scene>,
     traversal: Arc<dyn Traversal>,
     settings: VcmSettings,
+    plan: BidirPlan,
     base_radius: f32,
     light_pass: LightPass,
     camera_pass: CameraPass,
@@ -180,17 +200,19 @@ impl Vcm {
             ));
         }
         let base_radius = settings.radius_fraction * scene.features.bounds.radius();
+        let plan = BidirPlan::new(settings.algorithm, &scene.features, settings.prune);
         let mut vcm = Vcm {
             scene,
             traversal,
             settings,
+            plan,
             base_radius,
             light_pass: LightPass::default(),
             camera_pass: CameraPass::default(),
             cache: LightVertexCache::default(),
             grid: HashGrid::default(),
         };
-        if settings.algorithm.caches() {
+        if plan.cache {
             vcm.cache = LightVertexCache::with_capacity(vcm.estimate_cache_capacity());
         }
         Ok(vcm)
@@ -212,6 +234,11 @@ impl Vcm {
         &self.cache
     }
 
+    /// The hash grid over the last frame's cache (empty unless the frame merged).
+    pub fn grid(&self) -> &HashGrid {
+        &self.grid
+    }
+
     /// Traces [`PREPROCESS_LIGHT_PATHS`] light paths (without storing or splatting anything)
     /// and returns the cache capacity they suggest for one frame.
     fn estimate_cache_capacity(&mut self) -> usize {
@@ -223,6 +250,7 @@ impl Vcm {
             settings: &self.settings,
             iteration: 0,
             factors: &factors,
+            plan: &self.plan,
         };
         let vertices = self.light_pass.count_vertices(&ctx, PREPROCESS_LIGHT_PATHS);
         LightVertexCache::estimate_capacity(
@@ -239,12 +267,8 @@ impl Vcm {
 
 impl Integrator for Vcm {
     fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats {
-        let VcmSettings {
-            width,
-            height,
-            algorithm,
-            ..
-        } = self.settings;
+        let VcmSettings { width, height, .. } = self.settings;
+        let plan = self.plan;
         assert_eq!(
             (film.width(), film.height()),
             (width, height),
@@ -253,17 +277,12 @@ impl Integrator for Vcm {
         let start = Instant::now();
         let radius = self.radius(iteration);
         let light_paths = self.light_paths();
-        let factors = MisFactors::new(
-            algorithm.connects(),
-            algorithm.merges(),
-            radius,
-            light_paths as f32,
-        );
+        let factors = MisFactors::new(plan.connects, plan.merges, radius, light_paths as f32);
         let mut stats = FrameStats::default();
         self.cache.clear();
         let outputs = LightPassOutputs {
-            cache: algorithm.caches().then_some(&mut self.cache),
-            film: algorithm.splats().then_some(&mut *film),
+            cache: plan.cache.then_some(&mut self.cache),
+            film: plan.splats.then_some(&mut *film),
         };
         let frame = FrameContext {
             scene: &self.scene,
@@ -271,13 +290,16 @@ impl Integrator for Vcm {
             settings: &self.settings,
             iteration,
             factors: &factors,
+            plan: &plan,
         };
-        self.light_pass
-            .run(&frame, light_paths, outputs, &mut stats);
+        if plan.light_paths() {
+            self.light_pass
+                .run(&frame, light_paths, outputs, &mut stats);
+        }
         stats.light_vertices = self.cache.len() as u64;
         stats.discarded_light_vertices = self.cache.discarded();
 
-        if algorithm.merges() {
+        if plan.merges {
             let grid_start = Instant::now();
             let positions: Vec<_> = self.cache.vertices().iter().map(|v| v.position).collect();
             self.grid = HashGrid::build(&positions, radius);
@@ -298,6 +320,12 @@ impl Integrator for Vcm {
 
     fn image_size(&self) -> (u32, u32) {
         (self.settings.width, self.settings.height)
+    }
+
+    /// Light paths, the light vertex cache, light tracing splats, merging and the hash grid.
+    fn decisions(&self) -> Vec<Decision> {
+        self.plan
+            .decisions(self.settings.algorithm, &self.scene.features)
     }
 }
 

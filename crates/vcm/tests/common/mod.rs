@@ -170,6 +170,31 @@ pub struct RegionSeries {
     pub image_error: f64,
 }
 
+impl RegionSeries {
+    /// z-scores of the region means against `reference`'s, and last that of the image mean
+    /// (its standard error is about 1/√regions² of a region's, so it sees a small bias that
+    /// the regions would not). Asserts that no region of the reference is black.
+    pub fn z_scores(&self, reference: &RegionSeries) -> Vec<f64> {
+        let z = |m: f64, e: f64, rm: f64, re: f64| (m - rm) / (e * e + re * re).sqrt();
+        let regions = self.means.iter().zip(&self.errors);
+        let mut scores: Vec<f64> = regions
+            .zip(reference.means.iter().zip(&reference.errors))
+            .enumerate()
+            .map(|(r, ((&m, &e), (&rm, &re)))| {
+                assert!(rm > 0.0, "region {r} of the reference is black");
+                z(m, e, rm, re)
+            })
+            .collect();
+        scores.push(z(
+            self.image_mean,
+            self.image_error,
+            reference.image_mean,
+            reference.image_error,
+        ));
+        scores
+    }
+}
+
 /// Renders `frames` frames (iterations 0, 1, …) and measures the image split into
 /// `regions` × `regions` blocks. Asserts that no sample was dropped.
 pub fn region_means(integrator: &mut dyn Integrator, frames: u32, regions: usize) -> RegionSeries {
