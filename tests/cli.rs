@@ -218,3 +218,37 @@ fn schedulers_render_the_same_image() {
     assert!(none.iter().any(|p| p.max_element() > 0.0));
     assert_eq!(none, tiles);
 }
+
+/// `--explain` names every part of the render with its verdict and reason; `--no-prune`
+/// runs them all, and on the Cornell box (nothing but diffuse surfaces) the path tracer's
+/// image does not change.
+#[test]
+fn explain_prints_what_runs_and_no_prune_runs_everything() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, extra: &[&str]| {
+        let exr = dir.path().join(format!("{name}.exr"));
+        let mut args = vec!["render", "--spp", "2", "--width", "24", "--explain"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", exr.to_str().unwrap()]);
+        let output = vcm(&args);
+        assert!(output.status.success(), "{name}: {}", stderr(&output));
+        let pixels = vcm::image_io::RgbImage::read_exr(&exr).unwrap().pixels;
+        (String::from_utf8_lossy(&output.stdout).into_owned(), pixels)
+    };
+    let (vcm_plan, _) = render("vcm", &["--algo", "vcm"]);
+    for line in [
+        "light vertex cache: runs",
+        "merging and hash grid: left out (no specular or near-specular surface",
+        "normal maps and tangents: left out (no material has a normal map)",
+        "alpha test in the cpu traversal: left out",
+    ] {
+        assert!(vcm_plan.contains(line), "missing {line:?} in\n{vcm_plan}");
+    }
+    let (full_plan, _) = render("vcm-full", &["--algo", "vcm", "--no-prune"]);
+    assert!(full_plan.contains("merging and hash grid: runs ("), "{full_plan}");
+    assert!(full_plan.contains("normal maps and tangents: runs ("), "{full_plan}");
+    let (_, pruned) = render("pt", &[]);
+    let (_, full) = render("pt-full", &["--no-prune"]);
+    assert!(pruned.iter().any(|p| p.max_element() > 0.0));
+    assert_eq!(pruned, full);
+}
