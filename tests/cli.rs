@@ -245,8 +245,14 @@ fn explain_prints_what_runs_and_no_prune_runs_everything() {
         assert!(vcm_plan.contains(line), "missing {line:?} in\n{vcm_plan}");
     }
     let (full_plan, _) = render("vcm-full", &["--algo", "vcm", "--no-prune"]);
-    assert!(full_plan.contains("merging and hash grid: runs ("), "{full_plan}");
-    assert!(full_plan.contains("normal maps and tangents: runs ("), "{full_plan}");
+    assert!(
+        full_plan.contains("merging and hash grid: runs ("),
+        "{full_plan}"
+    );
+    assert!(
+        full_plan.contains("normal maps and tangents: runs ("),
+        "{full_plan}"
+    );
     let (_, pruned) = render("pt", &[]);
     let (_, full) = render("pt-full", &["--no-prune"]);
     assert!(pruned.iter().any(|p| p.max_element() > 0.0));

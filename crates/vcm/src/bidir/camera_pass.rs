@@ -7,6 +7,7 @@ use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use vcm_scene::bsdf::{Bsdf, LobeKind, TransportMode};
 use vcm_scene::sampling::Rng;
+use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
 use super::mis::{
@@ -14,7 +15,7 @@ use super::mis::{
     light_sample_weight, merge_weight,
 };
 use super::walk::Walk;
-use super::{Algorithm, FrameContext, VcmSettings, timed};
+use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::film::Film;
 use crate::hash_grid::HashGrid;
 use crate::integrator::FrameStats;
@@ -55,60 +56,81 @@ struct CameraPathState {
     shadows: Vec<ShadowRay>,
 }
 
-/// The camera pass's reusable buffers.
-#[derive(Default)]
-pub(crate) struct CameraPass {
-    paths: Vec<CameraPathState>,
-    rays: RayBatch,
-    hits: HitBatch,
-    shadow_rays: RayBatch,
-    occluded: Vec<bool>,
+/// Traces one camera path per pixel, grouped as `scheduler` says, and adds each path's
+/// radiance to `film` once it ends.
+pub(crate) fn run(
+    ctx: &CameraContext,
+    scheduler: Scheduler,
+    film: &mut Film,
+    stats: &mut FrameStats,
+) {
+    let VcmSettings { width, height, .. } = *ctx.settings;
+    let new_wavefront = || CameraWavefront {
+        ctx,
+        paths: Vec::new(),
+        finished: Vec::new(),
+    };
+    let (outputs, scheduled) =
+        vcm_scheduler::run(scheduler, (width, height), ctx.traversal, new_wavefront);
+    let camera_rays = u64::from(width) * u64::from(height);
+    stats.camera_rays += camera_rays;
+    stats.continuation_rays += scheduled.closest_rays - camera_rays;
+    add_scheduled(stats, &scheduled);
+    // One path per pixel: the additions to different pixels commute, so their order does not
+    // matter.
+    for (pixel, radiance) in outputs.into_iter().flatten() {
+        film.add(pixel as usize, radiance);
+    }
 }
 
-impl CameraPass {
-    /// Traces one camera path per pixel and adds each path's radiance to `film` once it ends.
-    pub fn run(&mut self, ctx: &CameraContext, film: &mut Film, stats: &mut FrameStats) {
-        let VcmSettings { width, height, .. } = *ctx.settings;
-        (0..width * height)
+/// The camera paths one scheduler worker has in flight, and the radiance of those that ended.
+struct CameraWavefront<'a> {
+    ctx: &'a CameraContext<'a>,
+    paths: Vec<CameraPathState>,
+    /// (pixel, radiance) of the paths that ended.
+    finished: Vec<(u32, Vec3)>,
+}
+
+impl Wavefront for CameraWavefront<'_> {
+    type Output = Vec<(u32, Vec3)>;
+
+    fn start(&mut self, tile: Tile) {
+        let ctx = self.ctx;
+        let pixels: Vec<u32> = tile.pixels(ctx.settings.width).collect();
+        let new_paths = pixels
             .into_par_iter()
-            .map(|pixel| start(ctx, pixel))
-            .collect_into_vec(&mut self.paths);
-        stats.camera_rays += self.paths.len() as u64;
-        while !self.paths.is_empty() {
-            self.rays.clear();
-            for path in &self.paths {
-                self.rays
-                    .push(path.walk.origin, path.walk.direction, 0.0, f32::INFINITY);
-            }
-            let (rays, hits) = (&self.rays, &mut self.hits);
-            timed(&mut stats.traversal_time, || {
-                ctx.traversal.intersect(rays, hits)
-            });
-            let hits = &self.hits;
-            self.paths.par_iter_mut().enumerate().for_each(|(i, path)| {
-                shade(ctx, path, Hit::from_batch(hits, i));
-            });
-            self.add_unoccluded(ctx, stats);
-            self.paths.retain(|path| {
-                if !path.alive {
-                    film.add(path.pixel as usize, path.radiance);
-                }
-                path.alive
-            });
-            stats.continuation_rays += self.paths.len() as u64;
+            .with_min_len(256)
+            .map(|pixel| start(ctx, pixel));
+        self.paths.par_extend(new_paths);
+    }
+
+    fn active(&self) -> usize {
+        self.paths.len()
+    }
+
+    fn extension_rays(&self, rays: &mut RayBatch) {
+        rays.clear();
+        for path in &self.paths {
+            rays.push(path.walk.origin, path.walk.direction, 0.0, f32::INFINITY);
         }
     }
 
-    /// Tests every queued occlusion ray and adds the unoccluded contributions to their paths.
-    fn add_unoccluded(&mut self, ctx: &CameraContext, stats: &mut FrameStats) {
+    /// Shades every path at its hit in parallel and queues its light sample and connections,
+    /// in path order.
+    fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
+        let ctx = self.ctx;
+        self.paths
+            .par_iter_mut()
+            .with_min_len(64)
+            .enumerate()
+            .for_each(|(i, path)| shade(ctx, path, Hit::from_batch(hits, i)));
         let shadows = self.paths.iter().flat_map(|p| &p.shadows);
-        ShadowRay::fill_batch(&mut self.shadow_rays, shadows);
-        stats.shadow_rays += self.shadow_rays.len() as u64;
-        let (rays, occluded) = (&self.shadow_rays, &mut self.occluded);
-        timed(&mut stats.traversal_time, || {
-            ctx.traversal.occluded(rays, occluded)
-        });
-        let mut blocked = self.occluded.iter();
+        ShadowRay::fill_batch(shadow_rays, shadows);
+    }
+
+    /// Adds the unoccluded contributions to their paths and retires the paths that ended.
+    fn resolve(&mut self, occluded: &[bool]) {
+        let mut blocked = occluded.iter();
         for path in &mut self.paths {
             for shadow in path.shadows.drain(..) {
                 if !blocked.next().expect("one test per queued ray") {
@@ -116,6 +138,17 @@ impl CameraPass {
                 }
             }
         }
+        let finished = &mut self.finished;
+        self.paths.retain(|path| {
+            if !path.alive {
+                finished.push((path.pixel, path.radiance));
+            }
+            path.alive
+        });
+    }
+
+    fn finish(self) -> Vec<(u32, Vec3)> {
+        self.finished
     }
 }
 

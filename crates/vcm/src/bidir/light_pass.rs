@@ -5,11 +5,12 @@ use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 use vcm_scene::bsdf::{Bsdf, TransportMode};
 use vcm_scene::sampling::Rng;
+use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
 use super::mis::{SubpathMis, camera_connection_weight};
 use super::walk::Walk;
-use super::{Algorithm, FrameContext, VcmSettings, timed};
+use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::film::Film;
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
@@ -36,6 +37,8 @@ pub(crate) struct LightPassOutputs<'a> {
 struct Splat {
     /// The pixel the light vertex projects to.
     pixel: u32,
+    /// Path length of the light vertex.
+    path_length: u32,
     /// The ray from the light vertex to the camera and its contribution.
     ray: ShadowRay,
 }
@@ -43,6 +46,8 @@ struct Splat {
 /// One light path between waves.
 #[derive(Clone, Debug)]
 struct LightPathState {
+    /// The path's index in the frame (its random stream and its place in the results).
+    index: u32,
     walk: Walk,
     /// 1 / the largest channel of the throughput after emission: makes Russian roulette
     /// independent of the light's units.
@@ -56,120 +61,165 @@ struct LightPathState {
     splat: Option<Splat>,
 }
 
-/// The light pass's reusable buffers.
-#[derive(Default)]
-pub(crate) struct LightPass {
-    paths: Vec<LightPathState>,
-    rays: RayBatch,
-    hits: HitBatch,
-    shadow_rays: RayBatch,
-    occluded: Vec<bool>,
+/// The place of a vertex (or its splat) in the results: by the vertex's path length, then by
+/// its path's index, the order in which one batch of all paths produces them, whatever the
+/// scheduler.
+fn result_key(path_length: u32, index: u32) -> u64 {
+    (u64::from(path_length) << 32) | u64::from(index)
 }
 
-impl LightPass {
-    /// Traces one light path per index in `0..count` for frame `ctx.iteration`, stores their
-    /// vertices in `outputs.cache` and splats their camera connections onto `outputs.film`.
-    pub fn run(
-        &mut self,
-        ctx: &FrameContext,
-        count: u32,
-        mut outputs: LightPassOutputs,
-        stats: &mut FrameStats,
-    ) {
-        let splat = outputs.film.is_some();
-        self.trace_paths(ctx, count, LIGHT_STREAM, splat, stats, |pass, stats| {
-            let vertices = pass.paths.iter_mut().filter_map(|p| p.vertex.take());
-            match outputs.cache.as_deref_mut() {
-                Some(cache) => cache.extend(vertices),
-                None => vertices.for_each(drop),
-            }
-            if let Some(film) = outputs.film.as_deref_mut() {
-                pass.add_unoccluded_splats(ctx, film, stats);
-            }
-        });
+/// Traces one light path per pixel of the frame, grouped as `scheduler` says, stores their
+/// vertices in `outputs.cache` and splats their unoccluded camera connections onto
+/// `outputs.film`, both in the order of [`result_key`].
+pub(crate) fn run(
+    ctx: &FrameContext,
+    scheduler: Scheduler,
+    outputs: LightPassOutputs,
+    stats: &mut FrameStats,
+) {
+    let VcmSettings { width, height, .. } = *ctx.settings;
+    let splat = outputs.film.is_some();
+    let results = trace(ctx, scheduler, (width, height), LIGHT_STREAM, splat, stats);
+    if let Some(cache) = outputs.cache {
+        cache.extend(results.vertices.into_iter().map(|(_, vertex)| vertex));
     }
-
-    /// Traces `count` light paths that store and splat nothing and returns how many
-    /// cacheable (non-specular) vertices they have (the preprocess that sizes the cache).
-    pub fn count_vertices(&mut self, ctx: &FrameContext, count: u32) -> u64 {
-        let mut vertices = 0;
-        let mut stats = FrameStats::default();
-        self.trace_paths(
-            ctx,
-            count,
-            PREPROCESS_STREAM,
-            false,
-            &mut stats,
-            |pass, _| {
-                vertices += pass
-                    .paths
-                    .iter_mut()
-                    .filter_map(|p| p.vertex.take())
-                    .count() as u64;
-            },
-        );
-        vertices
+    if let Some(film) = outputs.film {
+        for (_, pixel, contribution) in results.splats {
+            film.add_splat(pixel as usize, contribution);
+        }
     }
+}
 
-    /// The wave loop: emit, then trace, shade (`splat`: connect to the camera) and hand the
-    /// wave to `collect` until every path has ended.
-    fn trace_paths(
-        &mut self,
-        ctx: &FrameContext,
-        count: u32,
-        stream: u64,
-        splat: bool,
-        stats: &mut FrameStats,
-        mut collect: impl FnMut(&mut LightPass, &mut FrameStats),
-    ) {
-        (0..count)
+/// Traces `count` light paths that store and splat nothing and returns how many cacheable
+/// (non-specular) vertices they have (the preprocess that sizes the cache).
+pub(crate) fn count_vertices(ctx: &FrameContext, scheduler: Scheduler, count: u32) -> u64 {
+    let mut stats = FrameStats::default();
+    let results = trace(
+        ctx,
+        scheduler,
+        (count, 1),
+        PREPROCESS_STREAM,
+        false,
+        &mut stats,
+    );
+    results.vertices.len() as u64
+}
+
+/// The vertices and unoccluded splats of a pass, sorted by [`result_key`].
+#[derive(Default)]
+struct LightResults {
+    vertices: Vec<(u64, LightVertex)>,
+    /// (key, pixel, contribution).
+    splats: Vec<(u64, u32, Vec3)>,
+}
+
+/// Traces the light paths of every index of a `size.0 × size.1` grid (tiles of it for the
+/// tile scheduler) and gathers their results in a fixed order.
+fn trace(
+    ctx: &FrameContext,
+    scheduler: Scheduler,
+    size: (u32, u32),
+    stream: u64,
+    splat: bool,
+    stats: &mut FrameStats,
+) -> LightResults {
+    let new_wavefront = || LightWavefront {
+        ctx,
+        grid_width: size.0,
+        stream,
+        splat,
+        paths: Vec::new(),
+        results: LightResults::default(),
+    };
+    let (outputs, scheduled) = vcm_scheduler::run(scheduler, size, ctx.traversal, new_wavefront);
+    stats.light_rays += scheduled.closest_rays;
+    add_scheduled(stats, &scheduled);
+    let mut results = LightResults::default();
+    for output in outputs {
+        results.vertices.extend(output.vertices);
+        results.splats.extend(output.splats);
+    }
+    results.vertices.par_sort_unstable_by_key(|&(key, _)| key);
+    results.splats.par_sort_unstable_by_key(|&(key, ..)| key);
+    results
+}
+
+/// The light paths one scheduler worker has in flight, and the results of their vertices.
+struct LightWavefront<'a> {
+    ctx: &'a FrameContext<'a>,
+    /// Width of the grid whose tiles name the paths (path index = y · width + x).
+    grid_width: u32,
+    stream: u64,
+    /// Whether vertices are connected to the camera.
+    splat: bool,
+    paths: Vec<LightPathState>,
+    results: LightResults,
+}
+
+impl Wavefront for LightWavefront<'_> {
+    type Output = LightResults;
+
+    fn start(&mut self, tile: Tile) {
+        let (ctx, stream) = (self.ctx, self.stream);
+        let indices: Vec<u32> = tile.pixels(self.grid_width).collect();
+        let new_paths = indices
             .into_par_iter()
+            .with_min_len(256)
             .map(|index| emit(ctx, index, stream))
-            .collect_into_vec(&mut self.paths);
-        self.paths.retain(|p| p.alive);
-        while !self.paths.is_empty() {
-            self.rays.clear();
-            for path in &self.paths {
-                self.rays
-                    .push(path.walk.origin, path.walk.direction, 0.0, f32::INFINITY);
-            }
-            stats.light_rays += self.rays.len() as u64;
-            let (rays, hits) = (&self.rays, &mut self.hits);
-            timed(&mut stats.traversal_time, || {
-                ctx.traversal.intersect(rays, hits)
-            });
-            let hits = &self.hits;
-            self.paths.par_iter_mut().enumerate().for_each(|(i, path)| {
-                shade(ctx, path, Hit::from_batch(hits, i), splat);
-            });
-            collect(self, stats);
-            self.paths.retain(|p| p.alive);
+            .filter(|path| path.alive);
+        self.paths.par_extend(new_paths);
+    }
+
+    fn active(&self) -> usize {
+        self.paths.len()
+    }
+
+    fn extension_rays(&self, rays: &mut RayBatch) {
+        rays.clear();
+        for path in &self.paths {
+            rays.push(path.walk.origin, path.walk.direction, 0.0, f32::INFINITY);
         }
     }
 
-    /// Tests the wave's camera connections and splats the unoccluded ones, in path order.
-    fn add_unoccluded_splats(
-        &mut self,
-        ctx: &FrameContext,
-        film: &mut Film,
-        stats: &mut FrameStats,
-    ) {
+    /// Shades every path at its hit in parallel, keeps the cacheable vertices and queues the
+    /// camera connections, in path order.
+    fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
+        let (ctx, splat) = (self.ctx, self.splat);
+        self.paths
+            .par_iter_mut()
+            .with_min_len(64)
+            .enumerate()
+            .for_each(|(i, path)| shade(ctx, path, Hit::from_batch(hits, i), splat));
+        for path in &mut self.paths {
+            if let Some(vertex) = path.vertex.take() {
+                let key = result_key(vertex.path_length, path.index);
+                self.results.vertices.push((key, vertex));
+            }
+        }
         let rays = self
             .paths
             .iter()
             .filter_map(|p| Some(&p.splat.as_ref()?.ray));
-        ShadowRay::fill_batch(&mut self.shadow_rays, rays);
-        stats.shadow_rays += self.shadow_rays.len() as u64;
-        let (rays, occluded) = (&self.shadow_rays, &mut self.occluded);
-        timed(&mut stats.traversal_time, || {
-            ctx.traversal.occluded(rays, occluded)
-        });
-        let splats = self.paths.iter_mut().filter_map(|p| p.splat.take());
-        for (splat, &blocked) in splats.zip(&self.occluded) {
+        ShadowRay::fill_batch(shadow_rays, rays);
+    }
+
+    /// Keeps the unoccluded splats and retires the paths that ended.
+    fn resolve(&mut self, occluded: &[bool]) {
+        let with_splat = self.paths.iter_mut().filter(|p| p.splat.is_some());
+        for (path, &blocked) in with_splat.zip(occluded) {
+            let splat = path.splat.take().expect("filtered on a queued splat");
             if !blocked {
-                film.add_splat(splat.pixel as usize, splat.ray.contribution);
+                let key = result_key(splat.path_length, path.index);
+                self.results
+                    .splats
+                    .push((key, splat.pixel, splat.ray.contribution));
             }
         }
+        self.paths.retain(|p| p.alive);
+    }
+
+    fn finish(self) -> LightResults {
+        self.results
     }
 }
 
@@ -183,6 +233,7 @@ fn emit(ctx: &FrameContext, index: u32, stream: u64) -> LightPathState {
     ]);
     let (u_pick, u_pos, u_dir) = (rng.uniform(), rng.uniform2(), rng.uniform2());
     let mut path = LightPathState {
+        index,
         walk: Walk {
             rng,
             origin: Vec3::ZERO,
@@ -304,6 +355,7 @@ fn connect_to_camera(
     let pixel = raster.as_uvec2().min(UVec2::new(width - 1, height - 1));
     Some(Splat {
         pixel: pixel.y * width + pixel.x,
+        path_length: vertex.path_length,
         ray: ShadowRay {
             origin,
             direction: ray_direction,

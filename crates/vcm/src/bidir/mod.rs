@@ -24,18 +24,18 @@ mod plan;
 mod walk;
 
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use vcm_scene::{Decision, Scene};
+use vcm_scheduler::SchedulerStats;
 use vcm_traversal::Traversal;
 
 use crate::error::RenderError;
 use crate::film::Film;
 use crate::hash_grid::HashGrid;
-use crate::integrator::{FrameStats, Integrator};
+use crate::integrator::{FrameStats, Integrator, Schedule};
 use crate::light_vertex_cache::LightVertexCache;
-use camera_pass::CameraPass;
-use light_pass::{LightPass, LightPassOutputs};
+use light_pass::LightPassOutputs;
 use mis::MisFactors;
 use plan::BidirPlan;
 
@@ -167,8 +167,7 @@ pub struct Vcm {
     settings: VcmSettings,
     plan: BidirPlan,
     base_radius: f32,
-    light_pass: LightPass,
-    camera_pass: CameraPass,
+    schedule: Schedule,
     cache: LightVertexCache,
     grid: HashGrid,
 }
@@ -207,8 +206,7 @@ impl Vcm {
             settings,
             plan,
             base_radius,
-            light_pass: LightPass::default(),
-            camera_pass: CameraPass::default(),
+            schedule: Schedule::ONE_BATCH,
             cache: LightVertexCache::default(),
             grid: HashGrid::default(),
         };
@@ -252,7 +250,8 @@ impl Vcm {
             factors: &factors,
             plan: &self.plan,
         };
-        let vertices = self.light_pass.count_vertices(&ctx, PREPROCESS_LIGHT_PATHS);
+        let scheduler = self.schedule.scheduler;
+        let vertices = light_pass::count_vertices(&ctx, scheduler, PREPROCESS_LIGHT_PATHS);
         LightVertexCache::estimate_capacity(
             vertices,
             u64::from(PREPROCESS_LIGHT_PATHS),
@@ -292,9 +291,9 @@ impl Integrator for Vcm {
             factors: &factors,
             plan: &plan,
         };
+        let scheduler = self.schedule.scheduler;
         if plan.light_paths() {
-            self.light_pass
-                .run(&frame, light_paths, outputs, &mut stats);
+            light_pass::run(&frame, scheduler, outputs, &mut stats);
         }
         stats.light_vertices = self.cache.len() as u64;
         stats.discarded_light_vertices = self.cache.discarded();
@@ -311,7 +310,7 @@ impl Integrator for Vcm {
             grid: &self.grid,
             radius,
         };
-        self.camera_pass.run(&ctx, film, &mut stats);
+        camera_pass::run(&ctx, scheduler, film, &mut stats);
         stats.shading_time = start
             .elapsed()
             .saturating_sub(stats.traversal_time + stats.grid_build_time);
@@ -327,12 +326,25 @@ impl Integrator for Vcm {
         self.plan
             .decisions(self.settings.algorithm, &self.scene.features)
     }
+
+    /// Both passes run under `schedule.scheduler`; one sample per pixel per frame only (the
+    /// light vertex cache and the hash grid hold one light path per pixel).
+    fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
+        let schedule = schedule.validated()?;
+        if schedule.samples_per_frame != 1 {
+            return Err(RenderError::InvalidSetting(format!(
+                "{} renders one sample per pixel per frame so far",
+                self.settings.algorithm.name()
+            )));
+        }
+        self.schedule = schedule;
+        Ok(())
+    }
 }
 
-/// Adds `elapsed` to `total` and passes it on (for timing traversal calls inline).
-fn timed<T>(total: &mut Duration, f: impl FnOnce() -> T) -> T {
-    let start = Instant::now();
-    let result = f();
-    *total += start.elapsed();
-    result
+/// Adds a scheduled pass's shadow rays and traversal time (its workers' total, as a share of
+/// the wall clock) to `stats`; the caller counts its closest-hit rays by kind.
+fn add_scheduled(stats: &mut FrameStats, scheduled: &SchedulerStats) {
+    stats.shadow_rays += scheduled.shadow_rays;
+    stats.traversal_time += scheduled.traversal / scheduled.workers.max(1) as u32;
 }
