@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
-use vcm_scene::bsdf::{Bsdf, LobeKind, TransportMode};
+use vcm_scene::bsdf::{Bsdf, TransportMode};
 use vcm_scene::sampling::Rng;
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
@@ -49,8 +49,6 @@ struct CameraPathState {
     pixel: u32,
     walk: Walk,
     radiance: Vec3,
-    /// Every scattering so far was specular (emission is then found only by hitting it).
-    specular_path: bool,
     alive: bool,
     /// Occlusion rays queued by the last shading step: the light sample and connections.
     shadows: Vec<ShadowRay>,
@@ -178,7 +176,6 @@ fn start(ctx: &CameraContext, pixel: u32) -> CameraPathState {
             segments: 1,
         },
         radiance: Vec3::ZERO,
-        specular_path: true,
         alive: true,
         shadows: Vec::new(),
     }
@@ -221,16 +218,17 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
             }
         }
     }
-    let lobe = path.walk.scatter(
-        &surface,
-        &bsdf,
-        wo,
-        TransportMode::Radiance,
-        ctx.factors,
-        1.0,
-    );
-    path.specular_path &= lobe == Some(LobeKind::Specular);
-    path.alive = lobe.is_some();
+    path.alive = path
+        .walk
+        .scatter(
+            &surface,
+            &bsdf,
+            wo,
+            TransportMode::Radiance,
+            ctx.factors,
+            1.0,
+        )
+        .is_some();
 }
 
 /// Emitted radiance found by the path at `hit`, MIS-weighted.
@@ -243,9 +241,10 @@ fn emission(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> Vec3 {
     let weight = if path.walk.segments == 1 {
         // No other technique samples a light seen directly through a pinhole.
         1.0
-    } else if !ctx.plan.connects {
-        // Without connections, merging finds every path with a non-specular vertex.
-        if path.specular_path { 1.0 } else { 0.0 }
+    } else if ctx.settings.algorithm == Algorithm::Ppm {
+        // Photon mapping proper merges at the first non-specular vertex and stops there: a
+        // light is hit only through specular vertices, which nothing else samples.
+        1.0
     } else {
         let light = scene
             .light_sampler
@@ -256,6 +255,7 @@ fn emission(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> Vec3 {
             &path.walk.mis,
             pick_pmf * emitted.direct_pdf_a,
             pick_pmf * emitted.emission_pdf_w,
+            ctx.factors,
         )
     };
     emitted.radiance * weight

@@ -18,17 +18,31 @@
 //!   for the same path, so the weights still sum to one and the estimate stays unbiased.
 //! * Specular (delta) vertices cannot be connected or merged: d_VCM becomes 0 there and d_VC,
 //!   d_VM are carried on, scaled by the delta's pdf ratio (eqs. 53–55) — never zeroed.
+//! * Emission found by the camera path (the unidirectional technique) is weighted in BPM
+//!   too, not only on purely specular paths as in the tech report's BPM: merging alone
+//!   samples a path whose last scattering is glossy only through a light vertex falling into
+//!   the lobe, an unbiased estimate whose mass sits in samples a render never draws (a glossy
+//!   mirror lit by a furnace came out 25% dark after 100 frames). In d_VC and in the light
+//!   subpath's starting d_VM the emission hit is kept while connections are dropped
+//!   ([`MisFactors::hit`], [`MisFactors::connections`]).
 
 /// Per-frame constants of the weights: which technique families exist and how many samples
 /// each takes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct MisFactors {
     /// η_VCM = π r² N_p when merging is used, else 0: the weight of a merge relative to a
-    /// connection.
+    /// connection or an emission hit.
     pub merge: f32,
     /// 1 / η_VCM when connections are used (and merging too), else 0: the weight of a
     /// connection relative to a merge.
     pub connect: f32,
+    /// 1 / η_VCM when merging is used, else 0: the weight of an emission hit relative to a
+    /// merge (it starts a light subpath's d_VM).
+    pub hit: f32,
+    /// 1 when connections (light samples, connections to light vertices, light tracing
+    /// splats) are used, else 0: whether d_VCM, which stands for them, enters d_VC and the
+    /// weight of an emission hit.
+    pub connections: f32,
     /// N_p, the number of light paths per frame (the sample count of light tracing splats).
     pub light_paths: f32,
 }
@@ -45,6 +59,8 @@ impl MisFactors {
             } else {
                 0.0
             },
+            hit: if merging { 1.0 / eta } else { 0.0 },
+            connections: if connections { 1.0 } else { 0.0 },
             light_paths,
         }
     }
@@ -72,7 +88,8 @@ impl SubpathMis {
         }
     }
 
-    /// A light subpath's start (eqs. 31–33, 48–50 for delta lights). `direct_pdf` is the pdf
+    /// A light subpath's start (eqs. 31–33, 48–50 for delta lights; d_VM carries the emission
+    /// hit, so it uses [`MisFactors::hit`], which VCM's 1 / η_VCM equals). `direct_pdf` is the pdf
     /// of light sampling picking the start point and `emission_pdf_w` that of emitting the
     /// ray (position × direction), both including the light's selection probability;
     /// `cos_at_light` is the emission cosine.
@@ -94,7 +111,7 @@ impl SubpathMis {
         SubpathMis {
             d_vcm: direct_pdf / emission_pdf_w,
             d_vc,
-            d_vm: d_vc * factors.connect,
+            d_vm: d_vc * factors.hit,
         }
     }
 
@@ -128,7 +145,8 @@ impl SubpathMis {
             self.d_vc *= ratio * pdf_rev;
             self.d_vm *= ratio * pdf_rev;
         } else {
-            let d_vc = ratio * (self.d_vc * pdf_rev + self.d_vcm + factors.merge);
+            let d_vc =
+                ratio * (self.d_vc * pdf_rev + self.d_vcm * factors.connections + factors.merge);
             let d_vm = ratio * (self.d_vm * pdf_rev + self.d_vcm * factors.connect + 1.0);
             *self = SubpathMis {
                 d_vcm: 1.0 / pdf_fwd,
@@ -139,14 +157,16 @@ impl SubpathMis {
     }
 }
 
-/// Weight of emission found by a camera path that hits an area light (eqs. 42–43).
-/// `direct_pdf_a` and `emission_pdf_w` include the light's selection probability.
+/// Weight of emission found by a camera path that hits an area light (eqs. 42–43; the light
+/// sample's term only with connections). `direct_pdf_a` and `emission_pdf_w` include the
+/// light's selection probability.
 pub(crate) fn emission_hit_weight(
     camera: &SubpathMis,
     direct_pdf_a: f32,
     emission_pdf_w: f32,
+    factors: &MisFactors,
 ) -> f32 {
-    let w_camera = direct_pdf_a * camera.d_vcm + emission_pdf_w * camera.d_vc;
+    let w_camera = factors.connections * direct_pdf_a * camera.d_vcm + emission_pdf_w * camera.d_vc;
     1.0 / (1.0 + w_camera)
 }
 

@@ -156,14 +156,15 @@ impl TestPath {
         let factors = MisFactors::new(algorithm.connects(), algorithm.merges(), 0.01, LIGHT_PATHS);
         let k = self.k();
         let mut weights = Vec::new();
+        // Emission found by the camera path (every algorithm here weights it).
+        let (direct, emission) = self.light_pdfs();
+        weights.push(emission_hit_weight(
+            &self.camera_mis(k, &factors),
+            direct,
+            emission,
+            &factors,
+        ));
         if algorithm.connects() {
-            // Emission found by the camera path.
-            let (direct, emission) = self.light_pdfs();
-            weights.push(emission_hit_weight(
-                &self.camera_mis(k, &factors),
-                direct,
-                emission,
-            ));
             // A light sample at x_{k−1}.
             let pdfs = LightSamplePdfs {
                 direct_pdf_w: direct * self.dist_sq(k - 1, k) / self.cos(k, k - 1),

@@ -57,7 +57,9 @@ pub enum Algorithm {
     Bpt,
     /// Progressive photon mapping: merging at the first non-specular camera vertex only.
     Ppm,
-    /// Bidirectional photon mapping: merging at every camera vertex, no connections.
+    /// Bidirectional photon mapping: merging at every camera vertex, no connections; emission
+    /// found by the camera path is weighted against the merges (a glossy vertex lit by a
+    /// light is found by its own sampling, not only by a light vertex in its lobe).
     Bpm,
     /// Vertex connection and merging: all techniques.
     Vcm,
