@@ -131,6 +131,30 @@ fn path_tracer_films_are_bit_identical_under_every_scheduler() {
 }
 
 #[test]
+fn vcm_family_films_are_bit_identical_under_every_scheduler() {
+    let schedule = |scheduler| Schedule {
+        scheduler,
+        samples_per_frame: 1,
+    };
+    // Tiles of 1 and 5 pixels split the light paths of one frame over many wavefronts, so
+    // the light vertex cache and the splats are gathered from all of them.
+    let tiles = [(5, 0.5), (1, 0.0), (64, 0.9)];
+    for algorithm in common::EVERY_ALGORITHM.into_iter().flatten() {
+        let reference = render(1, Some(algorithm), Schedule::ONE_BATCH);
+        for threads in [1, 2] {
+            for (size, merge_below) in tiles {
+                let scheduler = Scheduler::Tile { size, merge_below };
+                let film = render(threads, Some(algorithm), schedule(scheduler));
+                assert!(
+                    film == reference,
+                    "{algorithm:?}: {scheduler:?} on {threads} threads differs"
+                );
+            }
+        }
+    }
+}
+
+#[test]
 fn invalid_schedules_are_rejected() {
     let bad = [
         Schedule {
@@ -148,4 +172,20 @@ fn invalid_schedules_are_rejected() {
     for schedule in bad {
         assert!(schedule.validated().is_err(), "{schedule:?}");
     }
+    // The VCM family holds one light path per pixel in its cache: one sample per frame.
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    common::push_floor(&mut positions, &mut triangles, 1.0);
+    let floor = common::scene(
+        common::mesh(positions, triangles, vec![0, 0]),
+        vec![Material::diffuse("floor", Vec3::ONE)],
+        Vec::new(),
+        common::camera(Vec3::Z, 1.0),
+    );
+    let mut vcm = common::vcm(floor, VcmSettings::new(Algorithm::Vcm, 8, 8));
+    let two_per_frame = Schedule {
+        samples_per_frame: 2,
+        ..Schedule::default()
+    };
+    assert!(vcm.set_schedule(two_per_frame).is_err());
+    assert!(vcm.set_schedule(Schedule::default()).is_ok());
 }

@@ -208,7 +208,7 @@ impl Vcm {
             settings,
             plan,
             base_radius,
-            schedule: Schedule::ONE_BATCH,
+            schedule: Schedule::default(),
             cache: LightVertexCache::default(),
             grid: HashGrid::default(),
         };
