@@ -101,11 +101,10 @@ pub enum SchedulerKind {
 }
 
 /// How frames are scheduled; the image a seed gives does not depend on it. Options left out
-/// keep the integrator's own schedule (the path tracer: tiles; the others: one batch per
-/// pass, the only schedule they run so far).
+/// keep the integrator's own schedule (tiles of 32 pixels, one sample per pixel per frame).
 #[derive(clap::Args, Clone, Copy, Debug, Default, PartialEq)]
 pub struct ScheduleOptions {
-    /// How paths are grouped into batches (pt; default tile).
+    /// How paths are grouped into batches (default tile).
     #[arg(long, value_enum)]
     pub scheduler: Option<SchedulerKind>,
     /// Tile side in pixels (--scheduler tile; default 32).
@@ -115,7 +114,7 @@ pub struct ScheduleOptions {
     /// (--scheduler tile; 0 disables merging; default 0.5).
     #[arg(long)]
     pub tile_merge: Option<f32>,
-    /// Samples per pixel each frame renders (pt; default 1).
+    /// Samples per pixel each frame renders (default 1; more for pt only).
     #[arg(long)]
     pub spp_per_frame: Option<u32>,
 }

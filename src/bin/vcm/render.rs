@@ -295,7 +295,7 @@ fn print_summary(film: &Film, outcome: &Outcome) {
     );
     if totals.light_vertices + totals.discarded_light_vertices > 0 {
         println!(
-            "light vertex cache: {:.0} vertices per frame, {} discarded (cache full)",
+            "light vertex cache: {:.0} vertices per frame, {} discarded for lack of room",
             totals.light_vertices as f64 / f64::from((*spp).max(1)),
             totals.discarded_light_vertices
         );
