@@ -178,8 +178,8 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
             "tile size",
         ),
         (
-            &["render", "--algo", "vcm", "--scheduler", "tile"],
-            "one batch per pass",
+            &["render", "--algo", "vcm", "--spp-per-frame", "2"],
+            "one sample per pixel per frame",
         ),
     ];
     for (args, needle) in cases {
