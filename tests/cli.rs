@@ -258,3 +258,44 @@ fn explain_prints_what_runs_and_no_prune_runs_everything() {
     assert!(pruned.iter().any(|p| p.max_element() > 0.0));
     assert_eq!(pruned, full);
 }
+
+/// `--utilization` writes the CPU utilization over time as CSV (intervals of at least 0.25 s)
+/// and a plot beside it.
+#[test]
+fn utilization_is_recorded_over_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("util.csv");
+    let exr = dir.path().join("out.exr");
+    let output = vcm(&[
+        "render",
+        "--time",
+        "1",
+        "--width",
+        "64",
+        "--utilization",
+        csv.to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("seconds,utilization"));
+    let rows: Vec<(f64, f64)> = lines
+        .map(|line| {
+            let (t, u) = line.split_once(',').unwrap();
+            (t.parse().unwrap(), u.parse().unwrap())
+        })
+        .collect();
+    assert!(rows.len() >= 2, "{text}");
+    let mut previous = 0.0;
+    for (t, u) in rows {
+        assert!(t - previous >= 0.25, "interval shorter than 0.25 s: {text}");
+        // A busy renderer, measured in 10 ms ticks of all its threads' CPU time.
+        assert!(u > 0.0 && u <= 105.0, "{text}");
+        previous = t;
+    }
+    assert!(csv.with_extension("png").is_file());
+    let summary = String::from_utf8_lossy(&output.stdout);
+    assert!(summary.contains("cpu utilization: "), "{summary}");
+}

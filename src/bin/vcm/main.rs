@@ -4,6 +4,7 @@ mod compare;
 mod convergence;
 mod info;
 mod plot;
+mod process;
 mod progressive;
 mod render;
 

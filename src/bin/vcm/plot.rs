@@ -1,4 +1,5 @@
-//! Convergence plots: relMSE against seconds on log-log axes, one curve per series, as PNG.
+//! Plots as PNG, one curve per series: relMSE against seconds on log-log axes (convergence),
+//! and CPU utilization against seconds on linear axes.
 //!
 //! Text needs a TrueType font: `VCM_PLOT_FONT` names one, else common system fonts (DejaVu,
 //! Liberation) are tried; without any, the plot is drawn without labels and a warning says so.
@@ -7,14 +8,15 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use anyhow::bail;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use vcm::atomic_write::write_atomically;
 
-/// One curve: a label and (seconds, relMSE) points.
+/// One curve: a label and (seconds, value) points.
 pub struct Series {
     /// Legend text (e.g. the algorithm).
     pub label: String,
-    /// (seconds, relMSE) pairs in time order.
+    /// (seconds, value) pairs in time order.
     pub points: Vec<(f64, f64)>,
 }
 
@@ -45,7 +47,8 @@ fn font_available() -> bool {
     })
 }
 
-/// Draws the series into a PNG at `path` (written to a temporary file, then renamed).
+/// Draws relMSE series on log-log axes into a PNG at `path` (written to a temporary file,
+/// then renamed).
 pub fn plot_relmse(path: &Path, title: &str, series: &[Series]) -> anyhow::Result<()> {
     let positive = || {
         series
@@ -65,6 +68,60 @@ pub fn plot_relmse(path: &Path, title: &str, series: &[Series]) -> anyhow::Resul
     let (e0, e1) = positive().fold((f64::MAX, f64::MIN), |(a, b), (_, e)| {
         (a.min(*e), b.max(*e))
     });
+    let axes = Axes {
+        x: (t0 / 1.5..t1 * 1.5).log_scale(),
+        y: (e0 / 2.0..e1 * 2.0).log_scale(),
+        y_desc: "relMSE",
+    };
+    let positive_series: Vec<Series> = series
+        .iter()
+        .map(|s| Series {
+            label: s.label.clone(),
+            points: s
+                .points
+                .iter()
+                .copied()
+                .filter(|(t, e)| *t > 0.0 && *e > 0.0)
+                .collect(),
+        })
+        .collect();
+    plot(path, title, &positive_series, axes)
+}
+
+/// Draws CPU utilization (percent of all worker threads) against seconds into a PNG at
+/// `path`.
+pub fn plot_utilization(path: &Path, title: &str, series: &[Series]) -> anyhow::Result<()> {
+    let end = series
+        .iter()
+        .flat_map(|s| &s.points)
+        .map(|(t, _)| *t)
+        .fold(0.0, f64::max);
+    if end <= 0.0 {
+        bail!("{}: no utilization samples to plot", path.display());
+    }
+    let axes = Axes {
+        x: 0.0..end,
+        y: 0.0..105.0,
+        y_desc: "CPU utilization (%)",
+    };
+    plot(path, title, series, axes)
+}
+
+/// The x (seconds) and y ranges of a plot and the y axis's name.
+struct Axes<X, Y> {
+    x: X,
+    y: Y,
+    y_desc: &'static str,
+}
+
+/// Draws `series` within `axes` into a PNG at `path`, through a temporary file.
+fn plot<X, Y>(path: &Path, title: &str, series: &[Series], axes: Axes<X, Y>) -> anyhow::Result<()>
+where
+    X: AsRangedCoord<Value = f64>,
+    Y: AsRangedCoord<Value = f64>,
+    X::CoordDescType: ValueFormatter<f64>,
+    Y::CoordDescType: ValueFormatter<f64>,
+{
     let labels = font_available();
     if !labels {
         eprintln!("warning: no TrueType font found (set VCM_PLOT_FONT); the plot has no labels");
@@ -73,28 +130,26 @@ pub fn plot_relmse(path: &Path, title: &str, series: &[Series]) -> anyhow::Resul
     write_atomically(
         path,
         |temporary| {
-            draw(
-                temporary,
-                title,
-                series,
-                (t0 / 1.5, t1 * 1.5),
-                (e0 / 2.0, e1 * 2.0),
-                labels,
-            )
-            .map_err(|e| anyhow::anyhow!("{}: cannot draw the plot: {e}", path.display()))
+            draw(temporary, title, series, axes, labels)
+                .map_err(|e| anyhow::anyhow!("{}: cannot draw the plot: {e}", path.display()))
         },
         |e| anyhow::anyhow!("{}: cannot write: {e}", path.display()),
     )
 }
 
-fn draw(
+fn draw<X, Y>(
     path: &Path,
     title: &str,
     series: &[Series],
-    (t0, t1): (f64, f64),
-    (e0, e1): (f64, f64),
+    axes: Axes<X, Y>,
     labels: bool,
-) -> Result<(), Box<dyn std::error::Error>> {
+) -> Result<(), Box<dyn std::error::Error>>
+where
+    X: AsRangedCoord<Value = f64>,
+    Y: AsRangedCoord<Value = f64>,
+    X::CoordDescType: ValueFormatter<f64>,
+    Y::CoordDescType: ValueFormatter<f64>,
+{
     let root = BitMapBackend::new(path, (800, 600)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut builder = ChartBuilder::on(&root);
@@ -105,11 +160,11 @@ fn draw(
             .x_label_area_size(45)
             .y_label_area_size(70);
     }
-    let mut chart = builder.build_cartesian_2d((t0..t1).log_scale(), (e0..e1).log_scale())?;
+    let mut chart = builder.build_cartesian_2d(axes.x, axes.y)?;
     let mut mesh = chart.configure_mesh();
     if labels {
         mesh.x_desc("seconds")
-            .y_desc("relMSE")
+            .y_desc(axes.y_desc)
             .label_style(("sans-serif", 14));
     } else {
         mesh.x_labels(0).y_labels(0);
@@ -117,11 +172,7 @@ fn draw(
     mesh.draw()?;
     for (i, s) in series.iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();
-        let points = s
-            .points
-            .iter()
-            .copied()
-            .filter(|(t, e)| *t > 0.0 && *e > 0.0);
+        let points = s.points.iter().copied();
         let line = chart.draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))?;
         if labels {
             line.label(s.label.clone()).legend(move |(x, y)| {

@@ -9,6 +9,8 @@ use glam::Vec3;
 use vcm::metrics::{ErrorMetrics, compare};
 use vcm::{Film, FrameStats, Integrator};
 
+use crate::process::cpu_seconds;
+
 /// When to stop rendering.
 #[derive(Clone, Copy, Debug)]
 pub enum Budget {
@@ -54,6 +56,9 @@ impl Budget {
     }
 }
 
+/// Shortest interval CPU utilization is measured over: 25 ticks of the process's CPU clock.
+pub const UTILIZATION_INTERVAL: f64 = 0.25;
+
 /// One row of the convergence report.
 pub struct Checkpoint {
     /// Seconds since the render started.
@@ -85,6 +90,10 @@ pub struct Outcome {
     pub totals: FrameStats,
     /// The error over time (empty without a reference).
     pub checkpoints: Vec<Checkpoint>,
+    /// (seconds, CPU utilization as a fraction of all worker threads) over intervals of
+    /// whole frames at least [`UTILIZATION_INTERVAL`] long; empty where the CPU time is
+    /// unknown.
+    pub utilization: Vec<(f64, f64)>,
 }
 
 /// Renders frames into `film` until `budget` is spent or `interrupted` is set.
@@ -99,13 +108,22 @@ pub fn render(
     let mut totals = FrameStats::default();
     let mut checkpoints = Vec::new();
     let mut next_checkpoint = 1.0;
+    let mut utilization = Vec::new();
+    let threads = rayon::current_num_threads() as f64;
     let start = Instant::now();
-    let (mut spp, mut frame) = (0, 0);
+    let (mut spp, mut frame, mut frame_start) = (0, 0, (0.0, cpu_seconds()));
     while !budget.done(spp, start.elapsed()) && !interrupted.load(Ordering::SeqCst) {
         totals.accumulate(&integrator.render_frame(film, frame));
         frame += 1;
         spp += integrator.samples_per_frame();
         let seconds = start.elapsed().as_secs_f64();
+        if seconds - frame_start.0 >= UTILIZATION_INTERVAL {
+            let frame_end = (seconds, cpu_seconds());
+            if let ((t0, Some(cpu0)), (t1, Some(cpu1))) = (frame_start, frame_end) {
+                utilization.push((t1, (cpu1 - cpu0) / ((t1 - t0) * threads)));
+            }
+            frame_start = frame_end;
+        }
         progress.set_position(match budget {
             Budget::Samples(_) => u64::from(spp),
             Budget::Seconds(_) => (seconds * 10.0) as u64,
@@ -129,6 +147,7 @@ pub fn render(
         seconds,
         totals,
         checkpoints,
+        utilization,
     }
 }
 

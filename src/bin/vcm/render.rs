@@ -14,7 +14,7 @@ use vcm_rs::Backend;
 use vcm_rs::scene::{Scene, ShadingPlan};
 use vcm_rs::traversal::Traversal;
 
-use crate::plot::{Series, plot_relmse};
+use crate::plot::{Series, plot_relmse, plot_utilization};
 use crate::progressive::{self, Budget, Checkpoint, Outcome};
 use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, ScheduleOptions, image_size};
 
@@ -66,6 +66,10 @@ pub struct RenderArgs {
     /// the end; a log-log plot of relMSE against seconds is drawn beside it (PNG).
     #[arg(long, requires = "reference")]
     report: Option<PathBuf>,
+    /// CSV file for the CPU utilization over time: seconds,utilization (percent of all worker
+    /// threads) per interval of whole frames (≥ 0.25 s); a plot is drawn beside it (PNG).
+    #[arg(long)]
+    utilization: Option<PathBuf>,
     /// Print what the scene contains and, for each part of the render (light paths, cache,
     /// merging, shading, alpha test), whether it runs or is left out and why.
     #[arg(long)]
@@ -131,6 +135,21 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         let title = format!("relMSE over time: {}", args.scene.display());
         plot_relmse(&plot, &title, &[series])?;
         println!("wrote {} and {}", report.display(), plot.display());
+    }
+    if let Some(path) = &args.utilization {
+        write_utilization(path, &outcome.utilization)?;
+        let series = Series {
+            label: args.algo.name().to_string(),
+            points: outcome
+                .utilization
+                .iter()
+                .map(|&(t, u)| (t, u * 100.0))
+                .collect(),
+        };
+        let plot = path.with_extension("png");
+        let title = format!("CPU utilization: {}", args.scene.display());
+        plot_utilization(&plot, &title, &[series])?;
+        println!("wrote {} and {}", path.display(), plot.display());
     }
     print_summary(&film, &outcome);
     println!("wrote {} and {}", args.output.display(), png.display());
@@ -241,18 +260,19 @@ pub fn write_report(path: &Path, checkpoints: &[Checkpoint]) -> anyhow::Result<(
     write_text(path, csv)
 }
 
+/// Writes the CPU utilization CSV through a temporary file.
+fn write_utilization(path: &Path, samples: &[(f64, f64)]) -> anyhow::Result<()> {
+    let mut csv = String::from("seconds,utilization\n");
+    for (seconds, utilization) in samples {
+        csv += &format!("{seconds:.3},{:.1}\n", utilization * 100.0);
+    }
+    write_text(path, csv)
+}
+
 /// Writes `text` to `path` through a temporary file.
 pub fn write_text(path: &Path, text: String) -> anyhow::Result<()> {
     write_atomically(path, |temporary| std::fs::write(temporary, text), |e| e)
         .with_context(|| format!("{}: cannot write", path.display()))
-}
-
-/// Peak resident memory of this process in MiB (Linux), if known.
-fn peak_memory_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib / 1024.0)
 }
 
 fn print_summary(film: &Film, outcome: &Outcome) {
@@ -261,6 +281,7 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         seconds,
         totals,
         checkpoints,
+        utilization,
     } = outcome;
     let pixels = f64::from(film.width()) * f64::from(film.height());
     let samples = pixels * f64::from(*spp);
@@ -301,7 +322,22 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         );
     }
     println!("dropped non-finite samples: {}", film.dropped());
-    if let Some(mib) = peak_memory_mib() {
+    if let Some(&(end, _)) = utilization.last() {
+        // The intervals tile [0, end]: weight each by its length.
+        let mut previous = 0.0;
+        let mut weighted = 0.0;
+        for &(t, u) in utilization {
+            weighted += u * (t - previous);
+            previous = t;
+        }
+        let mean = weighted / end;
+        println!(
+            "cpu utilization: {:.0}% of {} threads",
+            100.0 * mean,
+            rayon::current_num_threads()
+        );
+    }
+    if let Some(mib) = crate::process::peak_memory_mib() {
         println!("peak memory: {mib:.0} MiB");
     }
     if let Some(last) = checkpoints.last() {
