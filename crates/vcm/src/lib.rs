@@ -56,6 +56,7 @@ mod roulette;
 mod shade;
 mod shadow;
 mod surface_hit;
+mod wave;
 
 pub use bidir::{Algorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Vcm, VcmSettings};
 pub use error::RenderError;

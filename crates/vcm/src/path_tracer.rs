@@ -15,7 +15,7 @@ use crate::film::Film;
 use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
 use crate::path_state::{PathState, ShadowRay};
 use crate::shade::{ShadeContext, shade};
-use crate::surface_hit::Hit;
+use crate::wave::{fill_extension_rays, shade_in_parallel};
 
 /// What a [`PathTracer`] renders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -191,10 +191,8 @@ impl Wavefront for PtWavefront<'_> {
     }
 
     fn extension_rays(&self, rays: &mut RayBatch) {
-        rays.clear();
-        for path in &self.paths {
-            rays.push(path.origin, path.direction, 0.0, f32::INFINITY);
-        }
+        let segments = self.paths.iter().map(|p| (p.origin, p.direction));
+        fill_extension_rays(rays, segments);
     }
 
     /// Shades every path at its hit in parallel and queues the shadow rays in path order.
@@ -203,11 +201,7 @@ impl Wavefront for PtWavefront<'_> {
             scene: self.scene,
             max_segments: self.settings.max_depth.unwrap_or(u32::MAX),
         };
-        self.paths
-            .par_iter_mut()
-            .with_min_len(64)
-            .enumerate()
-            .for_each(|(i, path)| shade(&ctx, path, Hit::from_batch(hits, i)));
+        shade_in_parallel(&mut self.paths, hits, |path, hit| shade(&ctx, path, hit));
         let shadows = self.paths.iter().filter_map(|p| p.shadow.as_ref());
         ShadowRay::fill_batch(shadow_rays, shadows);
     }

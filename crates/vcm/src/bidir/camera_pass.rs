@@ -23,6 +23,7 @@ use crate::light_vertex_cache::{LightVertex, LightVertexCache};
 use crate::path_state::ShadowRay;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
+use crate::wave::{fill_extension_rays, shade_in_parallel};
 
 /// What the camera pass reads: the frame, and the light pass's results.
 pub(crate) struct CameraContext<'a> {
@@ -107,21 +108,15 @@ impl Wavefront for CameraWavefront<'_> {
     }
 
     fn extension_rays(&self, rays: &mut RayBatch) {
-        rays.clear();
-        for path in &self.paths {
-            rays.push(path.walk.origin, path.walk.direction, 0.0, f32::INFINITY);
-        }
+        let segments = self.paths.iter().map(|p| (p.walk.origin, p.walk.direction));
+        fill_extension_rays(rays, segments);
     }
 
     /// Shades every path at its hit in parallel and queues its light sample and connections,
     /// in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let ctx = self.ctx;
-        self.paths
-            .par_iter_mut()
-            .with_min_len(64)
-            .enumerate()
-            .for_each(|(i, path)| shade(ctx, path, Hit::from_batch(hits, i)));
+        shade_in_parallel(&mut self.paths, hits, |path, hit| shade(ctx, path, hit));
         let shadows = self.paths.iter().flat_map(|p| &p.shadows);
         ShadowRay::fill_batch(shadow_rays, shadows);
     }

@@ -17,6 +17,7 @@ use crate::light_vertex_cache::{LightVertex, LightVertexCache};
 use crate::path_state::ShadowRay;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
+use crate::wave::{fill_extension_rays, shade_in_parallel};
 
 /// Random stream tag of light paths (camera paths use 0).
 const LIGHT_STREAM: u64 = 1;
@@ -175,21 +176,17 @@ impl Wavefront for LightWavefront<'_> {
     }
 
     fn extension_rays(&self, rays: &mut RayBatch) {
-        rays.clear();
-        for path in &self.paths {
-            rays.push(path.walk.origin, path.walk.direction, 0.0, f32::INFINITY);
-        }
+        let segments = self.paths.iter().map(|p| (p.walk.origin, p.walk.direction));
+        fill_extension_rays(rays, segments);
     }
 
     /// Shades every path at its hit in parallel, keeps the cacheable vertices and queues the
     /// camera connections, in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let (ctx, splat) = (self.ctx, self.splat);
-        self.paths
-            .par_iter_mut()
-            .with_min_len(64)
-            .enumerate()
-            .for_each(|(i, path)| shade(ctx, path, Hit::from_batch(hits, i), splat));
+        shade_in_parallel(&mut self.paths, hits, |path, hit| {
+            shade(ctx, path, hit, splat)
+        });
         for path in &mut self.paths {
             if let Some(vertex) = path.vertex.take() {
                 let key = result_key(vertex.path_length, path.index);
