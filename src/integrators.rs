@@ -30,14 +30,7 @@ pub enum Algorithm {
 impl Algorithm {
     /// The lower-case name used on the command line.
     pub fn name(self) -> &'static str {
-        match self {
-            Algorithm::Pt => "pt",
-            Algorithm::Lt => "lt",
-            Algorithm::Bpt => "bpt",
-            Algorithm::Ppm => "ppm",
-            Algorithm::Bpm => "bpm",
-            Algorithm::Vcm => "vcm",
-        }
+        self.vcm_algorithm().map_or("pt", VcmAlgorithm::name)
     }
 
     fn vcm_algorithm(self) -> Option<VcmAlgorithm> {
@@ -75,6 +68,18 @@ pub struct IntegratorOptions {
     /// (`vcm render --explain` lists them); the image's expectation is the same.
     #[arg(long)]
     pub no_prune: bool,
+}
+
+impl IntegratorOptions {
+    /// The shading plan renders with these options use on `scene`: every part with
+    /// `--no-prune`, else the scene's own.
+    pub fn shading_plan(&self, scene: &Scene) -> ShadingPlan {
+        if self.no_prune {
+            ShadingPlan::FULL
+        } else {
+            scene.shading
+        }
+    }
 }
 
 impl Default for IntegratorOptions {
@@ -148,9 +153,10 @@ pub fn build(
     (width, height): (u32, u32),
     options: &IntegratorOptions,
 ) -> Result<Box<dyn Integrator>, RenderError> {
-    let scene = if options.no_prune && scene.shading != ShadingPlan::FULL {
+    let shading = options.shading_plan(scene);
+    let scene = if shading != scene.shading {
         Arc::new(Scene {
-            shading: ShadingPlan::FULL,
+            shading,
             ..Scene::clone(scene)
         })
     } else {

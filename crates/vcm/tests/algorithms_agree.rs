@@ -5,11 +5,8 @@
 
 mod common;
 
-use std::path::Path;
-
 use common::RegionSeries;
 use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
-use vcm_scene::Scene;
 
 /// The image is compared in REGIONS × REGIONS blocks.
 const REGIONS: usize = 4;
@@ -19,13 +16,6 @@ const FRAMES: u32 = 1000;
 /// |z| < 4.9 keeps the family-wise false alarm rate near 1e-4 (Šidák).
 const Z_LIMIT: f64 = 4.9;
 
-fn scene(name: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name);
-    Scene::load(&path).unwrap()
-}
-
 fn reference(name: &str) -> RegionSeries {
     let settings = PtSettings {
         width: SIZE,
@@ -33,7 +23,7 @@ fn reference(name: &str) -> RegionSeries {
         seed: 100,
         max_depth: None,
     };
-    let mut tracer = common::path_tracer(scene(name), settings);
+    let mut tracer = common::path_tracer(common::scene_file(name), settings);
     common::region_means(&mut tracer, FRAMES, REGIONS)
 }
 
@@ -43,7 +33,7 @@ fn vcm_family(name: &str, algorithm: Algorithm, radius_fraction: f32) -> Box<dyn
         radius_fraction,
         ..VcmSettings::new(algorithm, SIZE, SIZE)
     };
-    Box::new(common::vcm(scene(name), settings))
+    Box::new(common::vcm(common::scene_file(name), settings))
 }
 
 /// z-scores of the region means of `integrator` against the reference, and last that of the

@@ -6,8 +6,6 @@
 
 mod common;
 
-use std::path::Path;
-
 use glam::Vec3;
 use vcm::{Algorithm, Film, FrameStats, Integrator, PtSettings, Vcm, VcmSettings};
 use vcm_scene::light::{Light, PointLight};
@@ -18,13 +16,6 @@ const SIZE: u32 = 32;
 /// (η = π r² N ≈ 4), but blurs less than the noise of the statistical test (as in
 /// `algorithms_agree`): a pruned VCM that lost merging's share would be seen.
 const RADIUS_FRACTION: f32 = 0.02;
-
-fn scene_file(name: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name);
-    Scene::load(&path).unwrap()
-}
 
 /// The integrator of `algorithm` (`None`: the path tracer) over `scene`.
 fn integrator(scene: Scene, algorithm: Option<Algorithm>, prune: bool) -> Box<dyn Integrator> {
@@ -81,7 +72,7 @@ fn floor_under_a_point_light() -> Scene {
 #[test]
 fn shading_without_the_parts_a_scene_lacks_gives_the_same_image_bit_for_bit() {
     let scenes = [
-        ("cornell-box", scene_file("cornell-box.gltf")),
+        ("cornell-box", common::scene_file("cornell-box.gltf")),
         ("point light", floor_under_a_point_light()),
     ];
     for (name, scene) in scenes {
@@ -162,24 +153,24 @@ fn a_scene_without_diffuse_or_glossy_surfaces_traces_no_light_paths() {
 #[test]
 fn integrators_that_never_connect_or_merge_allocate_no_cache_and_build_no_grid() {
     let mut lt = vcm_family(
-        scene_file("cornell-box.gltf"),
+        common::scene_file("cornell-box.gltf"),
         Algorithm::LightTracing,
         true,
     );
     render(&mut lt, 1);
     assert_eq!((lt.cache().capacity(), lt.grid().memory_bytes()), (0, 0));
-    let mut bpt = vcm_family(scene_file("cornell-box.gltf"), Algorithm::Bpt, true);
+    let mut bpt = vcm_family(common::scene_file("cornell-box.gltf"), Algorithm::Bpt, true);
     render(&mut bpt, 1);
     assert!(bpt.cache().capacity() > 0);
     assert_eq!(bpt.grid().memory_bytes(), 0);
-    let mut bpm = vcm_family(scene_file("cornell-box.gltf"), Algorithm::Bpm, true);
+    let mut bpm = vcm_family(common::scene_file("cornell-box.gltf"), Algorithm::Bpm, true);
     render(&mut bpm, 1);
     assert!(bpm.cache().capacity() > 0 && bpm.grid().memory_bytes() > 0);
 }
 
 #[test]
 fn vcm_without_specular_surfaces_runs_as_bpt_without_a_grid() {
-    let scene = scene_file("cornell-box.gltf");
+    let scene = common::scene_file("cornell-box.gltf");
     let mut vcm = vcm_family(scene.clone(), Algorithm::Vcm, true);
     let (vcm_image, vcm_stats) = render(&mut vcm, 3);
     let (bpt_image, _) = render(&mut vcm_family(scene, Algorithm::Bpt, true), 3);
@@ -201,7 +192,7 @@ const Z_LIMIT: f64 = 4.5;
 fn vcm_without_merging_has_the_expectation_of_full_vcm() {
     const FRAMES: u32 = 600;
     for name in ["cornell-box.gltf", "cornell-indirect.gltf"] {
-        let scene = scene_file(name);
+        let scene = common::scene_file(name);
         let [pruned, full] = [true, false].map(|prune| {
             let mut vcm = vcm_family(scene.clone(), Algorithm::Vcm, prune);
             common::region_means(&mut vcm, FRAMES, REGIONS)

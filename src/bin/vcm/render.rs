@@ -11,7 +11,7 @@ use vcm::atomic_write::write_atomically;
 use vcm::image_io::RgbImage;
 use vcm::{Film, Integrator};
 use vcm_rs::Backend;
-use vcm_rs::scene::{Scene, ShadingPlan};
+use vcm_rs::scene::Scene;
 use vcm_rs::traversal::Traversal;
 
 use crate::plot::{Series, plot_relmse, plot_utilization};
@@ -162,11 +162,7 @@ fn print_explanation(scene: &Scene, setup: &RenderSetup, integrator: &dyn Integr
     for line in scene.features.to_string().lines() {
         println!("  {line}");
     }
-    let shading = if setup.integrator.no_prune {
-        ShadingPlan::FULL
-    } else {
-        scene.shading
-    };
+    let shading = setup.integrator.shading_plan(scene);
     let decisions = integrator
         .decisions()
         .into_iter()

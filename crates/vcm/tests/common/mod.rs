@@ -77,6 +77,14 @@ pub fn scene(mesh: Mesh, materials: Vec<Material>, lights: Vec<Light>, camera: C
     )
 }
 
+/// A scene of the project's `scenes/` folder, by file name.
+pub fn scene_file(name: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name);
+    Scene::load(&path).unwrap()
+}
+
 /// The CPU traversal backend over `scene`.
 pub fn cpu_traversal(scene: &Scene) -> Arc<dyn Traversal> {
     Arc::new(CpuBvh::new(&scene.triangle_corners(), CpuBvhOptions::default()).unwrap())
