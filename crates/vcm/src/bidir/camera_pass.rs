@@ -16,7 +16,6 @@ use super::mis::{
 };
 use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
-use crate::film::Film;
 use crate::hash_grid::HashGrid;
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
@@ -25,15 +24,13 @@ use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::wave::{fill_extension_rays, shade_in_parallel};
 
-/// What the camera pass reads: the frame, and the light pass's results.
+/// What the camera paths of one iteration read: the iteration, and its light pass's results.
 pub(crate) struct CameraContext<'a> {
     pub frame: FrameContext<'a>,
-    /// This frame's light vertices.
+    /// The iteration's light vertices.
     pub cache: &'a LightVertexCache,
     /// The hash grid over `cache` (empty unless the algorithm merges).
     pub grid: &'a HashGrid,
-    /// This frame's merge radius.
-    pub radius: f32,
 }
 
 impl<'a> std::ops::Deref for CameraContext<'a> {
@@ -48,6 +45,8 @@ impl<'a> std::ops::Deref for CameraContext<'a> {
 #[derive(Clone, Debug)]
 struct CameraPathState {
     pixel: u32,
+    /// The path's sample of the frame: the iteration it belongs to.
+    sample: u32,
     walk: Walk,
     radiance: Vec3,
     alive: bool,
@@ -55,51 +54,58 @@ struct CameraPathState {
     shadows: Vec<ShadowRay>,
 }
 
-/// Traces one camera path per pixel, grouped as `scheduler` says, and adds each path's
-/// radiance to `film` once it ends.
+/// Traces one camera path per pixel for each iteration of `iterations`, grouped as
+/// `scheduler` says, and returns each iteration's (pixel, radiance) samples: one per pixel, in
+/// no particular order (the additions to different pixels commute).
 pub(crate) fn run(
-    ctx: &CameraContext,
+    iterations: &[CameraContext],
     scheduler: Scheduler,
-    film: &mut Film,
     stats: &mut FrameStats,
-) {
-    let VcmSettings { width, height, .. } = *ctx.settings;
+) -> Vec<Vec<(u32, Vec3)>> {
+    let VcmSettings { width, height, .. } = *iterations[0].settings;
     let new_wavefront = || CameraWavefront {
-        ctx,
+        iterations,
         paths: Vec::new(),
         finished: Vec::new(),
     };
+    let traversal = iterations[0].traversal;
     let (outputs, scheduled) =
-        vcm_scheduler::run(scheduler, (width, height), ctx.traversal, new_wavefront);
-    let camera_rays = u64::from(width) * u64::from(height);
+        vcm_scheduler::run(scheduler, (width, height), traversal, new_wavefront);
+    let camera_rays = u64::from(width) * u64::from(height) * iterations.len() as u64;
     stats.camera_rays += camera_rays;
     stats.continuation_rays += scheduled.closest_rays - camera_rays;
     add_scheduled(stats, &scheduled);
-    // One path per pixel: the additions to different pixels commute, so their order does not
-    // matter.
-    for (pixel, radiance) in outputs.into_iter().flatten() {
-        film.add(pixel as usize, radiance);
+    let mut samples = vec![Vec::with_capacity((width * height) as usize); iterations.len()];
+    for (sample, pixel, radiance) in outputs.into_iter().flatten() {
+        samples[sample as usize].push((pixel, radiance));
     }
+    samples
 }
 
 /// The camera paths one scheduler worker has in flight, and the radiance of those that ended.
 struct CameraWavefront<'a> {
-    ctx: &'a CameraContext<'a>,
+    /// The frame's iterations; a path's `sample` indexes them.
+    iterations: &'a [CameraContext<'a>],
     paths: Vec<CameraPathState>,
-    /// (pixel, radiance) of the paths that ended.
-    finished: Vec<(u32, Vec3)>,
+    /// (sample, pixel, radiance) of the paths that ended.
+    finished: Vec<(u32, u32, Vec3)>,
 }
 
 impl Wavefront for CameraWavefront<'_> {
-    type Output = Vec<(u32, Vec3)>;
+    type Output = Vec<(u32, u32, Vec3)>;
 
+    /// Starts the camera paths of the tile's pixels, one per iteration.
     fn start(&mut self, tile: Tile) {
-        let ctx = self.ctx;
-        let pixels: Vec<u32> = tile.pixels(ctx.settings.width).collect();
-        let new_paths = pixels
+        let iterations = self.iterations;
+        let samples = iterations.len() as u32;
+        let keys: Vec<(u32, u32)> = tile
+            .pixels(iterations[0].settings.width)
+            .flat_map(|pixel| (0..samples).map(move |sample| (pixel, sample)))
+            .collect();
+        let new_paths = keys
             .into_par_iter()
             .with_min_len(256)
-            .map(|pixel| start(ctx, pixel));
+            .map(|(pixel, sample)| start(&iterations[sample as usize], pixel, sample));
         self.paths.par_extend(new_paths);
     }
 
@@ -115,8 +121,10 @@ impl Wavefront for CameraWavefront<'_> {
     /// Shades every path at its hit in parallel and queues its light sample and connections,
     /// in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
-        let ctx = self.ctx;
-        shade_in_parallel(&mut self.paths, hits, |path, hit| shade(ctx, path, hit));
+        let iterations = self.iterations;
+        shade_in_parallel(&mut self.paths, hits, |path, hit| {
+            shade(&iterations[path.sample as usize], path, hit)
+        });
         let shadows = self.paths.iter().flat_map(|p| &p.shadows);
         ShadowRay::fill_batch(shadow_rays, shadows);
     }
@@ -134,19 +142,20 @@ impl Wavefront for CameraWavefront<'_> {
         let finished = &mut self.finished;
         self.paths.retain(|path| {
             if !path.alive {
-                finished.push((path.pixel, path.radiance));
+                finished.push((path.sample, path.pixel, path.radiance));
             }
             path.alive
         });
     }
 
-    fn finish(self) -> Vec<(u32, Vec3)> {
+    fn finish(self) -> Vec<(u32, u32, Vec3)> {
         self.finished
     }
 }
 
-/// Starts the camera path of `pixel`, its position jittered uniformly over the pixel.
-fn start(ctx: &CameraContext, pixel: u32) -> CameraPathState {
+/// Starts the camera path of `pixel` in iteration `ctx` (the frame's `sample`), its position
+/// jittered uniformly over the pixel.
+fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
     let VcmSettings {
         width,
         height,
@@ -154,7 +163,7 @@ fn start(ctx: &CameraContext, pixel: u32) -> CameraPathState {
         ..
     } = *ctx.settings;
     let camera = &ctx.scene.camera;
-    let mut rng = Rng::from_key(&[seed, u64::from(ctx.iteration), u64::from(pixel), 0]);
+    let mut rng = Rng::from_key(&[seed, ctx.iteration, u64::from(pixel), 0]);
     let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
     let raster: Vec2 = xy + rng.uniform2();
     let direction = camera.direction(width, height, raster);
@@ -162,12 +171,13 @@ fn start(ctx: &CameraContext, pixel: u32) -> CameraPathState {
     let camera_pdf_w = 1.0 / (camera.pixel_area(width, height) * cos_camera.powi(3));
     CameraPathState {
         pixel,
+        sample,
         walk: Walk {
             rng,
             origin: camera.position,
             direction,
             throughput: Vec3::ONE,
-            mis: SubpathMis::camera(camera_pdf_w, ctx.factors),
+            mis: SubpathMis::camera(camera_pdf_w, &ctx.factors),
             segments: 1,
         },
         radiance: Vec3::ZERO,
@@ -220,7 +230,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
             &bsdf,
             wo,
             TransportMode::Radiance,
-            ctx.factors,
+            &ctx.factors,
             1.0,
         )
         .is_some();
@@ -250,7 +260,7 @@ fn emission(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> Vec3 {
             &path.walk.mis,
             pick_pmf * emitted.direct_pdf_a,
             pick_pmf * emitted.emission_pdf_w,
-            ctx.factors,
+            &ctx.factors,
         )
     };
     emitted.radiance * weight
@@ -279,7 +289,7 @@ fn light_sample(
         },
         bsdf_rev_pdf_w: eval.pdf_rev,
     };
-    let weight = light_sample_weight(&path.walk.mis, &pdfs, ctx.factors);
+    let weight = light_sample_weight(&path.walk.mis, &pdfs, &ctx.factors);
     let contribution =
         path.walk.throughput * illumination.value * eval.f_cos * (weight / pdfs.direct_pdf_w);
     Some(sample.shadow_ray(surface, contribution))
@@ -347,7 +357,7 @@ fn connect(
         light_fwd_pdf_a: light_eval.pdf_fwd * surface.cos_geometric(direction) / distance_sq,
         light_rev_pdf_w: light_eval.pdf_rev,
     };
-    let weight = connection_weight(&path.walk.mis, &vertex.mis, &pdfs, ctx.factors);
+    let weight = connection_weight(&path.walk.mis, &vertex.mis, &pdfs, &ctx.factors);
     let contribution = path.walk.throughput
         * vertex.throughput
         * camera_eval.f_cos
@@ -394,7 +404,7 @@ fn merge(
                 &vertex.mis,
                 eval.pdf_fwd,
                 eval.pdf_rev,
-                ctx.factors,
+                &ctx.factors,
             )
         };
         // The density estimate needs f, not f·cos: f_cos = f·|ωi·n_s| in radiance mode.

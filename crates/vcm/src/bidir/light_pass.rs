@@ -11,9 +11,8 @@ use vcm_traversal::{HitBatch, RayBatch};
 use super::mis::{SubpathMis, camera_connection_weight};
 use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
-use crate::film::Film;
 use crate::integrator::FrameStats;
-use crate::light_vertex_cache::{LightVertex, LightVertexCache};
+use crate::light_vertex_cache::LightVertex;
 use crate::path_state::ShadowRay;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
@@ -24,14 +23,6 @@ const LIGHT_STREAM: u64 = 1;
 
 /// Random stream tag of the preprocess's light paths.
 const PREPROCESS_STREAM: u64 = 2;
-
-/// Where the light pass puts its results (`None`: the algorithm does not use them).
-pub(crate) struct LightPassOutputs<'a> {
-    /// The light vertex cache.
-    pub cache: Option<&'a mut LightVertexCache>,
-    /// The film that light tracing splats go to.
-    pub film: Option<&'a mut Film>,
-}
 
 /// A light tracing splat waiting for its occlusion test.
 #[derive(Clone, Copy, Debug)]
@@ -47,8 +38,10 @@ struct Splat {
 /// One light path between waves.
 #[derive(Clone, Debug)]
 struct LightPathState {
-    /// The path's index in the frame (its random stream and its place in the results).
+    /// The path's index in its iteration (its random stream and its place in the results).
     index: u32,
+    /// The path's sample of the frame: the iteration it belongs to.
+    sample: u32,
     walk: Walk,
     /// 1 / the largest channel of the throughput after emission: makes Russian roulette
     /// independent of the light's units.
@@ -69,104 +62,117 @@ fn result_key(path_length: u32, index: u32) -> u64 {
     (u64::from(path_length) << 32) | u64::from(index)
 }
 
-/// Traces one light path per pixel of the frame, grouped as `scheduler` says, stores their
-/// vertices in `outputs.cache` and splats their unoccluded camera connections onto
-/// `outputs.film`, both in the order of [`result_key`].
+/// Traces one light path per pixel for each iteration of `iterations`, grouped as `scheduler`
+/// says, and returns each iteration's vertices and (with `splat`) unoccluded camera
+/// connections.
 pub(crate) fn run(
-    ctx: &FrameContext,
+    iterations: &[FrameContext],
     scheduler: Scheduler,
-    outputs: LightPassOutputs,
+    splat: bool,
     stats: &mut FrameStats,
-) {
-    let VcmSettings { width, height, .. } = *ctx.settings;
-    let splat = outputs.film.is_some();
-    let results = trace(ctx, scheduler, (width, height), LIGHT_STREAM, splat, stats);
-    if let Some(cache) = outputs.cache {
-        cache.extend(results.vertices.into_iter().map(|(_, vertex)| vertex));
-    }
-    if let Some(film) = outputs.film {
-        for (_, pixel, contribution) in results.splats {
-            film.add_splat(pixel as usize, contribution);
-        }
-    }
+) -> Vec<LightResults> {
+    let VcmSettings { width, height, .. } = *iterations[0].settings;
+    trace(
+        iterations,
+        scheduler,
+        (width, height),
+        LIGHT_STREAM,
+        splat,
+        stats,
+    )
 }
 
 /// Traces `count` light paths that store and splat nothing and returns how many cacheable
 /// (non-specular) vertices they have (the preprocess that sizes the cache).
-pub(crate) fn count_vertices(ctx: &FrameContext, scheduler: Scheduler, count: u32) -> u64 {
+pub(crate) fn count_vertices(ctx: FrameContext, scheduler: Scheduler, count: u32) -> u64 {
     let mut stats = FrameStats::default();
     let results = trace(
-        ctx,
+        &[ctx],
         scheduler,
         (count, 1),
         PREPROCESS_STREAM,
         false,
         &mut stats,
     );
-    results.vertices.len() as u64
+    results[0].vertices.len() as u64
 }
 
-/// The vertices and unoccluded splats of a pass, sorted by [`result_key`].
+/// The vertices and unoccluded splats of one iteration's light paths, sorted by
+/// [`result_key`]: the order in which one batch of all its paths produces them.
 #[derive(Default)]
-struct LightResults {
-    vertices: Vec<(u64, LightVertex)>,
+pub(crate) struct LightResults {
+    /// (key, vertex).
+    pub vertices: Vec<(u64, LightVertex)>,
     /// (key, pixel, contribution).
-    splats: Vec<(u64, u32, Vec3)>,
+    pub splats: Vec<(u64, u32, Vec3)>,
 }
 
 /// Traces the light paths of every index of a `size.0 × size.1` grid (tiles of it for the
-/// tile scheduler) and gathers their results in a fixed order.
+/// tile scheduler), one per iteration, and gathers each iteration's results in a fixed order.
 fn trace(
-    ctx: &FrameContext,
+    iterations: &[FrameContext],
     scheduler: Scheduler,
     size: (u32, u32),
     stream: u64,
     splat: bool,
     stats: &mut FrameStats,
-) -> LightResults {
+) -> Vec<LightResults> {
+    let per_iteration = || iterations.iter().map(|_| LightResults::default()).collect();
     let new_wavefront = || LightWavefront {
-        ctx,
+        iterations,
         grid_width: size.0,
         stream,
         splat,
         paths: Vec::new(),
-        results: LightResults::default(),
+        results: per_iteration(),
     };
-    let (outputs, scheduled) = vcm_scheduler::run(scheduler, size, ctx.traversal, new_wavefront);
+    let traversal = iterations[0].traversal;
+    let (outputs, scheduled) = vcm_scheduler::run(scheduler, size, traversal, new_wavefront);
     stats.light_rays += scheduled.closest_rays;
     add_scheduled(stats, &scheduled);
-    let mut results = LightResults::default();
+    let mut results: Vec<LightResults> = per_iteration();
     for output in outputs {
-        results.vertices.extend(output.vertices);
-        results.splats.extend(output.splats);
+        for (gathered, part) in results.iter_mut().zip(output) {
+            gathered.vertices.extend(part.vertices);
+            gathered.splats.extend(part.splats);
+        }
     }
-    results.vertices.par_sort_unstable_by_key(|&(key, _)| key);
-    results.splats.par_sort_unstable_by_key(|&(key, ..)| key);
+    for gathered in &mut results {
+        gathered.vertices.par_sort_unstable_by_key(|&(key, _)| key);
+        gathered.splats.par_sort_unstable_by_key(|&(key, ..)| key);
+    }
     results
 }
 
 /// The light paths one scheduler worker has in flight, and the results of their vertices.
 struct LightWavefront<'a> {
-    ctx: &'a FrameContext<'a>,
+    /// The frame's iterations; a path's `sample` indexes them.
+    iterations: &'a [FrameContext<'a>],
     /// Width of the grid whose tiles name the paths (path index = y · width + x).
     grid_width: u32,
     stream: u64,
     /// Whether vertices are connected to the camera.
     splat: bool,
     paths: Vec<LightPathState>,
-    results: LightResults,
+    /// Results per iteration.
+    results: Vec<LightResults>,
 }
 
 impl Wavefront for LightWavefront<'_> {
-    type Output = LightResults;
+    type Output = Vec<LightResults>;
 
+    /// Starts the light paths of the tile's indices, one per iteration.
     fn start(&mut self, tile: Tile) {
-        let (ctx, stream) = (self.ctx, self.stream);
-        let indices: Vec<u32> = tile.pixels(self.grid_width).collect();
-        let new_paths = indices
+        let (iterations, stream) = (self.iterations, self.stream);
+        let samples = iterations.len() as u32;
+        let keys: Vec<(u32, u32)> = tile
+            .pixels(self.grid_width)
+            .flat_map(|index| (0..samples).map(move |sample| (index, sample)))
+            .collect();
+        let new_paths = keys
             .into_par_iter()
             .with_min_len(256)
-            .map(|index| emit(ctx, index, stream))
+            .map(|(index, sample)| emit(&iterations[sample as usize], index, sample, stream))
             .filter(|path| path.alive);
         self.paths.par_extend(new_paths);
     }
@@ -183,14 +189,16 @@ impl Wavefront for LightWavefront<'_> {
     /// Shades every path at its hit in parallel, keeps the cacheable vertices and queues the
     /// camera connections, in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
-        let (ctx, splat) = (self.ctx, self.splat);
+        let (iterations, splat) = (self.iterations, self.splat);
         shade_in_parallel(&mut self.paths, hits, |path, hit| {
-            shade(ctx, path, hit, splat)
+            shade(&iterations[path.sample as usize], path, hit, splat)
         });
         for path in &mut self.paths {
             if let Some(vertex) = path.vertex.take() {
                 let key = result_key(vertex.path_length, path.index);
-                self.results.vertices.push((key, vertex));
+                self.results[path.sample as usize]
+                    .vertices
+                    .push((key, vertex));
             }
         }
         let rays = self
@@ -207,30 +215,29 @@ impl Wavefront for LightWavefront<'_> {
             let splat = path.splat.take().expect("filtered on a queued splat");
             if !blocked {
                 let key = result_key(splat.path_length, path.index);
-                self.results
-                    .splats
-                    .push((key, splat.pixel, splat.ray.contribution));
+                self.results[path.sample as usize].splats.push((
+                    key,
+                    splat.pixel,
+                    splat.ray.contribution,
+                ));
             }
         }
         self.paths.retain(|p| p.alive);
     }
 
-    fn finish(self) -> LightResults {
+    fn finish(self) -> Vec<LightResults> {
         self.results
     }
 }
 
-/// Starts light path `index`: picks a light by power and samples an emitted ray.
-fn emit(ctx: &FrameContext, index: u32, stream: u64) -> LightPathState {
-    let mut rng = Rng::from_key(&[
-        ctx.settings.seed,
-        u64::from(ctx.iteration),
-        u64::from(index),
-        stream,
-    ]);
+/// Starts light path `index` of iteration `ctx` (the frame's `sample`): picks a light by
+/// power and samples an emitted ray.
+fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathState {
+    let mut rng = Rng::from_key(&[ctx.settings.seed, ctx.iteration, u64::from(index), stream]);
     let (u_pick, u_pos, u_dir) = (rng.uniform(), rng.uniform2(), rng.uniform2());
     let mut path = LightPathState {
         index,
+        sample,
         walk: Walk {
             rng,
             origin: Vec3::ZERO,
@@ -262,7 +269,7 @@ fn emit(ctx: &FrameContext, index: u32, stream: u64) -> LightPathState {
         emission.cos_at_light,
         light.is_delta(),
         light.is_finite(),
-        ctx.factors,
+        &ctx.factors,
     );
     path.walk.origin = offset_off_light(light, emission.position, emission.direction);
     path.walk.direction = emission.direction;
@@ -310,7 +317,7 @@ fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat:
                 &bsdf,
                 wo,
                 TransportMode::Importance,
-                ctx.factors,
+                &ctx.factors,
                 path.roulette_scale,
             )
             .is_some();
@@ -342,7 +349,7 @@ fn connect_to_camera(
     let weight = if ctx.settings.algorithm == Algorithm::LightTracing {
         1.0
     } else {
-        camera_connection_weight(&vertex.mis, camera_pdf_a, eval.pdf_rev, ctx.factors)
+        camera_connection_weight(&vertex.mis, camera_pdf_a, eval.pdf_rev, &ctx.factors)
     };
     let contribution = vertex.throughput
         * eval.f_cos

@@ -2,15 +2,22 @@
 //! light tracing, bidirectional path tracing, progressive photon mapping and bidirectional
 //! photon mapping, all from one integrator.
 //!
-//! A frame has two passes, each run as waves of ray batches over a [`Traversal`]:
-//! 1. **Light pass**: one light path per pixel. Every non-specular vertex is stored in the
-//!    [`LightVertexCache`] and, for the algorithms that use it, connected to the camera (a
-//!    light tracing splat). Merging algorithms then build a [`HashGrid`] over the cache.
-//! 2. **Camera pass**: one path per pixel. Each non-specular vertex takes a light sample,
-//!    connects to `connections` vertices picked uniformly from the whole cache (the
-//!    contribution scaled by c = N_v / (N_c · N_p), so that it estimates the same sum as
-//!    connecting to all vertices of one light path) and merges with the cached vertices
-//!    within the frame's radius.
+//! An iteration of the algorithm renders one sample per pixel; a frame renders
+//! `samples_per_frame` iterations side by side (iteration `frame · S + s` for its sample `s`),
+//! each with its own merge radius, light vertex cache and hash grid, in two passes run as
+//! waves of ray batches over a [`Traversal`]:
+//! 1. **Light pass**: one light path per pixel and sample. Every non-specular vertex is stored
+//!    in its iteration's [`LightVertexCache`] and, for the algorithms that use it, connected to
+//!    the camera (a light tracing splat). Merging algorithms then build one [`HashGrid`] per
+//!    iteration over its cache, the grids in parallel.
+//! 2. **Camera pass**: one path per pixel and sample. Each non-specular vertex takes a light
+//!    sample, connects to `connections` vertices picked uniformly from its iteration's whole
+//!    cache (the contribution scaled by c = N_v / (N_c · N_p), so that it estimates the same
+//!    sum as connecting to all vertices of one light path) and merges with that cache's
+//!    vertices within the iteration's radius.
+//!
+//! The film receives each iteration's splats and then its camera samples, iteration after
+//! iteration, so a frame of S samples adds exactly what S frames of one sample would.
 //!
 //! Every technique is weighted by the balance heuristic through the recursive quantities of
 //! [`mis`]. Connections to cache vertices are weighted as bidirectional path tracing weights
@@ -26,6 +33,8 @@ mod walk;
 use std::sync::Arc;
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 use vcm_scene::{Decision, Scene};
 use vcm_scheduler::SchedulerStats;
 use vcm_traversal::Traversal;
@@ -35,7 +44,6 @@ use crate::film::Film;
 use crate::hash_grid::HashGrid;
 use crate::integrator::{FrameStats, Integrator, Schedule};
 use crate::light_vertex_cache::LightVertexCache;
-use light_pass::LightPassOutputs;
 use mis::MisFactors;
 use plan::BidirPlan;
 
@@ -143,14 +151,16 @@ impl VcmSettings {
     }
 }
 
-/// What both passes of a frame read.
+/// What both passes read about one iteration (one sample per pixel) of a frame.
 pub(crate) struct FrameContext<'a> {
     pub scene: &'a Scene,
     pub traversal: &'a dyn Traversal,
     pub settings: &'a VcmSettings,
-    /// The frame (seeds the paths).
-    pub iteration: u32,
-    pub factors: &'a MisFactors,
+    /// The iteration, counted over the whole render (seeds the paths).
+    pub iteration: u64,
+    /// The iteration's merge radius.
+    pub radius: f32,
+    pub factors: MisFactors,
     /// The parts of the frame that run.
     pub plan: &'a BidirPlan,
 }
@@ -170,8 +180,12 @@ pub struct Vcm {
     plan: BidirPlan,
     base_radius: f32,
     schedule: Schedule,
-    cache: LightVertexCache,
-    grid: HashGrid,
+    /// Capacity of each iteration's cache, from the preprocess (0 without a cache).
+    cache_capacity: usize,
+    /// One light vertex cache per sample of a frame.
+    caches: Vec<LightVertexCache>,
+    /// One hash grid per sample of a frame (empty unless the frame merged).
+    grids: Vec<HashGrid>,
 }
 
 impl Vcm {
@@ -209,12 +223,14 @@ impl Vcm {
             plan,
             base_radius,
             schedule: Schedule::default(),
-            cache: LightVertexCache::default(),
-            grid: HashGrid::default(),
+            cache_capacity: 0,
+            caches: Vec::new(),
+            grids: Vec::new(),
         };
         if plan.cache {
-            vcm.cache = LightVertexCache::with_capacity(vcm.estimate_cache_capacity());
+            vcm.cache_capacity = vcm.estimate_cache_capacity();
         }
+        vcm.size_buffers();
         Ok(vcm)
     }
 
@@ -223,37 +239,74 @@ impl Vcm {
         &self.settings
     }
 
-    /// The merge radius of frame `iteration` (from 0): r₀ · (iteration + 1)^((α − 1) / 2).
-    pub fn radius(&self, iteration: u32) -> f32 {
+    /// The merge radius of iteration `iteration` (from 0; frame f of S samples per pixel
+    /// renders iterations f · S to f · S + S − 1): r₀ · (iteration + 1)^((α − 1) / 2).
+    pub fn radius(&self, iteration: u64) -> f32 {
         let exponent = 0.5 * (self.settings.alpha - 1.0);
         self.base_radius * ((iteration as f32) + 1.0).powf(exponent)
     }
 
-    /// The light vertex cache of the last frame.
-    pub fn cache(&self) -> &LightVertexCache {
-        &self.cache
+    /// The light vertex caches of the last frame, one per sample per pixel (each empty, with
+    /// no capacity, when the algorithm keeps no cache).
+    pub fn caches(&self) -> &[LightVertexCache] {
+        &self.caches
     }
 
-    /// The hash grid over the last frame's cache (empty unless the frame merged).
-    pub fn grid(&self) -> &HashGrid {
-        &self.grid
+    /// The hash grids over the last frame's caches (each empty unless the frame merged).
+    pub fn grids(&self) -> &[HashGrid] {
+        &self.grids
+    }
+
+    /// Keeps one cache (of the preprocess's capacity) and one grid per sample of a frame.
+    fn size_buffers(&mut self) {
+        let samples = self.schedule.samples_per_frame as usize;
+        let capacity = self.cache_capacity;
+        self.caches
+            .resize_with(samples, || LightVertexCache::with_capacity(capacity));
+        self.grids.resize_with(samples, HashGrid::default);
+    }
+
+    /// The contexts of frame `frame`'s iterations, one per sample per pixel.
+    fn iterations(&self, frame: u32) -> Vec<FrameContext<'_>> {
+        let samples = self.schedule.samples_per_frame;
+        let light_paths = self.light_paths() as f32;
+        (0..samples)
+            .map(|sample| {
+                let iteration = u64::from(frame) * u64::from(samples) + u64::from(sample);
+                let radius = self.radius(iteration);
+                FrameContext {
+                    scene: &self.scene,
+                    traversal: self.traversal.as_ref(),
+                    settings: &self.settings,
+                    iteration,
+                    radius,
+                    factors: MisFactors::new(
+                        self.plan.connects,
+                        self.plan.merges,
+                        radius,
+                        light_paths,
+                    ),
+                    plan: &self.plan,
+                }
+            })
+            .collect()
     }
 
     /// Traces [`PREPROCESS_LIGHT_PATHS`] light paths (without storing or splatting anything)
     /// and returns the cache capacity they suggest for one frame.
     fn estimate_cache_capacity(&mut self) -> usize {
         let light_paths = self.light_paths();
-        let factors = MisFactors::new(false, false, 1.0, 1.0);
         let ctx = FrameContext {
             scene: &self.scene,
             traversal: self.traversal.as_ref(),
             settings: &self.settings,
             iteration: 0,
-            factors: &factors,
+            radius: 1.0,
+            factors: MisFactors::new(false, false, 1.0, 1.0),
             plan: &self.plan,
         };
         let scheduler = self.schedule.scheduler;
-        let vertices = light_pass::count_vertices(&ctx, scheduler, PREPROCESS_LIGHT_PATHS);
+        let vertices = light_pass::count_vertices(ctx, scheduler, PREPROCESS_LIGHT_PATHS);
         LightVertexCache::estimate_capacity(
             vertices,
             u64::from(PREPROCESS_LIGHT_PATHS),
@@ -267,6 +320,7 @@ impl Vcm {
 }
 
 impl Integrator for Vcm {
+    /// Renders frame `iteration`: `samples_per_frame` iterations of the algorithm at once.
     fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats {
         let VcmSettings { width, height, .. } = self.settings;
         let plan = self.plan;
@@ -276,43 +330,53 @@ impl Integrator for Vcm {
             "film size differs from the settings"
         );
         let start = Instant::now();
-        let radius = self.radius(iteration);
-        let light_paths = self.light_paths();
-        let factors = MisFactors::new(plan.connects, plan.merges, radius, light_paths as f32);
         let mut stats = FrameStats::default();
-        self.cache.clear();
-        let outputs = LightPassOutputs {
-            cache: plan.cache.then_some(&mut self.cache),
-            film: plan.splats.then_some(&mut *film),
-        };
-        let frame = FrameContext {
-            scene: &self.scene,
-            traversal: self.traversal.as_ref(),
-            settings: &self.settings,
-            iteration,
-            factors: &factors,
-            plan: &plan,
-        };
         let scheduler = self.schedule.scheduler;
-        if plan.light_paths() {
-            light_pass::run(&frame, scheduler, outputs, &mut stats);
+        let mut caches = std::mem::take(&mut self.caches);
+        let mut grids = std::mem::take(&mut self.grids);
+        let iterations = self.iterations(iteration);
+        let mut light = if plan.light_paths() {
+            light_pass::run(&iterations, scheduler, plan.splats, &mut stats)
+        } else {
+            Vec::new()
+        };
+        if plan.cache {
+            for (cache, results) in caches.iter_mut().zip(&mut light) {
+                cache.clear();
+                cache.extend(results.vertices.drain(..).map(|(_, vertex)| vertex));
+                stats.light_vertices += cache.len() as u64;
+                stats.discarded_light_vertices += cache.discarded();
+            }
         }
-        stats.light_vertices = self.cache.len() as u64;
-        stats.discarded_light_vertices = self.cache.discarded();
-
         if plan.merges {
             let grid_start = Instant::now();
-            let positions: Vec<_> = self.cache.vertices().iter().map(|v| v.position).collect();
-            self.grid = HashGrid::build(&positions, radius);
+            grids = caches
+                .par_iter()
+                .zip(&iterations)
+                .map(|(cache, ctx)| {
+                    let positions: Vec<_> = cache.vertices().iter().map(|v| v.position).collect();
+                    HashGrid::build(&positions, ctx.radius)
+                })
+                .collect();
             stats.grid_build_time = grid_start.elapsed();
         }
-        let ctx = camera_pass::CameraContext {
-            frame,
-            cache: &self.cache,
-            grid: &self.grid,
-            radius,
-        };
-        camera_pass::run(&ctx, scheduler, film, &mut stats);
+        let samples: Vec<_> = iterations
+            .into_iter()
+            .zip(caches.iter().zip(&grids))
+            .map(|(frame, (cache, grid))| camera_pass::CameraContext { frame, cache, grid })
+            .collect();
+        let camera = camera_pass::run(&samples, scheduler, &mut stats);
+        for (sample, radiance) in camera.into_iter().enumerate() {
+            if let Some(results) = light.get(sample).filter(|_| plan.splats) {
+                for &(_, pixel, contribution) in &results.splats {
+                    film.add_splat(pixel as usize, contribution);
+                }
+            }
+            for (pixel, radiance) in radiance {
+                film.add(pixel as usize, radiance);
+            }
+        }
+        (self.caches, self.grids) = (caches, grids);
         stats.shading_time = start
             .elapsed()
             .saturating_sub(stats.traversal_time + stats.grid_build_time);
@@ -329,18 +393,16 @@ impl Integrator for Vcm {
             .decisions(self.settings.algorithm, &self.scene.features)
     }
 
-    /// Both passes run under `schedule.scheduler`; one sample per pixel per frame only (the
-    /// light vertex cache and the hash grid hold one light path per pixel).
+    /// Both passes run under `schedule.scheduler`; `schedule.samples_per_frame` iterations
+    /// per frame, each with its own cache and grid.
     fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
-        let schedule = schedule.validated()?;
-        if schedule.samples_per_frame != 1 {
-            return Err(RenderError::InvalidSetting(format!(
-                "{} renders one sample per pixel per frame so far",
-                self.settings.algorithm.name()
-            )));
-        }
-        self.schedule = schedule;
+        self.schedule = schedule.validated()?;
+        self.size_buffers();
         Ok(())
+    }
+
+    fn samples_per_frame(&self) -> u32 {
+        self.schedule.samples_per_frame
     }
 }
 
