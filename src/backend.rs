@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use vcm::Schedule;
+use vcm::Scheduler;
 use vcm_scene::{Decision, Scene};
 use vcm_traversal::{BuildError, Traversal};
 use vcm_traversal_wgpu::GpuError;
@@ -48,14 +48,14 @@ impl Backend {
         }
     }
 
-    /// The schedule to run on this backend when the user picks none, or `None` to keep the
-    /// integrator's own. On the GPU one big batch per pass beats tiles, whose small batches
-    /// pay the dispatch and transfer costs many times over (Cornell box, 256², lavapipe:
-    /// 0.42 vs 0.32 M samples/s); on the CPU the path tracer's default tiles are faster.
-    pub fn preferred_schedule(self) -> Option<Schedule> {
+    /// The scheduler to run on this backend when the user picks none. On the GPU one big
+    /// batch per pass beats tiles, whose small batches pay the dispatch and transfer costs
+    /// many times over (Cornell box, 256², lavapipe: 0.42 vs 0.32 M samples/s); on the CPU
+    /// tiles are faster ([`Scheduler::default`]).
+    pub fn preferred_scheduler(self) -> Scheduler {
         match self {
-            Backend::Cpu => None,
-            Backend::Gpu => Some(Schedule::ONE_BATCH),
+            Backend::Cpu => Scheduler::default(),
+            Backend::Gpu => Scheduler::None,
         }
     }
 

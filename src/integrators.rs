@@ -3,6 +3,7 @@
 
 use std::sync::Arc;
 
+use crate::Backend;
 use vcm::{
     Algorithm as VcmAlgorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer,
     PtSettings, RenderError, Schedule, Scheduler, Vcm, VcmSettings,
@@ -119,7 +120,7 @@ pub struct ScheduleOptions {
     /// (--scheduler tile; 0 disables merging; default 0.5).
     #[arg(long)]
     pub tile_merge: Option<f32>,
-    /// Samples per pixel each frame renders (default 1; more for pt only).
+    /// Samples per pixel each frame renders (default 1).
     #[arg(long)]
     pub spp_per_frame: Option<u32>,
 }
@@ -141,6 +142,17 @@ impl ScheduleOptions {
             scheduler,
             samples_per_frame: self.spp_per_frame.unwrap_or(1),
         })
+    }
+
+    /// The schedule to render with on `backend`: what these options ask for, with the
+    /// backend's [preferred scheduler](Backend::preferred_scheduler) where they name neither a
+    /// scheduler nor a tile option.
+    pub fn schedule_on(&self, backend: Backend) -> Schedule {
+        let mut schedule = self.schedule().unwrap_or_default();
+        if self.scheduler.is_none() && self.tile_size.is_none() && self.tile_merge.is_none() {
+            schedule.scheduler = backend.preferred_scheduler();
+        }
+        schedule
     }
 }
 
@@ -195,4 +207,41 @@ pub fn image_size(scene: &Scene, width: u32, height: Option<u32>) -> (u32, u32) 
         ((width as f32 / aspect).round() as u32).max(1)
     });
     (width, height)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_backend_picks_the_scheduler_only_where_the_options_name_none() {
+        let none = ScheduleOptions::default();
+        assert_eq!(none.schedule_on(Backend::Cpu), Schedule::default());
+        assert_eq!(none.schedule_on(Backend::Gpu), Schedule::ONE_BATCH);
+        let four = ScheduleOptions {
+            spp_per_frame: Some(4),
+            ..ScheduleOptions::default()
+        };
+        let on_gpu = four.schedule_on(Backend::Gpu);
+        assert_eq!(
+            (on_gpu.scheduler, on_gpu.samples_per_frame),
+            (Scheduler::None, 4)
+        );
+        let tiles = ScheduleOptions {
+            tile_size: Some(64),
+            ..ScheduleOptions::default()
+        };
+        assert!(matches!(
+            tiles.schedule_on(Backend::Gpu).scheduler,
+            Scheduler::Tile { size: 64, .. }
+        ));
+        let one_batch = ScheduleOptions {
+            scheduler: Some(SchedulerKind::None),
+            ..ScheduleOptions::default()
+        };
+        assert_eq!(
+            one_batch.schedule_on(Backend::Cpu).scheduler,
+            Scheduler::None
+        );
+    }
 }

@@ -14,7 +14,7 @@ use crate::render::{
     RenderSetup, build_traversal, check_writable, interrupt_flag, load_scene, read_reference,
     relmse_points, set_threads, write_text,
 };
-use vcm_rs::integrators::{self, Algorithm, image_size};
+use vcm_rs::integrators::{Algorithm, image_size};
 
 /// Arguments of `vcm convergence`.
 #[derive(clap::Args)]
@@ -57,8 +57,7 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
     for &algorithm in &args.algos {
         eprintln!("rendering with {} for {} s", algorithm.name(), args.time);
         let traversal = Arc::clone(&traversal) as _;
-        let mut integrator =
-            integrators::build(algorithm, &scene, traversal, size, &args.setup.integrator)?;
+        let mut integrator = args.setup.integrator(algorithm, &scene, traversal, size)?;
         let mut film = Film::new(size.0, size.1);
         let outcome = progressive::render(
             integrator.as_mut(),

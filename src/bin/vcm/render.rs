@@ -35,6 +35,25 @@ pub struct RenderSetup {
     pub threads: Option<usize>,
     #[command(flatten)]
     pub integrator: IntegratorOptions,
+    #[command(flatten)]
+    pub schedule: ScheduleOptions,
+}
+
+impl RenderSetup {
+    /// The integrator of `algorithm` for `scene` at `size`, traced by `traversal`, with the
+    /// schedule these options ask for on their backend.
+    pub fn integrator(
+        &self,
+        algorithm: Algorithm,
+        scene: &Arc<Scene>,
+        traversal: Arc<dyn Traversal>,
+        size: (u32, u32),
+    ) -> anyhow::Result<Box<dyn Integrator>> {
+        let mut integrator =
+            integrators::build(algorithm, scene, traversal, size, &self.integrator)?;
+        integrator.set_schedule(self.schedule.schedule_on(self.backend))?;
+        Ok(integrator)
+    }
 }
 
 /// Arguments of `vcm render`.
@@ -54,8 +73,6 @@ pub struct RenderArgs {
     time: Option<f64>,
     #[command(flatten)]
     setup: RenderSetup,
-    #[command(flatten)]
-    schedule: ScheduleOptions,
     /// Output EXR (linear radiance); a tone-mapped PNG is written beside it.
     #[arg(short, long, default_value = "out.exr")]
     output: PathBuf,
@@ -88,19 +105,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => None,
     };
     let traversal = build_traversal(args.setup.backend, &scene)?;
-    let mut integrator = integrators::build(
-        args.algo,
-        &scene,
-        traversal,
-        (width, height),
-        &args.setup.integrator,
-    )?;
+    let mut integrator = args
+        .setup
+        .integrator(args.algo, &scene, traversal, (width, height))?;
     if args.explain {
         print_explanation(&scene, &args.setup, integrator.as_ref());
-    }
-    let schedule = args.schedule.schedule();
-    if let Some(schedule) = schedule.or(args.setup.backend.preferred_schedule()) {
-        integrator.set_schedule(schedule)?;
     }
     let interrupted = interrupt_flag()?;
     let mut film = Film::new(width, height);
