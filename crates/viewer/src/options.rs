@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Parser;
 use vcm_rs::Backend;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
 
 use crate::settings::RenderSettings;
 
@@ -21,9 +21,6 @@ pub struct Options {
     /// Ray traversal backend.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     pub backend: Backend,
-    /// Frames (one sample per pixel each) rendered between two updates of the image.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024))]
-    pub samples_per_frame: u32,
     /// Image width in pixels at full resolution.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub width: u32,
@@ -32,6 +29,8 @@ pub struct Options {
     pub height: Option<u32>,
     #[command(flatten)]
     pub integrator: IntegratorOptions,
+    #[command(flatten)]
+    pub schedule: ScheduleOptions,
     /// Exposure in stops (the image is scaled by 2^exposure before tone mapping).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
@@ -55,7 +54,7 @@ impl Options {
             algorithm: self.algo,
             backend: self.backend,
             integrator: self.integrator.clone(),
-            samples_per_frame: self.samples_per_frame,
+            schedule: self.schedule,
         }
     }
 
@@ -68,6 +67,7 @@ impl Options {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use vcm_rs::integrators::SchedulerKind;
 
     fn parse(args: &[&str]) -> Result<Options, clap::Error> {
         Options::try_parse_from(std::iter::once("vcm-viewer").chain(args.iter().copied()))
@@ -78,7 +78,7 @@ mod tests {
         let options = parse(&[]).unwrap();
         assert_eq!(options.scene, PathBuf::from("scenes/cornell-box.gltf"));
         assert_eq!(options.settings().algorithm, Algorithm::Pt);
-        assert_eq!(options.settings().samples_per_frame, 1);
+        assert_eq!(options.settings().schedule, ScheduleOptions::default());
         assert_eq!(options.screenshot(), None);
     }
 
@@ -92,12 +92,18 @@ mod tests {
             "5",
             "--radius",
             "0.01",
+            "--scheduler",
+            "none",
+            "--spp-per-frame",
+            "4",
         ])
         .unwrap();
         let settings = options.settings();
         assert_eq!(settings.algorithm, Algorithm::Vcm);
         assert_eq!(settings.integrator.max_depth, Some(5));
         assert_eq!(settings.integrator.radius, 0.01);
+        assert_eq!(settings.schedule.scheduler, Some(SchedulerKind::None));
+        assert_eq!(settings.schedule.spp_per_frame, Some(4));
         assert_eq!(options.exposure, 0.0);
         assert_eq!(parse(&["--exposure", "-1.5"]).unwrap().exposure, -1.5);
     }
@@ -109,7 +115,7 @@ mod tests {
             (&["--algo", "mlt"], "mlt"),
             (&["--backend", "tpu"], "tpu"),
             (&["--width", "0"], "0"),
-            (&["--samples-per-frame", "0"], "0"),
+            (&["--scheduler", "spiral"], "spiral"),
             (&["--frames", "4"], "--screenshot"),
             (&["--screenshot", "a.png"], "--frames"),
         ] {

@@ -2,10 +2,12 @@
 //! relMSE plot. Widgets edit [`ViewerApp::settings`] directly; the session notices the change
 //! and restarts the accumulation.
 
+use clap::ValueEnum;
 use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
+use vcm::Scheduler;
 use vcm_rs::Backend;
-use vcm_rs::integrators::Algorithm;
+use vcm_rs::integrators::{Algorithm, ScheduleOptions, SchedulerKind};
 
 use crate::app::ViewerApp;
 use crate::camera_controller::CameraController;
@@ -125,10 +127,49 @@ fn render_section(settings: &mut RenderSettings, ui: &mut egui::Ui) {
             );
             ui.end_row();
 
-            ui.label("Samples/frame");
-            ui.add(egui::Slider::new(&mut settings.samples_per_frame, 1..=64));
-            ui.end_row();
+            schedule_rows(&mut settings.schedule, settings.backend, ui);
         });
+}
+
+/// The scheduler (its backend's choice unless picked), the tile size where tiles are used,
+/// and the samples per pixel per frame.
+fn schedule_rows(schedule: &mut ScheduleOptions, backend: Backend, ui: &mut egui::Ui) {
+    let name = |kind: SchedulerKind| {
+        kind.to_possible_value()
+            .map_or_else(String::new, |value| value.get_name().to_owned())
+    };
+    ui.label("Scheduler");
+    let automatic = format!("auto ({})", backend.name());
+    egui::ComboBox::from_id_salt("scheduler")
+        .selected_text(schedule.scheduler.map_or(automatic.clone(), name))
+        .show_ui(ui, |ui| {
+            ui.selectable_value(&mut schedule.scheduler, None, automatic);
+            for &kind in SchedulerKind::value_variants() {
+                ui.selectable_value(&mut schedule.scheduler, Some(kind), name(kind));
+            }
+        });
+    ui.end_row();
+
+    ui.label("Tile size");
+    let tiled = !matches!(schedule.schedule_on(backend).scheduler, Scheduler::None);
+    let mut size = schedule.tile_size.unwrap_or(Scheduler::DEFAULT_TILE_SIZE);
+    let edited = ui.add_enabled(
+        tiled,
+        egui::DragValue::new(&mut size)
+            .range(1..=1024)
+            .suffix(" px"),
+    );
+    if edited.changed() {
+        schedule.tile_size = Some(size);
+    }
+    ui.end_row();
+
+    ui.label("Samples/frame");
+    let mut samples = schedule.spp_per_frame.unwrap_or(1);
+    if ui.add(egui::Slider::new(&mut samples, 1..=64)).changed() {
+        schedule.spp_per_frame = Some(samples);
+    }
+    ui.end_row();
 }
 
 fn image_section(app: &mut ViewerApp, ui: &mut egui::Ui) {

@@ -25,7 +25,7 @@ pub struct Job {
     pub scene: Arc<Scene>,
     /// Settings, camera and image size.
     pub view: View,
-    /// Stop after this many frames (samples per pixel); `None`: render until replaced.
+    /// Stop after this many frames; `None`: render until replaced.
     pub frame_limit: Option<u32>,
 }
 
@@ -38,7 +38,7 @@ pub struct Snapshot {
     pub size: (u32, u32),
     /// Mean radiance per pixel (W·sr⁻¹·m⁻², RGB), row by row from the top left.
     pub mean: Vec<Vec3>,
-    /// Frames rendered: samples per pixel.
+    /// Samples per pixel rendered.
     pub spp: u32,
     /// Time spent rendering frames since the job started.
     pub elapsed: Duration,
@@ -174,14 +174,20 @@ impl Worker {
                 ..Scene::clone(&job.scene)
             })
         };
-        integrators::build(
+        let name = settings.algorithm.name();
+        let mut integrator = integrators::build(
             settings.algorithm,
             &scene,
             traversal,
             job.view.size,
             &settings.integrator,
         )
-        .map_err(|e| format!("cannot start {}: {e}", settings.algorithm.name()))
+        .map_err(|e| format!("cannot start {name}: {e}"))?;
+        let schedule = settings.schedule.schedule_on(settings.backend);
+        integrator
+            .set_schedule(schedule)
+            .map_err(|e| format!("cannot schedule {name}: {e}"))?;
+        Ok(integrator)
     }
 
     fn traversal(
@@ -223,35 +229,33 @@ impl Worker {
         let mut film = Film::new(width, height);
         let mut totals = FrameStats::default();
         let mut elapsed = Duration::ZERO;
-        let per_update = job.view.settings.samples_per_frame.max(1);
-        let mut spp = 0;
+        let (mut frame, mut spp) = (0, 0);
         loop {
             match inbox.try_recv() {
                 Ok(newer) => return latest_job(newer, inbox),
                 Err(TryRecvError::Disconnected) => return Next::Quit,
                 Err(TryRecvError::Empty) => {}
             }
-            if job.frame_limit.is_some_and(|limit| spp >= limit) {
+            if job.frame_limit.is_some_and(|limit| frame >= limit) {
                 return wait_for_job(inbox);
             }
             let start = Instant::now();
-            totals.accumulate(&integrator.render_frame(&mut film, spp));
+            totals.accumulate(&integrator.render_frame(&mut film, frame));
             elapsed += start.elapsed();
-            spp += 1;
-            if spp % per_update == 0 || job.frame_limit == Some(spp) {
-                let mean = film.mean();
-                let relmse = self.relmse(job.view.size, &mean);
-                self.publish(Update::Frames(Snapshot {
-                    generation: job.generation,
-                    size: job.view.size,
-                    mean,
-                    spp,
-                    elapsed,
-                    totals,
-                    dropped: film.dropped(),
-                    relmse,
-                }));
-            }
+            frame += 1;
+            spp += integrator.samples_per_frame();
+            let mean = film.mean();
+            let relmse = self.relmse(job.view.size, &mean);
+            self.publish(Update::Frames(Snapshot {
+                generation: job.generation,
+                size: job.view.size,
+                mean,
+                spp,
+                elapsed,
+                totals,
+                dropped: film.dropped(),
+                relmse,
+            }));
         }
     }
 
@@ -296,7 +300,7 @@ mod tests {
     use std::path::Path;
     use std::sync::mpsc;
 
-    use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+    use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
 
     use crate::settings::RenderSettings;
 
@@ -317,7 +321,11 @@ mod tests {
                 alpha: 0.75,
                 ..IntegratorOptions::default()
             },
-            samples_per_frame: 2,
+            // Frames of two samples: the worker must apply the schedule.
+            schedule: ScheduleOptions {
+                spp_per_frame: Some(2),
+                ..ScheduleOptions::default()
+            },
         }
     }
 
@@ -368,7 +376,8 @@ mod tests {
         }
     }
 
-    /// The mean of `frames` frames rendered directly by the integrator.
+    /// The mean of `frames` frames of one sample per pixel rendered directly by the integrator
+    /// (the VCM family's frames of two samples add the same as two of one).
     fn direct_render(scene: &Arc<Scene>, size: (u32, u32), frames: u32) -> Vec<Vec3> {
         let settings = settings(Algorithm::Vcm);
         let traversal = Backend::Cpu.traversal(scene).unwrap();
@@ -386,7 +395,7 @@ mod tests {
     fn the_worker_renders_what_the_integrator_renders() {
         let scene = cornell_box();
         let (renderer, woken) = spawn(None);
-        renderer.submit(job(1, &scene, (24, 16), Some(4)));
+        renderer.submit(job(1, &scene, (24, 16), Some(2)));
         let snapshot = wait_for(&renderer, &woken, |u| frames(u, 1, 4));
         assert_eq!(snapshot.size, (24, 16));
         assert_eq!(snapshot.mean, direct_render(&scene, (24, 16), 4));
@@ -400,7 +409,7 @@ mod tests {
         let (renderer, woken) = spawn(None);
         renderer.submit(job(1, &scene, (32, 32), None));
         wait_for(&renderer, &woken, |u| frames(u, 1, 2));
-        let mut moved = job(2, &scene, (8, 8), Some(2));
+        let mut moved = job(2, &scene, (8, 8), Some(1));
         moved.view.camera.position.y += 0.1;
         renderer.submit(moved);
         let snapshot = wait_for(&renderer, &woken, |u| frames(u, 2, 2));
@@ -429,7 +438,7 @@ mod tests {
             "{message}"
         );
         // The worker goes on with the next job.
-        renderer.submit(job(6, &scene, (4, 4), Some(2)));
+        renderer.submit(job(6, &scene, (4, 4), Some(1)));
         wait_for(&renderer, &woken, |u| frames(u, 6, 2));
     }
 
@@ -442,10 +451,10 @@ mod tests {
             pixels: direct_render(&scene, (16, 12), 2),
         };
         let (renderer, woken) = spawn(Some(reference));
-        renderer.submit(job(1, &scene, (16, 12), Some(2)));
+        renderer.submit(job(1, &scene, (16, 12), Some(1)));
         let same = wait_for(&renderer, &woken, |u| frames(u, 1, 2));
         assert_eq!(same.relmse, Some(0.0), "the same frames give zero error");
-        renderer.submit(job(2, &scene, (12, 16), Some(2)));
+        renderer.submit(job(2, &scene, (12, 16), Some(1)));
         let other = wait_for(&renderer, &woken, |u| frames(u, 2, 2));
         assert_eq!(other.relmse, None, "another size has no error");
     }

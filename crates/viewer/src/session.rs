@@ -47,7 +47,7 @@ impl Session {
 mod tests {
     use super::*;
     use vcm_rs::Backend;
-    use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+    use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions, SchedulerKind};
     use vcm_scene::Bounds;
 
     fn view() -> View {
@@ -68,7 +68,7 @@ mod tests {
                     alpha: 0.75,
                     ..IntegratorOptions::default()
                 },
-                samples_per_frame: 1,
+                schedule: ScheduleOptions::default(),
             },
             camera: Camera::framing(&bounds),
             size: (64, 48),
@@ -85,7 +85,7 @@ mod tests {
 
     #[test]
     fn every_setting_camera_and_size_change_restarts() {
-        let changes: [fn(&mut View); 10] = [
+        let changes: [fn(&mut View); 11] = [
             |v| v.scene = 2,
             |v| v.settings.algorithm = Algorithm::Vcm,
             |v| v.settings.integrator.max_depth = Some(4),
@@ -93,7 +93,8 @@ mod tests {
             |v| v.settings.integrator.seed = 7,
             |v| v.settings.integrator.connections = 2,
             |v| v.settings.integrator.alpha = 0.5,
-            |v| v.settings.samples_per_frame = 4,
+            |v| v.settings.schedule.spp_per_frame = Some(4),
+            |v| v.settings.schedule.scheduler = Some(SchedulerKind::None),
             |v| v.camera.position.x += 0.01,
             |v| v.size = (16, 12),
         ];

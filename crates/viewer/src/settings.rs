@@ -1,8 +1,8 @@
 //! What the user picks for a render besides the camera: algorithm, backend, integrator options
-//! and samples per frame. Any change restarts the accumulation (see [`crate::session`]).
+//! and the schedule (scheduler, tile size, samples per pixel per frame). Any change restarts the accumulation (see [`crate::session`]).
 
 use vcm_rs::Backend;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
 
 /// Every algorithm, in the order the algorithm menu lists them.
 pub const ALGORITHMS: [Algorithm; 6] = [
@@ -23,7 +23,7 @@ pub struct RenderSettings {
     pub backend: Backend,
     /// Seed, maximum path length, connections, merge radius and its reduction.
     pub integrator: IntegratorOptions,
-    /// Frames (one sample per pixel each) rendered between two updates of the displayed
-    /// image (≥ 1).
-    pub samples_per_frame: u32,
+    /// Scheduler, tile size and samples per pixel per frame (the displayed image is updated
+    /// after every frame); options left out take the backend's defaults.
+    pub schedule: ScheduleOptions,
 }
