@@ -8,6 +8,7 @@
 //! - [`traversal_wgpu`]: the GPU backend (WGSL compute shaders through wgpu).
 //! - [`Backend`]: the traversal backends, chosen at run time.
 //! - [`integrators`]: the light transport algorithms, their options and one builder for all.
+//! - [`plot`]: PNG plots of error, CPU utilization and scheduler speed-ups.
 //!
 //! ```no_run
 //! use vcm_rs::traversal::{HitBatch, RayBatch, Traversal};
@@ -26,6 +27,7 @@ use std::sync::Arc;
 
 mod backend;
 pub mod integrators;
+pub mod plot;
 
 pub use vcm_scene as scene;
 pub use vcm_traversal as traversal;

@@ -8,13 +8,13 @@ use std::sync::atomic::Ordering;
 
 use vcm::Film;
 
-use crate::plot::{Series, plot_relmse};
 use crate::progressive::{self, Budget, Outcome};
 use crate::render::{
     RenderSetup, build_traversal, check_writable, interrupt_flag, load_scene, read_reference,
     relmse_points, set_threads, write_text,
 };
 use vcm_rs::integrators::{Algorithm, image_size};
+use vcm_rs::plot::{Series, plot_relmse};
 
 /// Arguments of `vcm convergence`.
 #[derive(clap::Args)]

@@ -3,7 +3,6 @@
 mod compare;
 mod convergence;
 mod info;
-mod plot;
 mod process;
 mod progressive;
 mod render;

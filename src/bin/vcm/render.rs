@@ -14,9 +14,9 @@ use vcm_rs::Backend;
 use vcm_rs::scene::Scene;
 use vcm_rs::traversal::Traversal;
 
-use crate::plot::{Series, plot_relmse, plot_utilization};
 use crate::progressive::{self, Budget, Checkpoint, Outcome};
 use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, ScheduleOptions, image_size};
+use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 
 /// What `vcm render` and `vcm convergence` both need to set up a render.
 #[derive(clap::Args)]

@@ -1,5 +1,6 @@
 //! Plots as PNG, one curve per series: relMSE against seconds on log-log axes (convergence),
-//! and CPU utilization against seconds on linear axes.
+//! CPU utilization against seconds on linear axes, and schedulers' speed-ups against samples
+//! per pixel per frame.
 //!
 //! Text needs a TrueType font: `VCM_PLOT_FONT` names one, else common system fonts (DejaVu,
 //! Liberation) are tried; without any, the plot is drawn without labels and a warning says so.
@@ -16,7 +17,7 @@ use vcm::atomic_write::write_atomically;
 pub struct Series {
     /// Legend text (e.g. the algorithm).
     pub label: String,
-    /// (seconds, value) pairs in time order.
+    /// (x, y) pairs in x order: (seconds, value) for the plots over time.
     pub points: Vec<(f64, f64)>,
 }
 
@@ -71,6 +72,7 @@ pub fn plot_relmse(path: &Path, title: &str, series: &[Series]) -> anyhow::Resul
     let axes = Axes {
         x: (t0 / 1.5..t1 * 1.5).log_scale(),
         y: (e0 / 2.0..e1 * 2.0).log_scale(),
+        x_desc: "seconds",
         y_desc: "relMSE",
     };
     let positive_series: Vec<Series> = series
@@ -102,15 +104,35 @@ pub fn plot_utilization(path: &Path, title: &str, series: &[Series]) -> anyhow::
     let axes = Axes {
         x: 0.0..end,
         y: 0.0..105.0,
+        x_desc: "seconds",
         y_desc: "CPU utilization (%)",
     };
     plot(path, title, series, axes)
 }
 
-/// The x (seconds) and y ranges of a plot and the y axis's name.
+/// Draws speed-ups (y, linear from 0) against samples per pixel per frame (x, log scale) as
+/// a PNG at `path`.
+pub fn plot_speedup(path: &Path, title: &str, series: &[Series]) -> anyhow::Result<()> {
+    let points = || series.iter().flat_map(|s| &s.points);
+    let x_end = points().map(|(x, _)| *x).fold(1.0, f64::max);
+    let y_end = points()
+        .map(|(_, y)| *y)
+        .filter(|y| y.is_finite())
+        .fold(1.0, f64::max);
+    let axes = Axes {
+        x: (1.0..x_end * 1.2).log_scale(),
+        y: 0.0..y_end * 1.15,
+        x_desc: "samples per pixel per frame",
+        y_desc: "speed-up over one batch, 1 sample per frame",
+    };
+    plot(path, title, series, axes)
+}
+
+/// The x and y ranges of a plot and the axes' names.
 struct Axes<X, Y> {
     x: X,
     y: Y,
+    x_desc: &'static str,
     y_desc: &'static str,
 }
 
@@ -163,7 +185,7 @@ where
     let mut chart = builder.build_cartesian_2d(axes.x, axes.y)?;
     let mut mesh = chart.configure_mesh();
     if labels {
-        mesh.x_desc("seconds")
+        mesh.x_desc(axes.x_desc)
             .y_desc(axes.y_desc)
             .label_style(("sans-serif", 14));
     } else {
