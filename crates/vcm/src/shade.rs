@@ -8,7 +8,7 @@
 
 use glam::Vec3;
 use vcm_scene::Scene;
-use vcm_scene::bsdf::{Bsdf, LobeKind, TransportMode};
+use vcm_scene::bsdf::{Bsdf, LobeKind, Pdfs, TransportMode};
 use vcm_scene::mesh::SurfacePoint;
 use vcm_scene::sampling::power_heuristic;
 
@@ -83,7 +83,8 @@ fn next_event(
     bsdf: &Bsdf,
     wo: Vec3,
 ) -> Option<ShadowRay> {
-    let sample = LightSample::sample(scene, &mut path.rng, surface, bsdf, wo)?;
+    // Path tracing weighs light samples against BSDF samples from the camera side only.
+    let sample = LightSample::sample(scene, &mut path.rng, surface, bsdf, wo, Pdfs::Forward)?;
     let light_pdf_w = sample.direct_pdf_w();
     let weight = if sample.light.is_delta() {
         1.0
@@ -99,7 +100,8 @@ fn next_event(
 /// path goes on.
 fn scatter(path: &mut PathState, bsdf: &Bsdf, wo: Vec3, spawn: impl Fn(Vec3) -> Vec3) -> bool {
     let (u_lobe, u_dir) = (path.rng.uniform(), path.rng.uniform2());
-    let Some(sample) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
+    let Some(sample) = bsdf.sample_with(wo, u_lobe, u_dir, TransportMode::Radiance, Pdfs::Forward)
+    else {
         return false;
     };
     path.throughput *= sample.f_cos / sample.pdf_fwd;

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use vcm_scene::Scene;
-use vcm_scene::bsdf::{Bsdf, BsdfEval, TransportMode};
+use vcm_scene::bsdf::{Bsdf, BsdfEval, Pdfs, TransportMode};
 use vcm_scene::light::{Illumination, Light};
 use vcm_scene::sampling::Rng;
 
@@ -19,27 +19,28 @@ pub(crate) struct LightSample<'a> {
     pub pick_pmf: f32,
     /// The sampled point on the light as seen from the receiver.
     pub illumination: Illumination,
-    /// The receiver's BSDF (radiance transport) toward the light.
+    /// The receiver's BSDF (radiance transport) toward the light, with the pdfs asked for.
     pub eval: BsdfEval,
 }
 
 impl LightSample<'_> {
     /// Picks a light by power and a point on it with three numbers from `rng`, seen from
-    /// `surface` whose BSDF is `bsdf` (`wo` toward the previous vertex); `None` when the
-    /// sample cannot contribute.
+    /// `surface` whose BSDF is `bsdf` (`wo` toward the previous vertex), evaluating the BSDF's
+    /// `pdfs`; `None` when the sample cannot contribute.
     pub fn sample<'a>(
         scene: &'a Scene,
         rng: &mut Rng,
         surface: &SurfaceHit,
         bsdf: &Bsdf,
         wo: Vec3,
+        pdfs: Pdfs,
     ) -> Option<LightSample<'a>> {
         let (u_pick, u_light) = (rng.uniform(), rng.uniform2());
         let (index, pick_pmf) = scene.light_sampler.sample(u_pick)?;
         let light = &scene.lights[index];
         let receiver = surface.point.position;
         let illumination = light.illuminate(&scene.textures, receiver, u_light)?;
-        let eval = bsdf.eval(wo, illumination.direction, TransportMode::Radiance);
+        let eval = bsdf.eval_with(wo, illumination.direction, TransportMode::Radiance, pdfs);
         (eval.f_cos != Vec3::ZERO).then_some(LightSample {
             light,
             pick_pmf,

@@ -18,6 +18,9 @@ use glam::{Vec2, Vec3};
 /// Number of lobe slots.
 const LOBES: usize = 4;
 
+/// Lobe selection probabilities at one `wo` (see [`Mixture::selection`]), one per lobe slot.
+pub(super) type Selection = [f32; LOBES];
+
 /// Largest `f32` below 1.
 const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
@@ -157,8 +160,9 @@ impl Mixture {
         })
     }
 
-    /// Selection probabilities at `wo` (all zero when no lobe can scatter).
-    fn selection(&self, wo: Vec3, eta: f32) -> [f32; LOBES] {
+    /// Selection probabilities at `wo` (all zero when no lobe can scatter): what
+    /// [`Mixture::eval`] and [`Mixture::sample`] take, so that one `wo` computes them once.
+    pub fn selection(&self, wo: Vec3, eta: f32) -> Selection {
         let mut p = [0.0; LOBES];
         for (pk, lobe) in p.iter_mut().zip(self.lobes()) {
             if let Some(lobe) = lobe {
@@ -174,11 +178,18 @@ impl Mixture {
         p
     }
 
-    /// f·|cos θi| of the non-delta lobes and the mixture pdf of `wi` (local, `wo.z > 0`).
-    pub fn eval(&self, wo: Vec3, wi: Vec3, eta: f32, mode: TransportMode) -> (Vec3, f32) {
-        let p = self.selection(wo, eta);
+    /// f·|cos θi| of the non-delta lobes and the mixture pdf of `wi` (local, `wo.z > 0`),
+    /// `p` being the [selection](Mixture::selection) at `wo`.
+    pub fn eval(
+        &self,
+        p: &Selection,
+        wo: Vec3,
+        wi: Vec3,
+        eta: f32,
+        mode: TransportMode,
+    ) -> (Vec3, f32) {
         let (mut f_cos, mut pdf) = (Vec3::ZERO, 0.0);
-        for (pk, lobe) in p.into_iter().zip(self.lobes()) {
+        for (pk, lobe) in p.iter().zip(self.lobes()) {
             if let Some(lobe) = lobe {
                 let (f, lobe_pdf) = lobe.eval(wo, wi, eta, mode);
                 f_cos += f;
@@ -188,17 +199,18 @@ impl Mixture {
         (f_cos, pdf)
     }
 
-    /// Samples one lobe with `u_lobe`, then a direction from it with `u`. Non-delta samples
-    /// carry no value: the caller evaluates [`Mixture::eval`] at the final direction.
+    /// Samples one lobe with `u_lobe` from the [selection](Mixture::selection) `p` at `wo`,
+    /// then a direction from it with `u`. Non-delta samples carry no value: the caller
+    /// evaluates [`Mixture::eval`] at the final direction.
     pub fn sample(
         &self,
+        p: &Selection,
         wo: Vec3,
         eta: f32,
         u_lobe: f32,
         u: Vec2,
         mode: TransportMode,
     ) -> Option<MixtureSample> {
-        let p = self.selection(wo, eta);
         // Invert the discrete CDF; the last lobe with p > 0 absorbs rounding at u_lobe ≈ 1.
         let (mut cdf, mut chosen) = (0.0, None);
         for (k, &pk) in p.iter().enumerate().filter(|(_, pk)| **pk > 0.0) {

@@ -124,6 +124,17 @@ pub enum TransportMode {
     Importance,
 }
 
+/// Which pdfs [`Bsdf::eval_with`] and [`Bsdf::sample_with`] compute. The reverse pdf costs
+/// a second evaluation of every lobe; only integrators that weigh a path from both of its
+/// ends (the VCM family) need it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pdfs {
+    /// Only `pdf_fwd`; `pdf_rev` is left 0.
+    Forward,
+    /// `pdf_fwd` and `pdf_rev`.
+    Both,
+}
+
 /// Classification of lobes and vertices for integrators.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LobeKind {
@@ -147,7 +158,8 @@ pub struct BsdfSample {
     /// Pdf of `wi` given `wo` (per steradian, mixture of all non-delta lobes); for delta
     /// lobes the discrete probability of having chosen this delta.
     pub pdf_fwd: f32,
-    /// Pdf of sampling `wo` given `wi` with the same BSDF (same units as `pdf_fwd`).
+    /// Pdf of sampling `wo` given `wi` with the same BSDF (same units as `pdf_fwd`); 0 when
+    /// not asked for ([`Pdfs::Forward`]).
     pub pdf_rev: f32,
     /// Class of the lobe that produced the sample.
     pub lobe: LobeKind,
@@ -164,6 +176,7 @@ pub struct BsdfEval {
     pub f_cos: Vec3,
     /// Pdf of sampling `wi` from `wo` (per steradian).
     pub pdf_fwd: f32,
-    /// Pdf of sampling `wo` from `wi` (per steradian).
+    /// Pdf of sampling `wo` from `wi` (per steradian); 0 when not asked for
+    /// ([`Pdfs::Forward`]).
     pub pdf_rev: f32,
 }

@@ -1,8 +1,8 @@
 //! World-space BSDF: sides, shading normals and the adjoint correction around the local
 //! [`Mixture`].
 
-use super::mixture::Mixture;
-use super::{BsdfEval, BsdfParams, BsdfSample, LobeKind, TransportMode};
+use super::mixture::{Mixture, Selection};
+use super::{BsdfEval, BsdfParams, BsdfSample, LobeKind, Pdfs, TransportMode};
 use crate::frame::Frame;
 use glam::{Vec2, Vec3};
 
@@ -29,6 +29,13 @@ struct Side {
     back: bool,
     /// Relative IOR η(other side) / η(this side) of the refracting interface.
     eta: f32,
+}
+
+/// `wo` as the mixture sees it: its side, its local direction and the lobe selection there.
+struct Outgoing {
+    side: Side,
+    local: Vec3,
+    selection: Selection,
 }
 
 impl Bsdf {
@@ -90,10 +97,16 @@ impl Bsdf {
         })
     }
 
-    /// Local `wo` for `side`, if it is in the upper shading hemisphere (not grazing).
-    fn local_wo(&self, side: Side, wo: Vec3) -> Option<Vec3> {
-        let l = self.to_local(side, wo);
-        (l.z >= GRAZING_COS).then_some(l)
+    /// `wo` seen from the surface, if it is in the upper shading hemisphere of its side (not
+    /// grazing) and the material scatters from that side.
+    fn outgoing(&self, wo: Vec3) -> Option<Outgoing> {
+        let side = self.side(wo)?;
+        let local = self.to_local(side, wo);
+        (local.z >= GRAZING_COS).then(|| Outgoing {
+            side,
+            local,
+            selection: self.mixture.selection(local, side.eta),
+        })
     }
 
     /// Whether (wo, wi_local) is a consistent pair: `wi` not grazing, and reflection vs
@@ -135,23 +148,42 @@ impl Bsdf {
     /// solid-angle pdf of sampling `wi` from `wo`, `pdf_rev` that of `wo` from `wi`.
     /// All zero for delta-only materials, inconsistent or degenerate pairs.
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> BsdfEval {
-        let Some((f_cos, pdf_fwd)) = self.eval_local(wo, wi, mode) else {
+        self.eval_with(wo, wi, mode, Pdfs::Both)
+    }
+
+    /// [`Bsdf::eval`] with only the `pdfs` asked for.
+    pub fn eval_with(&self, wo: Vec3, wi: Vec3, mode: TransportMode, pdfs: Pdfs) -> BsdfEval {
+        let Some((f_cos, pdf_fwd)) = self
+            .outgoing(wo)
+            .and_then(|out| self.eval_from(&out, wo, wi, mode))
+        else {
             return BsdfEval::default();
         };
         BsdfEval {
             f_cos,
             pdf_fwd,
-            pdf_rev: self.pdf(wi, wo),
+            pdf_rev: match pdfs {
+                Pdfs::Forward => 0.0,
+                Pdfs::Both => self.pdf(wi, wo),
+            },
         }
     }
 
-    fn eval_local(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Option<(Vec3, f32)> {
-        let side = self.side(wo)?;
-        let wo_l = self.local_wo(side, wo)?;
-        let wi_l = self.to_local(side, wi);
-        let cos_gi = self.consistent(side, wi, wi_l)?;
-        let (f_cos, pdf) = self.mixture.eval(wo_l, wi_l, side.eta, mode);
-        let f_cos = self.adjoint(f_cos, mode, wo, wo_l, wi_l, cos_gi);
+    /// f_cos and the forward pdf of the pair (`wo` as `out`, `wi`), if both are non-zero and
+    /// finite.
+    fn eval_from(
+        &self,
+        out: &Outgoing,
+        wo: Vec3,
+        wi: Vec3,
+        mode: TransportMode,
+    ) -> Option<(Vec3, f32)> {
+        let wi_l = self.to_local(out.side, wi);
+        let cos_gi = self.consistent(out.side, wi, wi_l)?;
+        let (f_cos, pdf) = self
+            .mixture
+            .eval(&out.selection, out.local, wi_l, out.side.eta, mode);
+        let f_cos = self.adjoint(f_cos, mode, wo, out.local, wi_l, cos_gi);
         (f_cos.is_finite() && pdf.is_finite() && pdf > 0.0).then_some((f_cos, pdf))
     }
 
@@ -165,24 +197,41 @@ impl Bsdf {
         u: Vec2,
         mode: TransportMode,
     ) -> Option<BsdfSample> {
-        let side = self.side(wo)?;
-        let wo_l = self.local_wo(side, wo)?;
-        let s = self.mixture.sample(wo_l, side.eta, u_lobe, u, mode)?;
+        self.sample_with(wo, u_lobe, u, mode, Pdfs::Both)
+    }
+
+    /// [`Bsdf::sample`] with only the `pdfs` asked for.
+    pub fn sample_with(
+        &self,
+        wo: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+        mode: TransportMode,
+        pdfs: Pdfs,
+    ) -> Option<BsdfSample> {
+        let out = self.outgoing(wo)?;
+        let (side, wo_l) = (out.side, out.local);
+        let s = self
+            .mixture
+            .sample(&out.selection, wo_l, side.eta, u_lobe, u, mode)?;
         let wi = self.to_world(side, s.wi).normalize();
+        let reverse = pdfs == Pdfs::Both;
         let (f_cos, pdf_fwd, pdf_rev) = match s.delta {
             Some(delta) => {
                 let cos_gi = self.consistent(side, wi, s.wi)?;
                 let f_cos = self.adjoint(delta.f_cos, mode, wo, wo_l, s.wi, cos_gi);
-                (
-                    f_cos,
-                    delta.prob,
-                    self.delta_pdf_rev(wo, wi, delta.lobe, s.transmitted),
-                )
+                let pdf_rev = if reverse {
+                    self.delta_pdf_rev(wo, wi, delta.lobe, s.transmitted)
+                } else {
+                    0.0
+                };
+                (f_cos, delta.prob, pdf_rev)
             }
             // Evaluated at the final world direction, so that the sample agrees with eval().
             None => {
-                let (f_cos, pdf_fwd) = self.eval_local(wo, wi, mode)?;
-                (f_cos, pdf_fwd, self.pdf(wi, wo))
+                let (f_cos, pdf_fwd) = self.eval_from(&out, wo, wi, mode)?;
+                let pdf_rev = if reverse { self.pdf(wi, wo) } else { 0.0 };
+                (f_cos, pdf_fwd, pdf_rev)
             }
         };
         let transmitted = wi.dot(self.n_g) * wo.dot(self.n_g) < 0.0;
@@ -214,7 +263,8 @@ impl Bsdf {
     /// Solid-angle pdf of sampling `wi` from `wo` (the `pdf_fwd` of [`Bsdf::eval`], without
     /// the reverse pdf); it does not depend on the transport mode.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.eval_local(wo, wi, TransportMode::Radiance)
+        self.outgoing(wo)
+            .and_then(|out| self.eval_from(&out, wo, wi, TransportMode::Radiance))
             .map_or(0.0, |(_, pdf)| pdf)
     }
 

@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
-use vcm_scene::bsdf::{Bsdf, TransportMode};
+use vcm_scene::bsdf::{Bsdf, Pdfs, TransportMode};
 use vcm_scene::sampling::Rng;
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
@@ -274,7 +274,7 @@ fn light_sample(
     bsdf: &Bsdf,
     wo: Vec3,
 ) -> Option<ShadowRay> {
-    let sample = LightSample::sample(ctx.scene, &mut path.walk.rng, surface, bsdf, wo)?;
+    let sample = LightSample::sample(ctx.scene, &mut path.walk.rng, surface, bsdf, wo, Pdfs::Both)?;
     let (illumination, eval) = (&sample.illumination, &sample.eval);
     let pdfs = LightSamplePdfs {
         direct_pdf_w: sample.direct_pdf_w(),

@@ -129,3 +129,33 @@ fn near_specular_roughness_becomes_delta() {
     assert_eq!(bsdf(&lambert(Vec3::ONE)).classify(), LobeKind::Diffuse);
     assert_eq!(bsdf(&mixture(0.5)).classify(), LobeKind::Glossy);
 }
+
+#[test]
+fn forward_only_evaluation_and_sampling_skip_just_the_reverse_pdf() {
+    use crate::bsdf::{BsdfEval, BsdfSample, Pdfs};
+    let mut rng = Rng::new(23, 0);
+    for (name, params) in material_classes(0.3) {
+        let b = Bsdf::new(&params, n_g(), tilted_normal(0.25), false);
+        for &c in &COS_SWEEP {
+            let wo = direction(n_g(), c, 0.4);
+            for mode in MODES {
+                let (u_lobe, u) = (rng.uniform(), rng.uniform2());
+                let both = b.sample(wo, u_lobe, u, mode);
+                let forward = b.sample_with(wo, u_lobe, u, mode, Pdfs::Forward);
+                let expected = both.map(|s| BsdfSample { pdf_rev: 0.0, ..s });
+                assert_eq!(forward, expected, "{name} cos {c} {mode:?}");
+                let wi = direction(n_g(), 0.7, 2.0);
+                let both = b.eval(wo, wi, mode);
+                let forward = b.eval_with(wo, wi, mode, Pdfs::Forward);
+                assert_eq!(
+                    forward,
+                    BsdfEval {
+                        pdf_rev: 0.0,
+                        ..both
+                    },
+                    "{name} cos {c}"
+                );
+            }
+        }
+    }
+}
