@@ -19,7 +19,9 @@
 mod drive;
 mod stats;
 mod tiles;
+mod wavefront;
 
-pub use drive::{Scheduler, Wavefront, run};
+pub use drive::{Scheduler, run};
 pub use stats::SchedulerStats;
 pub use tiles::{Tile, TileGrid};
+pub use wavefront::Wavefront;

@@ -1,6 +1,6 @@
 //! What a scheduler measured while running a pass.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Time and work of one [`run`](crate::run), summed over its workers.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -27,7 +27,7 @@ pub struct SchedulerStats {
 }
 
 impl SchedulerStats {
-    /// Adds the counts and times of `other` (another worker, or another pass).
+    /// Adds the counts and busy times of `other` (another worker, or another pass).
     pub fn accumulate(&mut self, other: &SchedulerStats) {
         self.traversal += other.traversal;
         self.shading += other.shading;
@@ -45,4 +45,19 @@ impl SchedulerStats {
         }
         ((self.traversal + self.shading).as_secs_f64() / total).min(1.0)
     }
+
+    /// Sets the wall-clock time of a pass that began at `start` and the idle time of its
+    /// [`workers`](Self::workers), who were busy for `busy` in all.
+    pub(crate) fn close(&mut self, start: Instant, busy: Duration) {
+        self.wall = start.elapsed();
+        self.idle = (self.wall * self.workers as u32).saturating_sub(busy);
+    }
+}
+
+/// Runs `f`, adding its duration to `total`.
+pub(crate) fn time<T>(total: &mut Duration, f: impl FnOnce() -> T) -> T {
+    let start = Instant::now();
+    let result = f();
+    *total += start.elapsed();
+    result
 }
