@@ -23,6 +23,24 @@ pub enum Scheduler {
         /// Fraction of a full tile below which the next tile is merged in (0 disables it).
         merge_below: f32,
     },
+    /// A pool of `queues` wavefronts, each with its own ray, hit and shadow buffers, taking
+    /// `size × size` tiles from a shared counter (and merging in the next one below
+    /// `merge_below` of a tile, as [`Tile`](Self::Tile) does). Each queue passes through
+    /// explicit states (empty, in use, ready for traversal, for shading, for shadow
+    /// traversal, for resolving); one thread submits every traversal job
+    /// ([`Traversal::submit`]), keeping several in flight, while the shading threads start,
+    /// shade and resolve the queues that are ready for it. With an asynchronous backend (the
+    /// GPU) the CPU shades some queues while others are traversed; the pool size bounds the
+    /// memory.
+    Queue {
+        /// Wavefronts in the pool (at least 1).
+        queues: usize,
+        /// Tile side in pixels.
+        size: u32,
+        /// Fraction of a full tile below which a queue merges in the next tile (0 disables
+        /// it).
+        merge_below: f32,
+    },
 }
 
 impl Scheduler {
@@ -31,6 +49,13 @@ impl Scheduler {
     pub const DEFAULT_TILE_SIZE: u32 = 32;
     /// Merge threshold of the default scheduler.
     pub const DEFAULT_MERGE_BELOW: f32 = 0.5;
+
+    /// Queues of a [`Queue`](Self::Queue) scheduler when none are asked for: one per
+    /// shading thread (the rayon pool's threads) and one more, so that one queue can be
+    /// traversed while every shading thread has a queue of its own.
+    pub fn default_queues() -> usize {
+        rayon::current_num_threads().max(1) + 1
+    }
 }
 
 impl Default for Scheduler {
@@ -45,8 +70,11 @@ impl Default for Scheduler {
 }
 
 /// Traces the camera paths of every pixel of a `width × height` image with wavefronts from
-/// `new_wavefront` (one per worker), as `scheduler` says. Returns each wavefront's output, in
-/// no particular order, and what the pass measured.
+/// `new_wavefront` (one per worker or queue), as `scheduler` says. Returns each wavefront's
+/// output, in no particular order, and what the pass measured.
+///
+/// Call it from any thread, a rayon worker included: the work runs on the caller's rayon
+/// pool.
 pub fn run<W: Wavefront>(
     scheduler: Scheduler,
     (width, height): (u32, u32),
@@ -56,12 +84,20 @@ pub fn run<W: Wavefront>(
     let (size, merge_below) = match scheduler {
         Scheduler::None => (width.max(height), 0.0),
         Scheduler::Tile { size, merge_below } => (size, merge_below),
+        Scheduler::Queue {
+            queues,
+            size,
+            merge_below,
+        } => {
+            let tiles = TileCounter::new(TileGrid::new(width, height, size));
+            return crate::queue::run(queues, &tiles, merge_below, traversal, new_wavefront);
+        }
     };
     let start = Instant::now();
     let tiles = TileCounter::new(TileGrid::new(width, height, size));
     let workers = match scheduler {
         Scheduler::None => 1,
-        Scheduler::Tile { .. } => rayon::current_num_threads().min(tiles.len()).max(1),
+        _ => rayon::current_num_threads().min(tiles.len()).max(1),
     };
     let merge_at = tiles.merge_at(merge_below);
     let worker = |_| {

@@ -103,6 +103,11 @@ impl TileCounter {
         (index < self.grid.len()).then(|| self.grid.tile(index))
     }
 
+    /// Whether every tile has been taken.
+    pub fn exhausted(&self) -> bool {
+        self.next.load(Ordering::Relaxed) >= self.grid.len()
+    }
+
     /// Number of tiles, taken or not.
     pub fn len(&self) -> usize {
         self.grid.len()
