@@ -161,7 +161,7 @@ fn every_algorithm_renders_from_the_command_line() {
 
 #[test]
 fn bad_input_is_a_clear_error_with_non_zero_status() {
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 11] = [
         (&["render", "no/such/scene.gltf"], "scene.gltf"),
         (&["render", "--spp", "0"], "--spp"),
         (
@@ -178,6 +178,10 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
             "tile size",
         ),
         (
+            &["render", "--scheduler", "queue", "--queues", "0"],
+            "at least 1 queue",
+        ),
+        (
             &["render", "--algo", "vcm", "--spp-per-frame", "2"],
             "one sample per pixel per frame",
         ),
@@ -191,8 +195,8 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
     assert!(!Path::new("/nonexistent-folder").exists());
 }
 
-/// The tile scheduler with several samples per frame renders the same image as one batch per
-/// pass with the same samples per frame: scheduling changes speed, not results.
+/// The tile and queue schedulers with several samples per frame render the same image as one
+/// batch per pass with the same samples per frame: scheduling changes speed, not results.
 #[test]
 fn schedulers_render_the_same_image() {
     let dir = tempfile::tempdir().unwrap();
@@ -215,8 +219,44 @@ fn schedulers_render_the_same_image() {
     };
     let none = render("none", &["--scheduler", "none"]);
     let tiles = render("tile", &["--scheduler", "tile", "--tile-size", "8"]);
+    let queues = ["--scheduler", "queue", "--queues", "3", "--tile-size", "8"];
+    let queue = render("queue", &queues);
     assert!(none.iter().any(|p| p.max_element() > 0.0));
     assert_eq!(none, tiles);
+    assert_eq!(none, queue);
+}
+
+/// `--scheduler queue` with its default pool renders VCM's image too, and says so in the
+/// summary like any other render.
+#[test]
+fn the_queue_scheduler_renders_vcm() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |scheduler: &str| {
+        let exr = dir.path().join(format!("{scheduler}.exr"));
+        let args = [
+            "render",
+            "--algo",
+            "vcm",
+            "--spp",
+            "2",
+            "--width",
+            "24",
+            "--scheduler",
+            scheduler,
+            "--tile-size",
+            "8",
+            "-o",
+            exr.to_str().unwrap(),
+        ];
+        let output = vcm(&args);
+        assert!(output.status.success(), "{scheduler}: {}", stderr(&output));
+        let summary = String::from_utf8_lossy(&output.stdout);
+        assert!(summary.contains("samples/s"), "{summary}");
+        vcm::image_io::RgbImage::read_exr(&exr).unwrap().pixels
+    };
+    let queue = render("queue");
+    assert!(queue.iter().any(|p| p.max_element() > 0.0));
+    assert_eq!(queue, render("tile"));
 }
 
 /// `--explain` names every part of the render with its verdict and reason; `--no-prune`
