@@ -104,6 +104,9 @@ pub enum SchedulerKind {
     /// Worker threads trace tiles to completion, merging in the next tile when few paths
     /// are left.
     Tile,
+    /// A pool of queues over tiles: one thread submits every traversal while the others
+    /// shade, so shading overlaps GPU traversal.
+    Queue,
 }
 
 /// How frames are scheduled; the image a seed gives does not depend on it. Options left out
@@ -113,13 +116,17 @@ pub struct ScheduleOptions {
     /// How paths are grouped into batches (default tile).
     #[arg(long, value_enum)]
     pub scheduler: Option<SchedulerKind>,
-    /// Tile side in pixels (--scheduler tile; default 32).
+    /// Tile side in pixels (--scheduler tile or queue; default 32).
     #[arg(long)]
     pub tile_size: Option<u32>,
-    /// Fraction of a tile's paths below which a worker merges in the next tile
-    /// (--scheduler tile; 0 disables merging; default 0.5).
+    /// Fraction of a tile's paths below which a worker or queue merges in the next tile
+    /// (--scheduler tile or queue; 0 disables merging; default 0.5).
     #[arg(long)]
     pub tile_merge: Option<f32>,
+    /// Queues in the pool, which bounds the paths in flight (--scheduler queue; default
+    /// threads + 1: one per shading thread and one being traversed).
+    #[arg(long)]
+    pub queues: Option<usize>,
     /// Samples per pixel each frame renders (default 1).
     #[arg(long)]
     pub spp_per_frame: Option<u32>,
@@ -131,11 +138,15 @@ impl ScheduleOptions {
         if *self == Self::default() {
             return None;
         }
+        let size = self.tile_size.unwrap_or(Scheduler::DEFAULT_TILE_SIZE);
+        let merge_below = self.tile_merge.unwrap_or(Scheduler::DEFAULT_MERGE_BELOW);
         let scheduler = match self.scheduler {
             Some(SchedulerKind::None) => Scheduler::None,
-            Some(SchedulerKind::Tile) | None => Scheduler::Tile {
-                size: self.tile_size.unwrap_or(Scheduler::DEFAULT_TILE_SIZE),
-                merge_below: self.tile_merge.unwrap_or(Scheduler::DEFAULT_MERGE_BELOW),
+            Some(SchedulerKind::Tile) | None => Scheduler::Tile { size, merge_below },
+            Some(SchedulerKind::Queue) => Scheduler::Queue {
+                queues: self.queues.unwrap_or_else(Scheduler::default_queues),
+                size,
+                merge_below,
             },
         };
         Some(Schedule {

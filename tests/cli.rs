@@ -161,7 +161,7 @@ fn every_algorithm_renders_from_the_command_line() {
 
 #[test]
 fn bad_input_is_a_clear_error_with_non_zero_status() {
-    let cases: [(&[&str], &str); 9] = [
+    let cases: [(&[&str], &str); 10] = [
         (&["render", "no/such/scene.gltf"], "scene.gltf"),
         (&["render", "--spp", "0"], "--spp"),
         (
@@ -177,6 +177,10 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
             &["render", "--scheduler", "tile", "--tile-size", "0"],
             "tile size",
         ),
+        (
+            &["render", "--scheduler", "queue", "--queues", "0"],
+            "at least 1 queue",
+        ),
     ];
     for (args, needle) in cases {
         let output = vcm(args);
@@ -187,10 +191,10 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
     assert!(!Path::new("/nonexistent-folder").exists());
 }
 
-/// The tile scheduler with several samples per frame renders the same image as one batch per
-/// pass with the same samples per frame: scheduling changes speed, not results. The VCM
-/// family's frames of several samples are its iterations side by side, so its image does not
-/// depend on the samples per frame either.
+/// The tile and queue schedulers with several samples per frame render the same image as one
+/// batch per pass with the same samples per frame: scheduling changes speed, not results. The
+/// VCM family's frames of several samples are its iterations side by side, so its image does
+/// not depend on the samples per frame either.
 #[test]
 fn schedulers_render_the_same_image() {
     let dir = tempfile::tempdir().unwrap();
@@ -215,8 +219,20 @@ fn schedulers_render_the_same_image() {
             "2",
         ],
     );
+    let queues = [
+        "--scheduler",
+        "queue",
+        "--queues",
+        "3",
+        "--tile-size",
+        "8",
+        "--spp-per-frame",
+        "2",
+    ];
+    let queue = render("queue", &queues);
     assert!(none.iter().any(|p| p.max_element() > 0.0));
     assert_eq!(none, tiles);
+    assert_eq!(none, queue);
     let vcm_one = render("vcm-1", &["--algo", "vcm", "--scheduler", "none"]);
     let vcm_four = render(
         "vcm-4",
@@ -224,6 +240,39 @@ fn schedulers_render_the_same_image() {
     );
     assert!(vcm_one.iter().any(|p| p.max_element() > 0.0));
     assert_eq!(vcm_one, vcm_four);
+}
+
+/// `--scheduler queue` with its default pool renders VCM's image too, and says so in the
+/// summary like any other render.
+#[test]
+fn the_queue_scheduler_renders_vcm() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |scheduler: &str| {
+        let exr = dir.path().join(format!("{scheduler}.exr"));
+        let args = [
+            "render",
+            "--algo",
+            "vcm",
+            "--spp",
+            "2",
+            "--width",
+            "24",
+            "--scheduler",
+            scheduler,
+            "--tile-size",
+            "8",
+            "-o",
+            exr.to_str().unwrap(),
+        ];
+        let output = vcm(&args);
+        assert!(output.status.success(), "{scheduler}: {}", stderr(&output));
+        let summary = String::from_utf8_lossy(&output.stdout);
+        assert!(summary.contains("samples/s"), "{summary}");
+        vcm::image_io::RgbImage::read_exr(&exr).unwrap().pixels
+    };
+    let queue = render("queue");
+    assert!(queue.iter().any(|p| p.max_element() > 0.0));
+    assert_eq!(queue, render("tile"));
 }
 
 /// `--explain` names every part of the render with its verdict and reason; `--no-prune`

@@ -1,42 +1,13 @@
-//! Driving wavefronts: the scheduling modes and the per-worker loop.
+//! The scheduling modes, and the loop of the `none` and `tile` workers.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use rayon::prelude::*;
 use vcm_traversal::{HitBatch, RayBatch, Traversal};
 
-use crate::stats::SchedulerStats;
-use crate::tiles::{Tile, TileGrid};
-
-/// The paths an integrator has in flight, advanced one segment per pass.
-///
-/// Each pass: [`extension_rays`](Self::extension_rays) → closest hits →
-/// [`shade`](Self::shade) (which queues shadow rays) → occlusion →
-/// [`resolve`](Self::resolve) (which also retires ended paths).
-pub trait Wavefront: Send {
-    /// What the wavefront hands back when the pass is over (e.g. its retired paths' results).
-    type Output: Send;
-
-    /// Adds the camera paths of `tile`'s pixels.
-    fn start(&mut self, tile: Tile);
-
-    /// Paths still running.
-    fn active(&self) -> usize;
-
-    /// Fills `rays` with the next segment of every active path, in path order.
-    fn extension_rays(&self, rays: &mut RayBatch);
-
-    /// Shades every active path at its hit (`hits[i]` for path `i`) and fills `shadow_rays`.
-    fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch);
-
-    /// Applies the occlusion of the shadow rays queued by [`shade`](Self::shade) and retires
-    /// the paths that ended.
-    fn resolve(&mut self, occluded: &[bool]);
-
-    /// Everything the retired paths produced.
-    fn finish(self) -> Self::Output;
-}
+use crate::stats::{SchedulerStats, time};
+use crate::tiles::{TileCounter, TileGrid};
+use crate::wavefront::{Wavefront, top_up};
 
 /// How paths are grouped into batches.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +23,24 @@ pub enum Scheduler {
         /// Fraction of a full tile below which the next tile is merged in (0 disables it).
         merge_below: f32,
     },
+    /// A pool of `queues` wavefronts, each with its own ray, hit and shadow buffers, taking
+    /// `size × size` tiles from a shared counter (and merging in the next one below
+    /// `merge_below` of a tile, as [`Tile`](Self::Tile) does). Each queue passes through
+    /// explicit states (empty, in use, ready for traversal, for shading, for shadow
+    /// traversal, for resolving); one thread submits every traversal job
+    /// ([`Traversal::submit`]), keeping several in flight, while the shading threads start,
+    /// shade and resolve the queues that are ready for it. With an asynchronous backend (the
+    /// GPU) the CPU shades some queues while others are traversed; the pool size bounds the
+    /// memory.
+    Queue {
+        /// Wavefronts in the pool (at least 1).
+        queues: usize,
+        /// Tile side in pixels.
+        size: u32,
+        /// Fraction of a full tile below which a queue merges in the next tile (0 disables
+        /// it).
+        merge_below: f32,
+    },
 }
 
 impl Scheduler {
@@ -60,6 +49,13 @@ impl Scheduler {
     pub const DEFAULT_TILE_SIZE: u32 = 32;
     /// Merge threshold of the default scheduler.
     pub const DEFAULT_MERGE_BELOW: f32 = 0.5;
+
+    /// Queues of a [`Queue`](Self::Queue) scheduler when none are asked for: one per
+    /// shading thread (the rayon pool's threads) and one more, so that one queue can be
+    /// traversed while every shading thread has a queue of its own.
+    pub fn default_queues() -> usize {
+        rayon::current_num_threads().max(1) + 1
+    }
 }
 
 impl Default for Scheduler {
@@ -74,35 +70,40 @@ impl Default for Scheduler {
 }
 
 /// Traces the camera paths of every pixel of a `width × height` image with wavefronts from
-/// `new_wavefront` (one per worker), as `scheduler` says. Returns each wavefront's output, in
-/// no particular order, and what the pass measured.
+/// `new_wavefront` (one per worker or queue), as `scheduler` says. Returns each wavefront's
+/// output, in no particular order, and what the pass measured.
+///
+/// Call it from any thread, a rayon worker included: the work runs on the caller's rayon
+/// pool.
 pub fn run<W: Wavefront>(
     scheduler: Scheduler,
     (width, height): (u32, u32),
     traversal: &dyn Traversal,
     new_wavefront: impl Fn() -> W + Sync,
 ) -> (Vec<W::Output>, SchedulerStats) {
-    let start = Instant::now();
-    let (grid, workers, merge_below) = match scheduler {
-        Scheduler::None => (TileGrid::new(width, height, width.max(height)), 1, 0.0),
-        Scheduler::Tile { size, merge_below } => (
-            TileGrid::new(width, height, size),
-            rayon::current_num_threads()
-                .min(TileGrid::new(width, height, size).len())
-                .max(1),
+    let (size, merge_below) = match scheduler {
+        Scheduler::None => (width.max(height), 0.0),
+        Scheduler::Tile { size, merge_below } => (size, merge_below),
+        Scheduler::Queue {
+            queues,
+            size,
             merge_below,
-        ),
+        } => {
+            let tiles = TileCounter::new(TileGrid::new(width, height, size));
+            return crate::queue::run(queues, &tiles, merge_below, traversal, new_wavefront);
+        }
     };
-    let next_tile = AtomicUsize::new(0);
+    let start = Instant::now();
+    let tiles = TileCounter::new(TileGrid::new(width, height, size));
+    let workers = match scheduler {
+        Scheduler::None => 1,
+        _ => rayon::current_num_threads().min(tiles.len()).max(1),
+    };
+    let merge_at = tiles.merge_at(merge_below);
     let worker = |_| {
         let mut wave = new_wavefront();
         let mut stats = SchedulerStats::default();
-        let merge_at = (merge_below.max(0.0) * (grid.size * grid.size) as f32) as usize;
-        let take = || {
-            let index = next_tile.fetch_add(1, Ordering::Relaxed);
-            (index < grid.len()).then(|| grid.tile(index))
-        };
-        drive(&mut wave, traversal, take, merge_at, &mut stats);
+        drive(&mut wave, traversal, &tiles, merge_at, &mut stats);
         (wave.finish(), stats)
     };
     let results: Vec<_> = (0..workers).into_par_iter().map(worker).collect();
@@ -117,9 +118,7 @@ pub fn run<W: Wavefront>(
             output
         })
         .collect();
-    stats.wall = start.elapsed();
-    let busy = stats.traversal + stats.shading;
-    stats.idle = (stats.wall * workers as u32).saturating_sub(busy);
+    stats.close(start, stats.traversal + stats.shading);
     (outputs, stats)
 }
 
@@ -128,24 +127,13 @@ pub fn run<W: Wavefront>(
 fn drive<W: Wavefront>(
     wave: &mut W,
     traversal: &dyn Traversal,
-    mut take: impl FnMut() -> Option<Tile>,
+    tiles: &TileCounter,
     merge_at: usize,
     stats: &mut SchedulerStats,
 ) {
     let (mut rays, mut hits) = (RayBatch::default(), HitBatch::default());
     let (mut shadow_rays, mut occluded) = (RayBatch::default(), Vec::new());
-    loop {
-        if wave.active() == 0 || wave.active() < merge_at {
-            let tile = take();
-            if let Some(tile) = tile {
-                time(&mut stats.shading, || wave.start(tile));
-                stats.tiles += 1;
-            }
-            if tile.is_none() && wave.active() == 0 {
-                return;
-            }
-        }
-        stats.peak_paths = stats.peak_paths.max(wave.active());
+    while top_up(wave, tiles, merge_at, stats) {
         time(&mut stats.shading, || wave.extension_rays(&mut rays));
         time(&mut stats.traversal, || {
             traversal.intersect(&rays, &mut hits)
@@ -158,12 +146,4 @@ fn drive<W: Wavefront>(
         stats.closest_rays += rays.len() as u64;
         stats.shadow_rays += shadow_rays.len() as u64;
     }
-}
-
-/// Runs `f`, adding its duration to `total`.
-fn time<T>(total: &mut Duration, f: impl FnOnce() -> T) -> T {
-    let start = Instant::now();
-    let result = f();
-    *total += start.elapsed();
-    result
 }

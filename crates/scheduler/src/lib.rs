@@ -8,7 +8,11 @@
 //! - [`Scheduler::None`]: one wavefront over the whole image, every pass one big batch;
 //! - [`Scheduler::Tile`]: the worker threads take tiles from an atomic counter and trace each
 //!   to completion; when a worker's active paths drop below a fraction of a tile, it pulls in
-//!   the next tile's camera paths (tile merging).
+//!   the next tile's camera paths (tile merging);
+//! - [`Scheduler::Queue`]: a pool of wavefronts ("queues") in explicit states, taking tiles
+//!   from the same counter; one thread submits every traversal job
+//!   ([`Traversal::submit`](vcm_traversal::Traversal::submit)) while the others shade, so
+//!   shading overlaps traversal on an asynchronous (GPU) backend.
 //!
 //! Paths' random numbers must not depend on which wavefront traces them (the integrators seed
 //! them from the pixel and sample), and results are gathered per path and added in a fixed
@@ -17,9 +21,14 @@
 #![warn(missing_docs)]
 
 mod drive;
+mod queue;
 mod stats;
+#[cfg(test)]
+mod tests;
 mod tiles;
+mod wavefront;
 
-pub use drive::{Scheduler, Wavefront, run};
+pub use drive::{Scheduler, run};
 pub use stats::SchedulerStats;
 pub use tiles::{Tile, TileGrid};
+pub use wavefront::Wavefront;

@@ -1,21 +1,28 @@
 //! What a scheduler measured while running a pass.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Time and work of one [`run`](crate::run), summed over its workers.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SchedulerStats {
     /// Wall-clock time of the whole pass.
     pub wall: Duration,
-    /// Worker time in closest-hit and occlusion queries.
+    /// Time in closest-hit and occlusion queries. `none` and `tile`: the workers' total
+    /// (each traverses its own batches). `queue`: the wall-clock time during which the
+    /// traversal thread had at least one job in flight, from the moment a pool worker began
+    /// submitting it to the return of its `wait`; it overlaps the shading threads' work.
     pub traversal: Duration,
     /// Worker time starting, shading and retiring paths.
     pub shading: Duration,
-    /// Worker time spent neither traversing nor shading (waiting for work or for the others
-    /// to finish): workers × wall − traversal − shading.
+    /// Worker time spent doing none of the above (waiting for work or for the others to
+    /// finish). `none` and `tile`: workers × wall − traversal − shading; `queue`: the shading
+    /// threads' workers × wall − shading (waiting for a queue to come back from traversal).
     pub idle: Duration,
-    /// Worker threads.
+    /// Worker threads: one per batch being traced (`none`, `tile`), or the shading threads
+    /// beside the one traversal thread (`queue`).
     pub workers: usize,
+    /// Queues in the pool of the `queue` scheduler; 0 for the others.
+    pub queues: usize,
     /// Closest-hit rays traced.
     pub closest_rays: u64,
     /// Occlusion rays traced.
@@ -27,7 +34,7 @@ pub struct SchedulerStats {
 }
 
 impl SchedulerStats {
-    /// Adds the counts and times of `other` (another worker, or another pass).
+    /// Adds the counts and busy times of `other` (another worker, or another pass).
     pub fn accumulate(&mut self, other: &SchedulerStats) {
         self.traversal += other.traversal;
         self.shading += other.shading;
@@ -37,12 +44,38 @@ impl SchedulerStats {
         self.peak_paths = self.peak_paths.max(other.peak_paths);
     }
 
-    /// Fraction of the workers' time spent traversing or shading.
+    /// The wall-clock time traversal accounts for: the workers' [`traversal`](Self::traversal)
+    /// shared among them (`none`, `tile`), or the traversal thread's busy time as it is
+    /// (`queue`).
+    pub fn traversal_share(&self) -> Duration {
+        if self.queues > 0 {
+            self.traversal
+        } else {
+            self.traversal / self.workers.max(1) as u32
+        }
+    }
+
+    /// Fraction of the workers' time not [`idle`](Self::idle).
     pub fn utilization(&self) -> f64 {
         let total = self.wall.as_secs_f64() * self.workers as f64;
         if total == 0.0 {
             return 0.0;
         }
-        ((self.traversal + self.shading).as_secs_f64() / total).min(1.0)
+        (1.0 - self.idle.as_secs_f64() / total).clamp(0.0, 1.0)
     }
+
+    /// Sets the wall-clock time of a pass that began at `start` and the idle time of its
+    /// [`workers`](Self::workers), who were busy for `busy` in all.
+    pub(crate) fn close(&mut self, start: Instant, busy: Duration) {
+        self.wall = start.elapsed();
+        self.idle = (self.wall * self.workers as u32).saturating_sub(busy);
+    }
+}
+
+/// Runs `f`, adding its duration to `total`.
+pub(crate) fn time<T>(total: &mut Duration, f: impl FnOnce() -> T) -> T {
+    let start = Instant::now();
+    let result = f();
+    *total += start.elapsed();
+    result
 }

@@ -1,4 +1,6 @@
-//! Splitting an image into square tiles.
+//! Splitting an image into square tiles, and handing them out to whichever worker asks first.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A rectangle of pixels `[x0, x1) × [y0, y1)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,6 +79,44 @@ impl TileGrid {
             x1: (x0 + self.size).min(self.width),
             y1: (y0 + self.size).min(self.height),
         }
+    }
+}
+
+/// The tiles of a [`TileGrid`] taken one by one, in order, from a shared counter.
+pub(crate) struct TileCounter {
+    grid: TileGrid,
+    next: AtomicUsize,
+}
+
+impl TileCounter {
+    /// Every tile of `grid`, none taken yet.
+    pub fn new(grid: TileGrid) -> Self {
+        Self {
+            grid,
+            next: AtomicUsize::new(0),
+        }
+    }
+
+    /// The next tile nobody has taken, if any is left.
+    pub fn take(&self) -> Option<Tile> {
+        let index = self.next.fetch_add(1, Ordering::Relaxed);
+        (index < self.grid.len()).then(|| self.grid.tile(index))
+    }
+
+    /// Whether every tile has been taken.
+    pub fn exhausted(&self) -> bool {
+        self.next.load(Ordering::Relaxed) >= self.grid.len()
+    }
+
+    /// Number of tiles, taken or not.
+    pub fn len(&self) -> usize {
+        self.grid.len()
+    }
+
+    /// The active paths below which a wavefront pulls in the next tile: `merge_below` of a
+    /// full tile (0 for a negative fraction).
+    pub fn merge_at(&self, merge_below: f32) -> usize {
+        (merge_below.max(0.0) * (self.grid.size * self.grid.size) as f32) as usize
     }
 }
 

@@ -69,12 +69,15 @@ impl Schedule {
                 "samples per frame must be at least 1".into(),
             ));
         }
-        if let Scheduler::Tile { size: 0, .. } = self.scheduler {
-            return Err(RenderError::InvalidSetting(
-                "the tile size must be at least 1".into(),
-            ));
+        match self.scheduler {
+            Scheduler::Tile { size: 0, .. } | Scheduler::Queue { size: 0, .. } => Err(
+                RenderError::InvalidSetting("the tile size must be at least 1".into()),
+            ),
+            Scheduler::Queue { queues: 0, .. } => Err(RenderError::InvalidSetting(
+                "the queue scheduler needs at least 1 queue".into(),
+            )),
+            _ => Ok(self),
         }
-        Ok(self)
     }
 }
 
@@ -104,7 +107,8 @@ pub struct FrameStats {
     pub light_vertices: u64,
     /// Light vertices discarded because the cache was full.
     pub discarded_light_vertices: u64,
-    /// Wall-clock time in closest-hit and occlusion queries.
+    /// Wall-clock time in closest-hit and occlusion queries (with [`Scheduler::Queue`]: the
+    /// time a traversal job was in flight, which overlaps shading).
     pub traversal_time: Duration,
     /// Wall-clock time building the hash grid over the light vertices.
     pub grid_build_time: Duration,

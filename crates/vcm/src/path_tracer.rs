@@ -108,8 +108,7 @@ impl Integrator for PathTracer {
         }
         self.last_schedule_stats = stats;
         let camera_rays = u64::from(width) * u64::from(height) * u64::from(samples);
-        let workers = stats.workers.max(1) as u32;
-        let traversal_time = stats.traversal / workers;
+        let traversal_time = stats.traversal_share();
         FrameStats {
             camera_rays,
             continuation_rays: stats.closest_rays - camera_rays,

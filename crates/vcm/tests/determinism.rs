@@ -100,6 +100,26 @@ fn render_frames(
     })
 }
 
+/// Queue schedulers: one queue, a few with small tiles (many tiles, merging), more queues
+/// than tiles.
+const QUEUES: [Scheduler; 3] = [
+    Scheduler::Queue {
+        queues: 1,
+        size: 5,
+        merge_below: 0.5,
+    },
+    Scheduler::Queue {
+        queues: 3,
+        size: 3,
+        merge_below: 0.9,
+    },
+    Scheduler::Queue {
+        queues: 8,
+        size: 16,
+        merge_below: 0.0,
+    },
+];
+
 #[test]
 fn films_are_bit_identical_for_one_and_two_threads() {
     let algorithms = common::EVERY_ALGORITHM;
@@ -127,9 +147,12 @@ fn path_tracer_films_are_bit_identical_under_every_scheduler() {
     let reference = render(1, None, schedule(Scheduler::None));
     assert!(reference.mean().iter().any(|rgb| rgb.max_element() > 0.0));
     let tiles = [(5, 0.5), (7, 0.0), (64, 0.9), (1, 0.5)];
+    let schedulers = tiles
+        .map(|(size, merge_below)| Scheduler::Tile { size, merge_below })
+        .into_iter()
+        .chain(QUEUES);
     for threads in [1, 2] {
-        for (size, merge_below) in tiles {
-            let scheduler = Scheduler::Tile { size, merge_below };
+        for scheduler in schedulers.clone() {
             let film = render(threads, None, schedule(scheduler));
             assert!(
                 film == reference,
@@ -150,11 +173,14 @@ fn vcm_family_films_are_bit_identical_under_every_scheduler() {
     // Tiles of 1 and 5 pixels split the light paths of one frame over many wavefronts, so
     // the light vertex cache and the splats are gathered from all of them.
     let tiles = [(5, 0.5), (1, 0.0), (64, 0.9)];
+    let schedulers = tiles
+        .map(|(size, merge_below)| Scheduler::Tile { size, merge_below })
+        .into_iter()
+        .chain(QUEUES);
     for algorithm in common::EVERY_ALGORITHM.into_iter().flatten() {
         let reference = render(1, Some(algorithm), Schedule::ONE_BATCH);
         for threads in [1, 2] {
-            for (size, merge_below) in tiles {
-                let scheduler = Scheduler::Tile { size, merge_below };
+            for scheduler in schedulers.clone() {
                 let film = render(threads, Some(algorithm), schedule(scheduler));
                 assert!(
                     film == reference,
@@ -186,6 +212,14 @@ fn vcm_family_films_are_the_same_for_any_samples_per_frame() {
                 merge_below: 0.0,
             },
         ),
+        (
+            2,
+            Scheduler::Queue {
+                queues: 2,
+                size: 5,
+                merge_below: 0.5,
+            },
+        ),
     ];
     for algorithm in common::EVERY_ALGORITHM.into_iter().flatten() {
         let reference = render(1, Some(algorithm), Schedule::ONE_BATCH);
@@ -215,6 +249,22 @@ fn invalid_schedules_are_rejected() {
         Schedule {
             scheduler: Scheduler::Tile {
                 size: 0,
+                merge_below: 0.5,
+            },
+            ..Schedule::default()
+        },
+        Schedule {
+            scheduler: Scheduler::Queue {
+                queues: 2,
+                size: 0,
+                merge_below: 0.5,
+            },
+            ..Schedule::default()
+        },
+        Schedule {
+            scheduler: Scheduler::Queue {
+                queues: 0,
+                size: 8,
                 merge_below: 0.5,
             },
             ..Schedule::default()

@@ -406,9 +406,10 @@ impl Integrator for Vcm {
     }
 }
 
-/// Adds a scheduled pass's shadow rays and traversal time (its workers' total, as a share of
-/// the wall clock) to `stats`; the caller counts its closest-hit rays by kind.
+/// Adds a scheduled pass's shadow rays and traversal time (as a share of the wall clock,
+/// [`SchedulerStats::traversal_share`]) to `stats`; the caller counts its closest-hit rays by
+/// kind.
 fn add_scheduled(stats: &mut FrameStats, scheduled: &SchedulerStats) {
     stats.shadow_rays += scheduled.shadow_rays;
-    stats.traversal_time += scheduled.traversal / scheduled.workers.max(1) as u32;
+    stats.traversal_time += scheduled.traversal_share();
 }

@@ -1,0 +1,314 @@
+//! Every scheduler against a fake wavefront and fake backends: each tile is started once,
+//! each path runs to its end with the right hits and occlusion, the rays are counted, and
+//! the run ends.
+
+use std::time::Duration;
+
+use glam::Vec3;
+use vcm_traversal::{HitBatch, PendingTraversal, RayBatch, Traversal, TraversalJob};
+
+use crate::{Scheduler, Tile, TileGrid, Wavefront, run};
+
+/// Segments of pixel `p`'s path: 0 (no path at all) to 6.
+fn length(pixel: u32) -> u32 {
+    (pixel * 5 + 3) % 7
+}
+
+/// Whether segment `remaining` of a path queues a shadow ray.
+fn casts_shadow(remaining: u32) -> bool {
+    remaining.is_multiple_of(2)
+}
+
+/// Whether the fake backends report a shadow ray from pixel `p` occluded.
+fn blocked(pixel: u32) -> bool {
+    pixel.is_multiple_of(3)
+}
+
+/// A path: its pixel, the segments left, and what it has seen.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Path {
+    pixel: u32,
+    remaining: u32,
+    segments: u32,
+    lit: u32,
+    shadowed: bool,
+}
+
+/// What a fake wavefront hands back: the tiles it started and its ended paths.
+type Output = (Vec<Tile>, Vec<Path>);
+
+/// Paths that trace `length(pixel)` segments; ray origins carry the pixel so that the fake
+/// backends can answer for it and shading can check its hit belongs to its path.
+struct FakeWave {
+    width: u32,
+    /// Panic when shading this pixel.
+    panic_at: Option<u32>,
+    paths: Vec<Path>,
+    started: Vec<Tile>,
+    ended: Vec<Path>,
+}
+
+impl Wavefront for FakeWave {
+    type Output = Output;
+
+    fn start(&mut self, tile: Tile) {
+        self.started.push(tile);
+        let paths = tile.pixels(self.width).map(|pixel| Path {
+            pixel,
+            remaining: length(pixel),
+            ..Path::default()
+        });
+        self.paths.extend(paths.filter(|path| path.remaining > 0));
+    }
+
+    fn active(&self) -> usize {
+        self.paths.len()
+    }
+
+    fn extension_rays(&self, rays: &mut RayBatch) {
+        rays.clear();
+        for path in &self.paths {
+            rays.push(Vec3::new(path.pixel as f32, 0.0, 0.0), Vec3::X, 0.0, 1.0);
+        }
+    }
+
+    fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
+        assert_eq!(hits.len(), self.paths.len());
+        shadow_rays.clear();
+        for (i, path) in self.paths.iter_mut().enumerate() {
+            assert_eq!(hits.t[i], path.pixel as f32, "a hit of another path");
+            assert!(Some(path.pixel) != self.panic_at, "shading panics");
+            path.segments += 1;
+            path.remaining -= 1;
+            path.shadowed = casts_shadow(path.remaining);
+            if path.shadowed {
+                shadow_rays.push(Vec3::new(path.pixel as f32, 1.0, 0.0), Vec3::Y, 0.0, 1.0);
+            }
+        }
+    }
+
+    fn resolve(&mut self, occluded: &[bool]) {
+        let shadowed = self.paths.iter_mut().filter(|path| path.shadowed);
+        let mut count = 0;
+        for (path, &occluded) in shadowed.zip(occluded) {
+            assert_eq!(occluded, blocked(path.pixel));
+            path.lit += u32::from(!occluded);
+            count += 1;
+        }
+        assert_eq!(count, occluded.len(), "one flag per shadow ray");
+        let ended = &mut self.ended;
+        self.paths.retain(|path| {
+            if path.remaining == 0 {
+                ended.push(*path);
+            }
+            path.remaining > 0
+        });
+    }
+
+    fn finish(self) -> Output {
+        (self.started, self.ended)
+    }
+}
+
+/// A backend that answers from the ray origins: hit distance = origin x, occluded =
+/// [`blocked`]. With `delay`, [`submit`](Traversal::submit) answers on another thread after
+/// that delay, as a GPU would.
+struct FakeTraversal {
+    delay: Option<Duration>,
+}
+
+impl Traversal for FakeTraversal {
+    fn intersect(&self, rays: &RayBatch, hits: &mut HitBatch) {
+        hits.resize(rays.len());
+        for i in 0..rays.len() {
+            (hits.t[i], hits.prim[i]) = (rays.origin_x[i], 0);
+        }
+    }
+
+    fn occluded(&self, rays: &RayBatch, occluded: &mut Vec<bool>) {
+        occluded.clear();
+        occluded.extend(rays.origin_x.iter().map(|&x| blocked(x as u32)));
+    }
+
+    fn submit(&self, mut job: TraversalJob) -> Box<dyn PendingTraversal + '_> {
+        let Some(delay) = self.delay else {
+            job.run(self);
+            return Box::new(vcm_traversal::CompletedTraversal(job));
+        };
+        let eager = FakeTraversal { delay: None };
+        Box::new(Later(std::thread::spawn(move || {
+            std::thread::sleep(delay);
+            job.run(&eager);
+            job
+        })))
+    }
+}
+
+/// A job answered on its own thread.
+struct Later(std::thread::JoinHandle<TraversalJob>);
+
+impl PendingTraversal for Later {
+    fn wait(self: Box<Self>) -> TraversalJob {
+        self.0.join().expect("the fake traversal thread")
+    }
+}
+
+/// Runs `scheduler` over a `width × height` image on a rayon pool of `threads` (`None`:
+/// from outside any pool) and checks everything the module promises.
+fn check(scheduler: Scheduler, (width, height): (u32, u32), threads: Option<usize>, delay: bool) {
+    let traversal = FakeTraversal {
+        delay: delay.then(|| Duration::from_micros(200)),
+    };
+    let new_wave = || FakeWave {
+        width,
+        panic_at: None,
+        paths: Vec::new(),
+        started: Vec::new(),
+        ended: Vec::new(),
+    };
+    let go = || run(scheduler, (width, height), &traversal, new_wave);
+    let (outputs, stats) = match threads {
+        Some(threads) => pool(threads).install(go),
+        None => go(),
+    };
+    let context = format!("{scheduler:?}, {threads:?} threads, delay {delay}");
+
+    let size = match scheduler {
+        Scheduler::None => width.max(height),
+        Scheduler::Tile { size, .. } | Scheduler::Queue { size, .. } => size,
+    };
+    let grid = TileGrid::new(width, height, size);
+    let mut started: Vec<_> = outputs
+        .iter()
+        .flat_map(|(tiles, _)| tiles)
+        .copied()
+        .collect();
+    started.sort_by_key(|tile| (tile.y0, tile.x0));
+    let every_tile: Vec<_> = (0..grid.len()).map(|t| grid.tile(t)).collect();
+    assert_eq!(started, every_tile, "{context}: every tile started once");
+    assert_eq!(stats.tiles, grid.len() as u64, "{context}");
+
+    let mut ended: Vec<_> = outputs.into_iter().flat_map(|(_, paths)| paths).collect();
+    ended.sort_by_key(|path| path.pixel);
+    let expected: Vec<_> = (0..width * height)
+        .filter(|&pixel| length(pixel) > 0)
+        .map(|pixel| {
+            let shadows = (0..length(pixel)).filter(|&r| casts_shadow(r)).count() as u32;
+            Path {
+                pixel,
+                remaining: 0,
+                segments: length(pixel),
+                lit: if blocked(pixel) { 0 } else { shadows },
+                shadowed: casts_shadow(0),
+            }
+        })
+        .collect();
+    assert_eq!(ended, expected, "{context}: every path ran to its end");
+    let segments: u32 = expected.iter().map(|path| path.segments).sum();
+    let shadows: u32 = (0..width * height)
+        .map(|pixel| (0..length(pixel)).filter(|&r| casts_shadow(r)).count() as u32)
+        .sum();
+    assert_eq!(stats.closest_rays, u64::from(segments), "{context}");
+    assert_eq!(stats.shadow_rays, u64::from(shadows), "{context}");
+    assert!(
+        stats.workers >= 1 && stats.utilization() <= 1.0,
+        "{context}"
+    );
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+}
+
+#[test]
+fn none_and_tile_trace_every_path_once() {
+    for threads in [Some(1), Some(2), None] {
+        check(Scheduler::None, (13, 7), threads, false);
+        for (size, merge_below) in [(1, 0.0), (3, 0.5), (4, 0.9), (64, 0.5)] {
+            check(
+                Scheduler::Tile { size, merge_below },
+                (13, 7),
+                threads,
+                false,
+            );
+        }
+    }
+}
+
+#[test]
+fn queue_traces_every_path_once() {
+    let shapes = [
+        // One queue: every step of the run goes through it in turn.
+        (1, 3, 0.5),
+        (2, 1, 0.0),
+        (3, 4, 0.9),
+        // More queues than tiles: most stay empty.
+        (8, 64, 0.5),
+        (40, 5, 0.5),
+    ];
+    for threads in [Some(1), Some(2), Some(3), None] {
+        for delay in [false, true] {
+            for (queues, size, merge_below) in shapes {
+                let scheduler = Scheduler::Queue {
+                    queues,
+                    size,
+                    merge_below,
+                };
+                check(scheduler, (13, 7), threads, delay);
+            }
+        }
+    }
+}
+
+#[test]
+fn queue_counts_its_threads_and_queues() {
+    let traversal = FakeTraversal { delay: None };
+    let scheduler = Scheduler::Queue {
+        queues: 3,
+        size: 4,
+        merge_below: 0.5,
+    };
+    let new_wave = || FakeWave {
+        width: 16,
+        panic_at: None,
+        paths: Vec::new(),
+        started: Vec::new(),
+        ended: Vec::new(),
+    };
+    let (_, stats) = pool(2).install(|| run(scheduler, (16, 16), &traversal, new_wave));
+    assert_eq!((stats.workers, stats.queues), (2, 3));
+    assert!(stats.traversal <= stats.wall && stats.traversal_share() == stats.traversal);
+    assert!(stats.peak_paths > 0 && stats.peak_paths <= 2 * 16);
+}
+
+#[test]
+fn a_panicking_wavefront_stops_the_queue_scheduler() {
+    for threads in [1, 2] {
+        let traversal = FakeTraversal { delay: None };
+        let scheduler = Scheduler::Queue {
+            queues: 3,
+            size: 2,
+            merge_below: 0.0,
+        };
+        let new_wave = || FakeWave {
+            width: 8,
+            panic_at: Some(37),
+            paths: Vec::new(),
+            started: Vec::new(),
+            ended: Vec::new(),
+        };
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool(threads).install(|| run(scheduler, (8, 8), &traversal, new_wave))
+        }));
+        let panic = result.expect_err("the panic comes out of run");
+        let message = panic
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| panic.downcast_ref::<&str>().copied())
+            .unwrap_or_default();
+        assert!(message.contains("shading panics"), "{message}");
+    }
+}
