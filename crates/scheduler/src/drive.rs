@@ -7,7 +7,7 @@ use vcm_traversal::{HitBatch, RayBatch, Traversal};
 
 use crate::stats::{SchedulerStats, time};
 use crate::tiles::{TileCounter, TileGrid};
-use crate::wavefront::{Wavefront, top_up};
+use crate::wavefront::{Wavefront, note_queue_memory, top_up};
 
 /// How paths are grouped into batches.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,6 +139,7 @@ fn drive<W: Wavefront>(
             traversal.intersect(&rays, &mut hits)
         });
         time(&mut stats.shading, || wave.shade(&hits, &mut shadow_rays));
+        note_queue_memory(stats, wave, (&rays, &hits, &shadow_rays), &occluded);
         time(&mut stats.traversal, || {
             traversal.occluded(&shadow_rays, &mut occluded)
         });

@@ -31,6 +31,9 @@ pub struct SchedulerStats {
     pub tiles: u64,
     /// The most paths one wavefront held at once (sizes its queues).
     pub peak_paths: usize,
+    /// The most memory one wavefront's queue held at once: its paths' states and its ray, hit
+    /// and shadow buffers (see [`queue_memory`](Self::queue_memory) for the whole pass).
+    pub peak_queue_bytes: usize,
 }
 
 impl SchedulerStats {
@@ -42,6 +45,19 @@ impl SchedulerStats {
         self.shadow_rays += other.shadow_rays;
         self.tiles += other.tiles;
         self.peak_paths = self.peak_paths.max(other.peak_paths);
+        self.peak_queue_bytes = self.peak_queue_bytes.max(other.peak_queue_bytes);
+    }
+
+    /// High-water mark of the pass's queues: [`peak_queue_bytes`](Self::peak_queue_bytes)
+    /// times the wavefronts that exist at once (the workers, or the queue scheduler's pool),
+    /// an upper bound since the wavefronts need not peak together.
+    pub fn queue_memory(&self) -> usize {
+        let wavefronts = if self.queues > 0 {
+            self.queues
+        } else {
+            self.workers
+        };
+        self.peak_queue_bytes * wavefronts.max(1)
     }
 
     /// The wall-clock time traversal accounts for: the workers' [`traversal`](Self::traversal)

@@ -65,6 +65,10 @@ impl Wavefront for FakeWave {
         self.paths.len()
     }
 
+    fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(self.paths.as_slice())
+    }
+
     fn extension_rays(&self, rays: &mut RayBatch) {
         rays.clear();
         for path in &self.paths {
@@ -311,4 +315,42 @@ fn a_panicking_wavefront_stops_the_queue_scheduler() {
             .unwrap_or_default();
         assert!(message.contains("shading panics"), "{message}");
     }
+}
+
+#[test]
+fn queue_memory_follows_the_paths_in_flight() {
+    let traversal = FakeTraversal { delay: None };
+    let new_wave = || FakeWave {
+        width: 32,
+        panic_at: None,
+        paths: Vec::new(),
+        started: Vec::new(),
+        ended: Vec::new(),
+    };
+    let memory = |scheduler| {
+        let (_, stats) = pool(2).install(|| run(scheduler, (32, 32), &traversal, new_wave));
+        assert!(stats.peak_queue_bytes > 0, "{scheduler:?}");
+        assert!(stats.queue_memory() >= stats.peak_queue_bytes);
+        stats.queue_memory()
+    };
+    // One batch holds all 1024 paths at once; 4-pixel tiles hold at most a tile and a half
+    // per worker, a queue pool of 3 at most that per queue.
+    let one_batch = memory(Scheduler::None);
+    let tiles = memory(Scheduler::Tile {
+        size: 4,
+        merge_below: 0.5,
+    });
+    let queues = memory(Scheduler::Queue {
+        queues: 3,
+        size: 4,
+        merge_below: 0.5,
+    });
+    assert!(
+        tiles * 8 < one_batch,
+        "tiles {tiles} vs one batch {one_batch}"
+    );
+    assert!(
+        queues * 8 < one_batch,
+        "queues {queues} vs one batch {one_batch}"
+    );
 }

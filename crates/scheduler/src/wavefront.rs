@@ -20,6 +20,10 @@ pub trait Wavefront: Send {
     /// Paths still running.
     fn active(&self) -> usize;
 
+    /// Bytes held for the paths in flight: their states and per-path buffers, not the
+    /// results of the paths that ended.
+    fn memory_bytes(&self) -> usize;
+
     /// Fills `rays` with the next segment of every active path, in path order.
     fn extension_rays(&self, rays: &mut RayBatch);
 
@@ -32,6 +36,22 @@ pub trait Wavefront: Send {
 
     /// Everything the retired paths produced.
     fn finish(self) -> Self::Output;
+}
+
+/// Notes the memory of a wavefront's queue after shading, when it holds the most: the
+/// wavefront's paths and its ray, hit and shadow buffers.
+pub(crate) fn note_queue_memory<W: Wavefront>(
+    stats: &mut SchedulerStats,
+    wave: &W,
+    (rays, hits, shadow_rays): (&RayBatch, &HitBatch, &RayBatch),
+    occluded: &[bool],
+) {
+    let bytes = wave.memory_bytes()
+        + rays.memory_bytes()
+        + hits.memory_bytes()
+        + shadow_rays.memory_bytes()
+        + std::mem::size_of_val(occluded);
+    stats.peak_queue_bytes = stats.peak_queue_bytes.max(bytes);
 }
 
 /// Starts the next tile of `tiles` in `wave` when none of its paths runs or fewer than

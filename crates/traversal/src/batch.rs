@@ -33,6 +33,21 @@ pub struct RayBatch {
 }
 
 impl RayBatch {
+    /// Bytes allocated for the batch's arrays (their capacity, not just their length).
+    pub fn memory_bytes(&self) -> usize {
+        let arrays = [
+            &self.origin_x,
+            &self.origin_y,
+            &self.origin_z,
+            &self.dir_x,
+            &self.dir_y,
+            &self.dir_z,
+            &self.tmin,
+            &self.tmax,
+        ];
+        arrays.iter().map(|a| a.capacity()).sum::<usize>() * size_of::<f32>()
+    }
+
     /// Creates an empty batch with room for `capacity` rays in every array.
     pub fn with_capacity(capacity: usize) -> Self {
         Self {
@@ -137,6 +152,12 @@ pub struct HitBatch {
 }
 
 impl HitBatch {
+    /// Bytes allocated for the batch's arrays (their capacity, not just their length).
+    pub fn memory_bytes(&self) -> usize {
+        (self.t.capacity() + self.u.capacity() + self.v.capacity()) * size_of::<f32>()
+            + self.prim.capacity() * size_of::<u32>()
+    }
+
     /// Creates an empty batch with room for `capacity` hits in every array.
     pub fn with_capacity(capacity: usize) -> Self {
         Self {

@@ -115,6 +115,9 @@ pub struct FrameStats {
     /// Wall-clock time in everything else: ray generation, shading, connections, merging,
     /// queue compaction and accumulation.
     pub shading_time: Duration,
+    /// High-water mark of the scheduler's queues (paths in flight and their ray buffers) in
+    /// bytes, over the frame's passes ([`vcm_scheduler::SchedulerStats::queue_memory`]).
+    pub queue_memory: usize,
 }
 
 impl FrameStats {
@@ -129,6 +132,7 @@ impl FrameStats {
         self.traversal_time += other.traversal_time;
         self.grid_build_time += other.grid_build_time;
         self.shading_time += other.shading_time;
+        self.queue_memory = self.queue_memory.max(other.queue_memory);
     }
 
     /// All rays traced.

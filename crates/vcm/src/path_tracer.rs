@@ -115,6 +115,7 @@ impl Integrator for PathTracer {
             shadow_rays: stats.shadow_rays,
             traversal_time,
             shading_time: stats.wall.saturating_sub(traversal_time),
+            queue_memory: stats.queue_memory(),
             ..FrameStats::default()
         }
     }
@@ -187,6 +188,10 @@ impl Wavefront for PtWavefront<'_> {
 
     fn active(&self) -> usize {
         self.paths.len()
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.paths.capacity() * size_of::<PathState>()
     }
 
     fn extension_rays(&self, rays: &mut RayBatch) {

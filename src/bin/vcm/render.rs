@@ -321,12 +321,16 @@ fn print_summary(film: &Film, outcome: &Outcome) {
     );
     if totals.light_vertices + totals.discarded_light_vertices > 0 {
         println!(
-            "light vertex cache: {:.0} vertices per frame, {} discarded for lack of room",
+            "light vertex cache: {:.0} vertices per iteration, {} discarded for lack of room",
             totals.light_vertices as f64 / f64::from((*spp).max(1)),
             totals.discarded_light_vertices
         );
     }
     println!("dropped non-finite samples: {}", film.dropped());
+    println!(
+        "queue memory: peak {:.1} MiB (paths in flight and their ray buffers)",
+        totals.queue_memory as f64 / f64::from(1 << 20)
+    );
     if let Some(&(end, _)) = utilization.last() {
         // The intervals tile [0, end]: weight each by its length.
         let mut previous = 0.0;

@@ -18,7 +18,7 @@ use vcm_traversal::{PendingTraversal, Traversal, TraversalJob};
 
 use crate::stats::{SchedulerStats, time};
 use crate::tiles::TileCounter;
-use crate::wavefront::{Wavefront, top_up};
+use crate::wavefront::{Wavefront, note_queue_memory, top_up};
 use jobs::Jobs;
 use pool::{AbortOnPanic, Pool, Queue, Role, State, Taken};
 
@@ -225,6 +225,7 @@ fn advance<W: Wavefront>(
     } = queue;
     if state == State::ReadyForShading {
         time(&mut stats.shading, || wave.shade(hits, shadow_rays));
+        note_queue_memory(stats, wave, (rays, hits, shadow_rays), occluded);
         if !shadow_rays.is_empty() {
             return State::ReadyForShadowTraversal;
         }

@@ -113,6 +113,12 @@ impl Wavefront for CameraWavefront<'_> {
         self.paths.len()
     }
 
+    /// The paths and the shadow rays they queued.
+    fn memory_bytes(&self) -> usize {
+        let shadows: usize = self.paths.iter().map(|p| p.shadows.capacity()).sum();
+        self.paths.capacity() * size_of::<CameraPathState>() + shadows * size_of::<ShadowRay>()
+    }
+
     fn extension_rays(&self, rays: &mut RayBatch) {
         let segments = self.paths.iter().map(|p| (p.walk.origin, p.walk.direction));
         fill_extension_rays(rays, segments);

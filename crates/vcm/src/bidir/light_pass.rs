@@ -181,6 +181,10 @@ impl Wavefront for LightWavefront<'_> {
         self.paths.len()
     }
 
+    fn memory_bytes(&self) -> usize {
+        self.paths.capacity() * size_of::<LightPathState>()
+    }
+
     fn extension_rays(&self, rays: &mut RayBatch) {
         let segments = self.paths.iter().map(|p| (p.walk.origin, p.walk.direction));
         fill_extension_rays(rays, segments);

@@ -412,4 +412,5 @@ impl Integrator for Vcm {
 fn add_scheduled(stats: &mut FrameStats, scheduled: &SchedulerStats) {
     stats.shadow_rays += scheduled.shadow_rays;
     stats.traversal_time += scheduled.traversal_share();
+    stats.queue_memory = stats.queue_memory.max(scheduled.queue_memory());
 }
