@@ -72,6 +72,43 @@ fn gpu_renders_match_cpu_renders() {
     }
 }
 
+/// The queue scheduler keeps several GPU jobs in flight (`Traversal::submit`) while it shades;
+/// every ray is still traced on its own, so the image is the one batch per pass gives, bit for
+/// bit.
+#[test]
+fn the_queue_scheduler_renders_the_same_gpu_image() {
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for algo in ["pt", "vcm"] {
+        let render = |name: &str, schedule: &[&str]| {
+            let path = dir.path().join(format!("{algo}-{name}.exr"));
+            let mut args = vec![
+                "render",
+                "--algo",
+                algo,
+                "--backend",
+                "gpu",
+                "--spp",
+                "2",
+                "--width",
+                "48",
+            ];
+            args.extend_from_slice(schedule);
+            args.extend_from_slice(&["-o", path.to_str().unwrap()]);
+            let output = vcm(&args, &[]);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(output.status.success(), "{stderr}");
+            RgbImage::read_exr(&path).unwrap().pixels
+        };
+        let one_batch = render("none", &["--scheduler", "none"]);
+        let queues = ["--scheduler", "queue", "--queues", "4", "--tile-size", "8"];
+        assert!(one_batch.iter().any(|p| p.max_element() > 0.0));
+        assert!(render("queue", &queues) == one_batch, "{algo}");
+    }
+}
+
 #[test]
 fn no_adapter_is_a_clear_error() {
     // Only the Vulkan, Metal and DX12 backends are built in: asking for OpenGL finds nothing.
