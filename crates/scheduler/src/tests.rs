@@ -2,6 +2,7 @@
 //! each path runs to its end with the right hits and occlusion, the rays are counted, and
 //! the run ends.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use glam::Vec3;
@@ -116,9 +117,21 @@ impl Wavefront for FakeWave {
 
 /// A backend that answers from the ray origins: hit distance = origin x, occluded =
 /// [`blocked`]. With `delay`, [`submit`](Traversal::submit) answers on another thread after
-/// that delay, as a GPU would.
+/// that delay, as a GPU would, and counts the jobs in flight.
 struct FakeTraversal {
     delay: Option<Duration>,
+    in_flight: AtomicUsize,
+    most_in_flight: AtomicUsize,
+}
+
+impl FakeTraversal {
+    fn new(delay: Option<Duration>) -> Self {
+        Self {
+            delay,
+            in_flight: AtomicUsize::new(0),
+            most_in_flight: AtomicUsize::new(0),
+        }
+    }
 }
 
 impl Traversal for FakeTraversal {
@@ -139,30 +152,45 @@ impl Traversal for FakeTraversal {
             job.run(self);
             return Box::new(vcm_traversal::CompletedTraversal(job));
         };
-        let eager = FakeTraversal { delay: None };
-        Box::new(Later(std::thread::spawn(move || {
+        let now = self.in_flight.fetch_add(1, Ordering::SeqCst) + 1;
+        self.most_in_flight.fetch_max(now, Ordering::SeqCst);
+        let eager = FakeTraversal::new(None);
+        let answer = std::thread::spawn(move || {
             std::thread::sleep(delay);
             job.run(&eager);
             job
-        })))
+        });
+        Box::new(Later {
+            answer,
+            in_flight: &self.in_flight,
+        })
     }
 }
 
 /// A job answered on its own thread.
-struct Later(std::thread::JoinHandle<TraversalJob>);
+struct Later<'a> {
+    answer: std::thread::JoinHandle<TraversalJob>,
+    in_flight: &'a AtomicUsize,
+}
 
-impl PendingTraversal for Later {
+impl PendingTraversal for Later<'_> {
     fn wait(self: Box<Self>) -> TraversalJob {
-        self.0.join().expect("the fake traversal thread")
+        let job = self.answer.join().expect("the fake traversal thread");
+        self.in_flight.fetch_sub(1, Ordering::SeqCst);
+        job
     }
 }
 
 /// Runs `scheduler` over a `width × height` image on a rayon pool of `threads` (`None`:
-/// from outside any pool) and checks everything the module promises.
-fn check(scheduler: Scheduler, (width, height): (u32, u32), threads: Option<usize>, delay: bool) {
-    let traversal = FakeTraversal {
-        delay: delay.then(|| Duration::from_micros(200)),
-    };
+/// from outside any pool) and checks everything the module promises. Returns the most
+/// traversal jobs that were in flight at once (0 without `delay`).
+fn check(
+    scheduler: Scheduler,
+    (width, height): (u32, u32),
+    threads: Option<usize>,
+    delay: bool,
+) -> usize {
+    let traversal = FakeTraversal::new(delay.then(|| Duration::from_micros(200)));
     let new_wave = || FakeWave {
         width,
         panic_at: None,
@@ -218,6 +246,7 @@ fn check(scheduler: Scheduler, (width, height): (u32, u32), threads: Option<usiz
         stats.workers >= 1 && stats.utilization() <= 1.0,
         "{context}"
     );
+    traversal.most_in_flight.into_inner()
 }
 
 fn pool(threads: usize) -> rayon::ThreadPool {
@@ -253,6 +282,7 @@ fn queue_traces_every_path_once() {
         (8, 64, 0.5),
         (40, 5, 0.5),
     ];
+    let mut most_in_flight = 0;
     for threads in [Some(1), Some(2), Some(3), None] {
         for delay in [false, true] {
             for (queues, size, merge_below) in shapes {
@@ -261,15 +291,19 @@ fn queue_traces_every_path_once() {
                     size,
                     merge_below,
                 };
-                check(scheduler, (13, 7), threads, delay);
+                let most = check(scheduler, (13, 7), threads, delay);
+                assert!(queues > 1 || most <= 1, "one queue, one job at a time");
+                most_in_flight = most_in_flight.max(most);
             }
         }
     }
+    // With jobs answered later, the traversal thread keeps several queues' jobs in flight.
+    assert!(most_in_flight > 1);
 }
 
 #[test]
 fn queue_counts_its_threads_and_queues() {
-    let traversal = FakeTraversal { delay: None };
+    let traversal = FakeTraversal::new(None);
     let scheduler = Scheduler::Queue {
         queues: 3,
         size: 4,
@@ -291,7 +325,7 @@ fn queue_counts_its_threads_and_queues() {
 #[test]
 fn a_panicking_wavefront_stops_the_queue_scheduler() {
     for threads in [1, 2] {
-        let traversal = FakeTraversal { delay: None };
+        let traversal = FakeTraversal::new(None);
         let scheduler = Scheduler::Queue {
             queues: 3,
             size: 2,
