@@ -353,7 +353,7 @@ fn a_panicking_wavefront_stops_the_queue_scheduler() {
 
 #[test]
 fn queue_memory_follows_the_paths_in_flight() {
-    let traversal = FakeTraversal { delay: None };
+    let traversal = FakeTraversal::new(None);
     let new_wave = || FakeWave {
         width: 32,
         panic_at: None,
