@@ -49,6 +49,19 @@ struct FakeWave {
     ended: Vec<Path>,
 }
 
+impl FakeWave {
+    /// A wavefront over an image `width` pixels wide, panicking when it shades `panic_at`.
+    fn new(width: u32, panic_at: Option<u32>) -> Self {
+        Self {
+            width,
+            panic_at,
+            paths: Vec::new(),
+            started: Vec::new(),
+            ended: Vec::new(),
+        }
+    }
+}
+
 impl Wavefront for FakeWave {
     type Output = Output;
 
@@ -191,13 +204,7 @@ fn check(
     delay: bool,
 ) -> usize {
     let traversal = FakeTraversal::new(delay.then(|| Duration::from_micros(200)));
-    let new_wave = || FakeWave {
-        width,
-        panic_at: None,
-        paths: Vec::new(),
-        started: Vec::new(),
-        ended: Vec::new(),
-    };
+    let new_wave = || FakeWave::new(width, None);
     let go = || run(scheduler, (width, height), &traversal, new_wave);
     let (outputs, stats) = match threads {
         Some(threads) => pool(threads).install(go),
@@ -309,13 +316,7 @@ fn queue_counts_its_threads_and_queues() {
         size: 4,
         merge_below: 0.5,
     };
-    let new_wave = || FakeWave {
-        width: 16,
-        panic_at: None,
-        paths: Vec::new(),
-        started: Vec::new(),
-        ended: Vec::new(),
-    };
+    let new_wave = || FakeWave::new(16, None);
     let (_, stats) = pool(2).install(|| run(scheduler, (16, 16), &traversal, new_wave));
     assert_eq!((stats.workers, stats.queues), (2, 3));
     assert!(stats.traversal <= stats.wall && stats.traversal_share() == stats.traversal);
@@ -331,13 +332,7 @@ fn a_panicking_wavefront_stops_the_queue_scheduler() {
             size: 2,
             merge_below: 0.0,
         };
-        let new_wave = || FakeWave {
-            width: 8,
-            panic_at: Some(37),
-            paths: Vec::new(),
-            started: Vec::new(),
-            ended: Vec::new(),
-        };
+        let new_wave = || FakeWave::new(8, Some(37));
         let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             pool(threads).install(|| run(scheduler, (8, 8), &traversal, new_wave))
         }));
@@ -354,13 +349,7 @@ fn a_panicking_wavefront_stops_the_queue_scheduler() {
 #[test]
 fn queue_memory_follows_the_paths_in_flight() {
     let traversal = FakeTraversal::new(None);
-    let new_wave = || FakeWave {
-        width: 32,
-        panic_at: None,
-        paths: Vec::new(),
-        started: Vec::new(),
-        ended: Vec::new(),
-    };
+    let new_wave = || FakeWave::new(32, None);
     let memory = |scheduler| {
         let (_, stats) = pool(2).install(|| run(scheduler, (32, 32), &traversal, new_wave));
         assert!(stats.peak_queue_bytes > 0, "{scheduler:?}");

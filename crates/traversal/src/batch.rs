@@ -35,17 +35,7 @@ pub struct RayBatch {
 impl RayBatch {
     /// Bytes allocated for the batch's arrays (their capacity, not just their length).
     pub fn memory_bytes(&self) -> usize {
-        let arrays = [
-            &self.origin_x,
-            &self.origin_y,
-            &self.origin_z,
-            &self.dir_x,
-            &self.dir_y,
-            &self.dir_z,
-            &self.tmin,
-            &self.tmax,
-        ];
-        arrays.iter().map(|a| a.capacity()).sum::<usize>() * size_of::<f32>()
+        self.arrays().map(Vec::capacity).iter().sum::<usize>() * size_of::<f32>()
     }
 
     /// Creates an empty batch with room for `capacity` rays in every array.
@@ -104,20 +94,24 @@ impl RayBatch {
     /// Panics unless all eight arrays have the same length (backends call it first).
     pub fn assert_consistent(&self) {
         let len = self.len();
-        let lengths = [
+        let lengths = self.arrays().map(Vec::len);
+        assert!(
+            lengths.iter().all(|&l| l == len),
+            "RayBatch arrays differ in length: {lengths:?} vs {len} tmin values"
+        );
+    }
+
+    fn arrays(&self) -> [&Vec<f32>; 8] {
+        [
             &self.origin_x,
             &self.origin_y,
             &self.origin_z,
             &self.dir_x,
             &self.dir_y,
             &self.dir_z,
+            &self.tmin,
             &self.tmax,
         ]
-        .map(Vec::len);
-        assert!(
-            lengths.iter().all(|&l| l == len),
-            "RayBatch arrays differ in length: {lengths:?} vs {len} tmin values"
-        );
     }
 
     fn arrays_mut(&mut self) -> [&mut Vec<f32>; 8] {
