@@ -75,7 +75,11 @@ pub(crate) fn run(
     stats.camera_rays += camera_rays;
     stats.continuation_rays += scheduled.closest_rays - camera_rays;
     add_scheduled(stats, &scheduled);
-    let mut samples = vec![Vec::with_capacity((width * height) as usize); iterations.len()];
+    // `vec![v; n]` would clone the empty vector, dropping the reserved room of all but one.
+    let pixels = width as usize * height as usize;
+    let mut samples: Vec<Vec<_>> = (0..iterations.len())
+        .map(|_| Vec::with_capacity(pixels))
+        .collect();
     for (sample, pixel, radiance) in outputs.into_iter().flatten() {
         samples[sample as usize].push((pixel, radiance));
     }
