@@ -117,6 +117,14 @@ impl Material {
         }
     }
 
+    /// The BSDF parameters when no texture changes them (the same at every `uv`), `None` for
+    /// a material with a base color or metallic-roughness texture.
+    pub fn uniform_bsdf_params(&self) -> Option<BsdfParams> {
+        let textured =
+            self.base_color_texture.is_some() || self.metallic_roughness_texture.is_some();
+        (!textured).then(|| self.bsdf_params(&[], Vec2::ZERO))
+    }
+
     /// Emitted radiance at `uv` (zero for non-emitters).
     pub fn emission_at(&self, textures: &[Texture], uv: Vec2) -> Vec3 {
         self.emission * lookup(textures, self.emissive_texture, uv).xyz()

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
-use crate::bsdf::Bsdf;
+use crate::bsdf::{Bsdf, Lobes};
 use crate::camera::Camera;
 use crate::error::SceneError;
 use crate::features::SceneFeatures;
@@ -23,6 +23,9 @@ pub struct Scene {
     pub mesh: Mesh,
     /// Materials, indexed by [`Mesh::material_ids`].
     pub materials: Vec<Material>,
+    /// Per material, its BSDF lobes when no texture changes them (built once from
+    /// `materials` by [`Scene::new`]; `None` for textured materials, built at every hit).
+    pub material_lobes: Vec<Option<Lobes>>,
     /// Textures, indexed by [`crate::TextureRef::index`].
     pub textures: Vec<Texture>,
     /// Lights: one area light per emissive triangle, then punctual lights.
@@ -78,10 +81,15 @@ impl Scene {
         lights.extend(punctual_lights);
         let light_sampler = LightSampler::new(&lights, &textures, mesh.triangle_count());
         let features = SceneFeatures::of(&mesh, &materials, &textures, &lights);
+        let material_lobes = materials
+            .iter()
+            .map(|m| m.uniform_bsdf_params().map(|params| Lobes::new(&params)))
+            .collect();
         Scene {
             path,
             mesh,
             materials,
+            material_lobes,
             textures,
             lights,
             light_sampler,
@@ -121,14 +129,16 @@ impl Scene {
 
     /// The BSDF at a surface point.
     pub fn bsdf(&self, point: &SurfacePoint) -> Bsdf {
-        let material = &self.materials[point.material as usize];
-        let params = material.bsdf_params(&self.textures, point.uv);
-        Bsdf::new(
-            &params,
-            point.geometric_normal,
-            point.shading_normal,
-            material.double_sided,
-        )
+        let index = point.material as usize;
+        let material = &self.materials[index];
+        let (n_g, n_s) = (point.geometric_normal, point.shading_normal);
+        match &self.material_lobes[index] {
+            Some(lobes) => Bsdf::from_lobes(lobes, n_g, n_s, material.double_sided),
+            None => {
+                let params = material.bsdf_params(&self.textures, point.uv);
+                Bsdf::new(&params, n_g, n_s, material.double_sided)
+            }
+        }
     }
 
     /// Emission seen by a ray with unit direction `ray_dir` that hits `triangle` at (u, v), or

@@ -186,6 +186,11 @@ impl SpecularAlbedo {
         SpecularAlbedo { f0, f90, row }
     }
 
+    /// Whether the lobe reflects anything (E is zero everywhere when it does not).
+    pub fn reflects(&self) -> bool {
+        self.f0.max(self.f90).max_element() > 0.0
+    }
+
     /// Directional albedo E(μ) per RGB channel, for μ = cos θo.
     pub fn directional(&self, mu: f32) -> Vec3 {
         let Some((k, tk)) = self.row else {

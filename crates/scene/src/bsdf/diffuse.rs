@@ -19,8 +19,9 @@ use std::f32::consts::FRAC_1_PI;
 pub(super) struct CompensatedDiffuse {
     /// ρ (with the mixture weight).
     albedo: Vec3,
-    /// Albedo E of the specular layer above.
-    layer: SpecularAlbedo,
+    /// Albedo E of the specular layer above; `None` when the layer reflects nothing (then
+    /// the lobe is plain Lambert and skips the albedo lookups).
+    layer: Option<SpecularAlbedo>,
     /// ρ / (π (1 − E_avg)), zero where E_avg = 1 (nothing gets through the layer).
     scale: Vec3,
 }
@@ -36,14 +37,16 @@ impl CompensatedDiffuse {
         );
         CompensatedDiffuse {
             albedo,
-            layer,
+            layer: layer.reflects().then_some(layer),
             scale,
         }
     }
 
     /// 1 − E(μ) of the layer.
     fn layer_transmission(&self, mu: f32) -> Vec3 {
-        (Vec3::ONE - self.layer.directional(mu)).max(Vec3::ZERO)
+        self.layer.as_ref().map_or(Vec3::ONE, |layer| {
+            (Vec3::ONE - layer.directional(mu)).max(Vec3::ZERO)
+        })
     }
 }
 

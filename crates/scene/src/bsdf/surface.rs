@@ -22,6 +22,19 @@ pub struct Bsdf {
     mixture: Mixture,
 }
 
+/// The lobes of one set of [`BsdfParams`], before they are placed at a surface point: a
+/// material whose parameters no texture changes builds them once and every hit on it
+/// reuses them ([`Bsdf::from_lobes`]).
+#[derive(Clone, Debug)]
+pub struct Lobes(Mixture);
+
+impl Lobes {
+    /// The lobes of `params` (see the [module docs](super)).
+    pub fn new(params: &BsdfParams) -> Lobes {
+        Lobes(Mixture::new(params))
+    }
+}
+
 /// Which side of the surface a direction is on, and what follows from it.
 #[derive(Clone, Copy)]
 struct Side {
@@ -46,6 +59,17 @@ impl Bsdf {
     /// `double_sided`: a non-transmissive material also scatters from the back side (glTF
     /// `doubleSided`); materials with transmission always scatter from both sides.
     pub fn new(params: &BsdfParams, n_g: Vec3, n_s: Vec3, double_sided: bool) -> Bsdf {
+        Bsdf::placed(Mixture::new(params), n_g, n_s, double_sided)
+    }
+
+    /// [`Bsdf::new`] with lobes built beforehand: the same BSDF as `Bsdf::new` with the
+    /// parameters `lobes` was built from, without building them again.
+    pub fn from_lobes(lobes: &Lobes, n_g: Vec3, n_s: Vec3, double_sided: bool) -> Bsdf {
+        Bsdf::placed(lobes.0.clone(), n_g, n_s, double_sided)
+    }
+
+    /// `mixture` placed at a surface point (see [`Bsdf::new`]).
+    fn placed(mixture: Mixture, n_g: Vec3, n_s: Vec3, double_sided: bool) -> Bsdf {
         let n_s = if !n_s.is_finite() || n_s.length_squared() < 0.25 {
             n_g
         } else if n_s.dot(n_g) < 0.0 {
@@ -53,7 +77,6 @@ impl Bsdf {
         } else {
             n_s
         };
-        let mixture = Mixture::new(params);
         Bsdf {
             frame: Frame::from_z(n_s),
             n_g,

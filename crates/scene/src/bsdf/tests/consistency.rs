@@ -159,3 +159,34 @@ fn forward_only_evaluation_and_sampling_skip_just_the_reverse_pdf() {
         }
     }
 }
+
+#[test]
+fn lobes_built_once_give_the_same_bsdf() {
+    let mut classes = material_classes(0.3);
+    classes.extend(material_classes(0.001));
+    classes.push(("lambert".into(), lambert(Vec3::new(0.7, 0.5, 0.2))));
+    let mut rng = Rng::new(5, 9);
+    for (name, params) in classes {
+        let lobes = crate::bsdf::Lobes::new(&params);
+        let (n_s, double_sided) = (tilted_normal(0.2), true);
+        let per_hit = Bsdf::new(&params, n_g(), n_s, double_sided);
+        let reused = Bsdf::from_lobes(&lobes, n_g(), n_s, double_sided);
+        for _ in 0..200 {
+            let wo = direction(n_g(), rng.uniform() * 2.0 - 1.0, rng.uniform() * TAU);
+            let wi = direction(n_g(), rng.uniform() * 2.0 - 1.0, rng.uniform() * TAU);
+            let (u_lobe, u) = (rng.uniform(), rng.uniform2());
+            for mode in MODES {
+                assert_eq!(
+                    per_hit.eval(wo, wi, mode),
+                    reused.eval(wo, wi, mode),
+                    "{name}"
+                );
+                assert_eq!(
+                    per_hit.sample(wo, u_lobe, u, mode),
+                    reused.sample(wo, u_lobe, u, mode),
+                    "{name}"
+                );
+            }
+        }
+    }
+}
