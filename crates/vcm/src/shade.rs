@@ -8,7 +8,7 @@
 
 use glam::Vec3;
 use vcm_scene::Scene;
-use vcm_scene::bsdf::{Bsdf, LobeKind, Pdfs, TransportMode};
+use vcm_scene::bsdf::{FixedOutgoing, LobeKind, Pdfs, TransportMode};
 use vcm_scene::mesh::SurfacePoint;
 use vcm_scene::sampling::power_heuristic;
 
@@ -47,11 +47,14 @@ pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) 
         return;
     }
     let bsdf = scene.bsdf(&point);
-    let wo = -path.direction;
+    let Some(seen) = bsdf.fix_outgoing(-path.direction) else {
+        path.alive = false;
+        return;
+    };
     if bsdf.has_non_delta() {
-        path.shadow = next_event(scene, path, &surface, &bsdf, wo);
+        path.shadow = next_event(scene, path, &surface, &seen);
     }
-    path.alive = scatter(path, &bsdf, wo, |w| surface.spawn(w));
+    path.alive = scatter(path, &seen, |w| surface.spawn(w));
 }
 
 /// Emitted radiance toward the path at `point`, MIS-weighted against light sampling
@@ -74,17 +77,16 @@ fn emission(scene: &Scene, path: &PathState, point: &SurfacePoint, hit: Hit) -> 
     emitted.radiance * power_heuristic(1.0, pdf_w, 1.0, light_pdf_w)
 }
 
-/// One light sample from `surface`: the MIS-weighted contribution and its shadow ray, or
-/// `None` when the sample cannot contribute.
+/// One light sample from `surface` (its BSDF `seen` from the path): the MIS-weighted
+/// contribution and its shadow ray, or `None` when the sample cannot contribute.
 fn next_event(
     scene: &Scene,
     path: &mut PathState,
     surface: &SurfaceHit,
-    bsdf: &Bsdf,
-    wo: Vec3,
+    seen: &FixedOutgoing,
 ) -> Option<ShadowRay> {
     // Path tracing weighs light samples against BSDF samples from the camera side only.
-    let sample = LightSample::sample(scene, &mut path.rng, surface, bsdf, wo, Pdfs::Forward)?;
+    let sample = LightSample::sample(scene, &mut path.rng, surface, seen, Pdfs::Forward)?;
     let light_pdf_w = sample.direct_pdf_w();
     let weight = if sample.light.is_delta() {
         1.0
@@ -96,12 +98,11 @@ fn next_event(
     Some(sample.shadow_ray(surface, contribution))
 }
 
-/// Samples the BSDF for the next segment and applies Russian roulette; returns whether the
-/// path goes on.
-fn scatter(path: &mut PathState, bsdf: &Bsdf, wo: Vec3, spawn: impl Fn(Vec3) -> Vec3) -> bool {
+/// Samples the BSDF (`seen` from the path) for the next segment and applies Russian
+/// roulette; returns whether the path goes on.
+fn scatter(path: &mut PathState, seen: &FixedOutgoing, spawn: impl Fn(Vec3) -> Vec3) -> bool {
     let (u_lobe, u_dir) = (path.rng.uniform(), path.rng.uniform2());
-    let Some(sample) = bsdf.sample_with(wo, u_lobe, u_dir, TransportMode::Radiance, Pdfs::Forward)
-    else {
+    let Some(sample) = seen.sample(u_lobe, u_dir, TransportMode::Radiance, Pdfs::Forward) else {
         return false;
     };
     path.throughput *= sample.f_cos / sample.pdf_fwd;

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use vcm_scene::Scene;
-use vcm_scene::bsdf::{Bsdf, BsdfEval, Pdfs, TransportMode};
+use vcm_scene::bsdf::{BsdfEval, FixedOutgoing, Pdfs, TransportMode};
 use vcm_scene::light::{Illumination, Light};
 use vcm_scene::sampling::Rng;
 
@@ -25,14 +25,13 @@ pub(crate) struct LightSample<'a> {
 
 impl LightSample<'_> {
     /// Picks a light by power and a point on it with three numbers from `rng`, seen from
-    /// `surface` whose BSDF is `bsdf` (`wo` toward the previous vertex), evaluating the BSDF's
-    /// `pdfs`; `None` when the sample cannot contribute.
+    /// `surface` whose BSDF `seen` has its outgoing direction toward the previous vertex,
+    /// evaluating the BSDF's `pdfs`; `None` when the sample cannot contribute.
     pub fn sample<'a>(
         scene: &'a Scene,
         rng: &mut Rng,
         surface: &SurfaceHit,
-        bsdf: &Bsdf,
-        wo: Vec3,
+        seen: &FixedOutgoing,
         pdfs: Pdfs,
     ) -> Option<LightSample<'a>> {
         let (u_pick, u_light) = (rng.uniform(), rng.uniform2());
@@ -40,7 +39,7 @@ impl LightSample<'_> {
         let light = &scene.lights[index];
         let receiver = surface.point.position;
         let illumination = light.illuminate(&scene.textures, receiver, u_light)?;
-        let eval = bsdf.eval_with(wo, illumination.direction, TransportMode::Radiance, pdfs);
+        let eval = seen.eval(illumination.direction, TransportMode::Radiance, pdfs);
         (eval.f_cos != Vec3::ZERO).then_some(LightSample {
             light,
             pick_pmf,

@@ -67,7 +67,7 @@ mod thin_dielectric;
 #[cfg(test)]
 mod tests;
 
-pub use surface::{Bsdf, GRAZING_COS, Lobes};
+pub use surface::{Bsdf, FixedOutgoing, GRAZING_COS, Lobes};
 
 use glam::Vec3;
 

@@ -46,9 +46,17 @@ struct Side {
 
 /// `wo` as the mixture sees it: its side, its local direction and the lobe selection there.
 struct Outgoing {
+    world: Vec3,
     side: Side,
     local: Vec3,
     selection: Selection,
+}
+
+/// A [`Bsdf`] with its outgoing direction `wo` fixed ([`Bsdf::fix_outgoing`]): evaluations
+/// and samples that share `wo` find its side, local direction and lobe selection once.
+pub struct FixedOutgoing<'a> {
+    bsdf: &'a Bsdf,
+    out: Outgoing,
 }
 
 impl Bsdf {
@@ -126,6 +134,7 @@ impl Bsdf {
         let side = self.side(wo)?;
         let local = self.to_local(side, wo);
         (local.z >= GRAZING_COS).then(|| Outgoing {
+            world: wo,
             side,
             local,
             selection: self.mixture.selection(local, side.eta),
@@ -176,37 +185,29 @@ impl Bsdf {
 
     /// [`Bsdf::eval`] with only the `pdfs` asked for.
     pub fn eval_with(&self, wo: Vec3, wi: Vec3, mode: TransportMode, pdfs: Pdfs) -> BsdfEval {
-        let Some((f_cos, pdf_fwd)) = self
-            .outgoing(wo)
-            .and_then(|out| self.eval_from(&out, wo, wi, mode))
-        else {
-            return BsdfEval::default();
-        };
-        BsdfEval {
-            f_cos,
-            pdf_fwd,
-            pdf_rev: match pdfs {
-                Pdfs::Forward => 0.0,
-                Pdfs::Both => self.pdf(wi, wo),
-            },
-        }
+        self.fix_outgoing(wo)
+            .map_or_else(BsdfEval::default, |fixed| fixed.eval(wi, mode, pdfs))
     }
 
-    /// f_cos and the forward pdf of the pair (`wo` as `out`, `wi`), if both are non-zero and
-    /// finite.
-    fn eval_from(
-        &self,
-        out: &Outgoing,
-        wo: Vec3,
-        wi: Vec3,
-        mode: TransportMode,
-    ) -> Option<(Vec3, f32)> {
+    /// The BSDF seen from `wo` (world, unit, toward the previous path vertex), for several
+    /// evaluations or a sample from the same `wo`; `None` when nothing scatters toward `wo`
+    /// (it is grazing, below the shading hemisphere, or on the black side of a one-sided
+    /// material), where every evaluation would be zero and every sample `None`.
+    pub fn fix_outgoing(&self, wo: Vec3) -> Option<FixedOutgoing<'_>> {
+        Some(FixedOutgoing {
+            bsdf: self,
+            out: self.outgoing(wo)?,
+        })
+    }
+
+    /// f_cos and the forward pdf of the pair (`out`, `wi`), if both are non-zero and finite.
+    fn eval_from(&self, out: &Outgoing, wi: Vec3, mode: TransportMode) -> Option<(Vec3, f32)> {
         let wi_l = self.to_local(out.side, wi);
         let cos_gi = self.consistent(out.side, wi, wi_l)?;
         let (f_cos, pdf) = self
             .mixture
             .eval(&out.selection, out.local, wi_l, out.side.eta, mode);
-        let f_cos = self.adjoint(f_cos, mode, wo, out.local, wi_l, cos_gi);
+        let f_cos = self.adjoint(f_cos, mode, out.world, out.local, wi_l, cos_gi);
         (f_cos.is_finite() && pdf.is_finite() && pdf > 0.0).then_some((f_cos, pdf))
     }
 
@@ -232,42 +233,7 @@ impl Bsdf {
         mode: TransportMode,
         pdfs: Pdfs,
     ) -> Option<BsdfSample> {
-        let out = self.outgoing(wo)?;
-        let (side, wo_l) = (out.side, out.local);
-        let s = self
-            .mixture
-            .sample(&out.selection, wo_l, side.eta, u_lobe, u, mode)?;
-        let wi = self.to_world(side, s.wi).normalize();
-        let reverse = pdfs == Pdfs::Both;
-        let (f_cos, pdf_fwd, pdf_rev) = match s.delta {
-            Some(delta) => {
-                let cos_gi = self.consistent(side, wi, s.wi)?;
-                let f_cos = self.adjoint(delta.f_cos, mode, wo, wo_l, s.wi, cos_gi);
-                let pdf_rev = if reverse {
-                    self.delta_pdf_rev(wo, wi, delta.lobe, s.transmitted)
-                } else {
-                    0.0
-                };
-                (f_cos, delta.prob, pdf_rev)
-            }
-            // Evaluated at the final world direction, so that the sample agrees with eval().
-            None => {
-                let (f_cos, pdf_fwd) = self.eval_from(&out, wo, wi, mode)?;
-                let pdf_rev = if reverse { self.pdf(wi, wo) } else { 0.0 };
-                (f_cos, pdf_fwd, pdf_rev)
-            }
-        };
-        let transmitted = wi.dot(self.n_g) * wo.dot(self.n_g) < 0.0;
-        let valid = f_cos.is_finite() && pdf_fwd.is_finite() && pdf_fwd > 0.0 && wi.is_finite();
-        (valid && transmitted == s.transmitted).then_some(BsdfSample {
-            wi,
-            f_cos,
-            pdf_fwd,
-            pdf_rev,
-            lobe: s.kind,
-            transmitted,
-            eta: s.eta,
-        })
+        self.fix_outgoing(wo)?.sample(u_lobe, u, mode, pdfs)
     }
 
     /// Probability of sampling the same delta of lobe slot `lobe` back from `wi` to `wo`.
@@ -287,7 +253,7 @@ impl Bsdf {
     /// the reverse pdf); it does not depend on the transport mode.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         self.outgoing(wo)
-            .and_then(|out| self.eval_from(&out, wo, wi, TransportMode::Radiance))
+            .and_then(|out| self.eval_from(&out, wi, TransportMode::Radiance))
             .map_or(0.0, |(_, pdf)| pdf)
     }
 
@@ -314,5 +280,78 @@ impl Bsdf {
     /// material (a smooth coat over diffuse) are ignored: connections use the rest.
     pub fn classify(&self) -> LobeKind {
         self.mixture.classify()
+    }
+}
+
+impl FixedOutgoing<'_> {
+    /// The BSDF.
+    pub fn bsdf(&self) -> &Bsdf {
+        self.bsdf
+    }
+
+    /// The fixed outgoing direction (world).
+    pub fn wo(&self) -> Vec3 {
+        self.out.world
+    }
+
+    /// [`Bsdf::eval_with`] at the fixed `wo`.
+    pub fn eval(&self, wi: Vec3, mode: TransportMode, pdfs: Pdfs) -> BsdfEval {
+        let Some((f_cos, pdf_fwd)) = self.bsdf.eval_from(&self.out, wi, mode) else {
+            return BsdfEval::default();
+        };
+        BsdfEval {
+            f_cos,
+            pdf_fwd,
+            pdf_rev: match pdfs {
+                Pdfs::Forward => 0.0,
+                Pdfs::Both => self.bsdf.pdf(wi, self.out.world),
+            },
+        }
+    }
+
+    /// [`Bsdf::sample_with`] at the fixed `wo`.
+    pub fn sample(
+        &self,
+        u_lobe: f32,
+        u: Vec2,
+        mode: TransportMode,
+        pdfs: Pdfs,
+    ) -> Option<BsdfSample> {
+        let (bsdf, out) = (self.bsdf, &self.out);
+        let (side, wo, wo_l) = (out.side, out.world, out.local);
+        let s = bsdf
+            .mixture
+            .sample(&out.selection, wo_l, side.eta, u_lobe, u, mode)?;
+        let wi = bsdf.to_world(side, s.wi).normalize();
+        let reverse = pdfs == Pdfs::Both;
+        let (f_cos, pdf_fwd, pdf_rev) = match s.delta {
+            Some(delta) => {
+                let cos_gi = bsdf.consistent(side, wi, s.wi)?;
+                let f_cos = bsdf.adjoint(delta.f_cos, mode, wo, wo_l, s.wi, cos_gi);
+                let pdf_rev = if reverse {
+                    bsdf.delta_pdf_rev(wo, wi, delta.lobe, s.transmitted)
+                } else {
+                    0.0
+                };
+                (f_cos, delta.prob, pdf_rev)
+            }
+            // Evaluated at the final world direction, so that the sample agrees with eval().
+            None => {
+                let (f_cos, pdf_fwd) = bsdf.eval_from(out, wi, mode)?;
+                let pdf_rev = if reverse { bsdf.pdf(wi, wo) } else { 0.0 };
+                (f_cos, pdf_fwd, pdf_rev)
+            }
+        };
+        let transmitted = wi.dot(bsdf.n_g) * wo.dot(bsdf.n_g) < 0.0;
+        let valid = f_cos.is_finite() && pdf_fwd.is_finite() && pdf_fwd > 0.0 && wi.is_finite();
+        (valid && transmitted == s.transmitted).then_some(BsdfSample {
+            wi,
+            f_cos,
+            pdf_fwd,
+            pdf_rev,
+            lobe: s.kind,
+            transmitted,
+            eta: s.eta,
+        })
     }
 }

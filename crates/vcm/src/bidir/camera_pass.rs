@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
-use vcm_scene::bsdf::{Bsdf, Pdfs, TransportMode};
+use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
 use vcm_scene::sampling::Rng;
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
@@ -217,15 +217,19 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
         return;
     }
     let bsdf = scene.bsdf(&surface.point);
+    let Some(seen) = bsdf.fix_outgoing(wo) else {
+        path.alive = false;
+        return;
+    };
     if bsdf.has_non_delta() {
         if ctx.plan.connects {
-            if let Some(shadow) = light_sample(ctx, path, &surface, &bsdf, wo) {
+            if let Some(shadow) = light_sample(ctx, path, &surface, &seen) {
                 path.shadows.push(shadow);
             }
-            connect_to_cache(ctx, path, &surface, &bsdf, wo);
+            connect_to_cache(ctx, path, &surface, &seen);
         }
         if ctx.plan.merges {
-            path.radiance += path.walk.throughput * merge(ctx, path, &surface, &bsdf, wo);
+            path.radiance += path.walk.throughput * merge(ctx, path, &surface, &seen);
             // Photon mapping proper stops at the first diffuse or glossy vertex.
             if algorithm == Algorithm::Ppm {
                 path.alive = false;
@@ -237,8 +241,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
         .walk
         .scatter(
             &surface,
-            &bsdf,
-            wo,
+            &seen,
             TransportMode::Radiance,
             &ctx.factors,
             1.0,
@@ -281,10 +284,9 @@ fn light_sample(
     ctx: &CameraContext,
     path: &mut CameraPathState,
     surface: &SurfaceHit,
-    bsdf: &Bsdf,
-    wo: Vec3,
+    seen: &FixedOutgoing,
 ) -> Option<ShadowRay> {
-    let sample = LightSample::sample(ctx.scene, &mut path.walk.rng, surface, bsdf, wo, Pdfs::Both)?;
+    let sample = LightSample::sample(ctx.scene, &mut path.walk.rng, surface, seen, Pdfs::Both)?;
     let (illumination, eval) = (&sample.illumination, &sample.eval);
     let pdfs = LightSamplePdfs {
         direct_pdf_w: sample.direct_pdf_w(),
@@ -310,8 +312,7 @@ fn connect_to_cache(
     ctx: &CameraContext,
     path: &mut CameraPathState,
     surface: &SurfaceHit,
-    bsdf: &Bsdf,
-    wo: Vec3,
+    seen: &FixedOutgoing,
 ) {
     let vertices = ctx.cache.vertices();
     if vertices.is_empty() {
@@ -327,7 +328,7 @@ fn connect_to_cache(
         if segments > ctx.max_segments() {
             continue;
         }
-        if let Some(shadow) = connect(ctx, path, surface, bsdf, wo, vertex, scale) {
+        if let Some(shadow) = connect(ctx, path, surface, seen, vertex, scale) {
             path.shadows.push(shadow);
         }
     }
@@ -339,8 +340,7 @@ fn connect(
     ctx: &CameraContext,
     path: &CameraPathState,
     surface: &SurfaceHit,
-    bsdf: &Bsdf,
-    wo: Vec3,
+    seen: &FixedOutgoing,
     vertex: &LightVertex,
     scale: f32,
 ) -> Option<ShadowRay> {
@@ -350,7 +350,7 @@ fn connect(
         return None;
     }
     let direction = to_light / distance_sq.sqrt();
-    let camera_eval = bsdf.eval(wo, direction, TransportMode::Radiance);
+    let camera_eval = seen.eval(direction, TransportMode::Radiance, Pdfs::Both);
     if camera_eval.f_cos == Vec3::ZERO {
         return None;
     }
@@ -389,11 +389,10 @@ fn merge(
     ctx: &CameraContext,
     path: &CameraPathState,
     surface: &SurfaceHit,
-    bsdf: &Bsdf,
-    wo: Vec3,
+    seen: &FixedOutgoing,
 ) -> Vec3 {
     let vertices = ctx.cache.vertices();
-    let n_s = bsdf.shading_normal();
+    let n_s = seen.bsdf().shading_normal();
     let max_segments = ctx.max_segments();
     let ppm = ctx.settings.algorithm == Algorithm::Ppm;
     let mut sum = Vec3::ZERO;
@@ -402,7 +401,7 @@ fn merge(
         if path.walk.segments.saturating_add(vertex.path_length) > max_segments {
             return;
         }
-        let eval = bsdf.eval(wo, vertex.wo, TransportMode::Radiance);
+        let eval = seen.eval(vertex.wo, TransportMode::Radiance, Pdfs::Both);
         if eval.f_cos == Vec3::ZERO {
             return;
         }

@@ -3,7 +3,7 @@
 
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
-use vcm_scene::bsdf::{Bsdf, TransportMode};
+use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
 use vcm_scene::sampling::Rng;
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
@@ -295,6 +295,7 @@ fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat:
     let distance_sq = (path.walk.segments > 1 || !path.from_infinity).then_some(hit.t * hit.t);
     path.walk.mis.arrive(distance_sq, surface.cos_geometric(wo));
     let bsdf = scene.bsdf(&surface.point);
+    let seen = bsdf.fix_outgoing(wo);
     let max_segments = ctx.max_segments();
     if bsdf.has_non_delta() {
         let vertex = LightVertex {
@@ -308,23 +309,25 @@ fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat:
             path_length: path.walk.segments,
         };
         if splat && path.walk.segments < max_segments {
-            path.splat = connect_to_camera(ctx, &surface, &bsdf, &vertex);
+            path.splat = seen
+                .as_ref()
+                .and_then(|seen| connect_to_camera(ctx, &surface, seen, &vertex));
         }
         path.vertex = Some(vertex);
     }
     // A further vertex has segments + 1 segments, and using it takes one more.
     path.alive = path.walk.segments.saturating_add(2) <= max_segments
-        && path
-            .walk
-            .scatter(
-                &surface,
-                &bsdf,
-                wo,
-                TransportMode::Importance,
-                &ctx.factors,
-                path.roulette_scale,
-            )
-            .is_some();
+        && seen.is_some_and(|seen| {
+            path.walk
+                .scatter(
+                    &surface,
+                    &seen,
+                    TransportMode::Importance,
+                    &ctx.factors,
+                    path.roulette_scale,
+                )
+                .is_some()
+        });
 }
 
 /// Connects a light vertex to the camera: its splat, if the vertex projects into the image
@@ -332,7 +335,7 @@ fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat:
 fn connect_to_camera(
     ctx: &FrameContext,
     surface: &SurfaceHit,
-    bsdf: &Bsdf,
+    seen: &FixedOutgoing,
     vertex: &LightVertex,
 ) -> Option<Splat> {
     let camera = &ctx.scene.camera;
@@ -341,7 +344,7 @@ fn connect_to_camera(
     let to_camera = camera.position - vertex.position;
     let distance_sq = to_camera.length_squared();
     let direction = to_camera / distance_sq.sqrt();
-    let eval = bsdf.eval(vertex.wo, direction, TransportMode::Importance);
+    let eval = seen.eval(direction, TransportMode::Importance, Pdfs::Both);
     if eval.f_cos == Vec3::ZERO {
         return None;
     }

@@ -1,7 +1,7 @@
 //! What camera and light subpaths share: the random walk from vertex to vertex.
 
 use glam::Vec3;
-use vcm_scene::bsdf::{Bsdf, LobeKind, TransportMode};
+use vcm_scene::bsdf::{FixedOutgoing, LobeKind, Pdfs, TransportMode};
 use vcm_scene::sampling::Rng;
 
 use super::mis::{MisFactors, SubpathMis};
@@ -27,21 +27,20 @@ pub(crate) struct Walk {
 }
 
 impl Walk {
-    /// Samples `bsdf` at `surface` for the next segment (`wo` toward the previous vertex),
+    /// Samples the BSDF at `surface` (`seen` from the previous vertex) for the next segment,
     /// updates the MIS quantities and applies Russian roulette on the throughput times
     /// `roulette_scale` (which makes it dimensionless). Returns the sampled lobe's class, or
     /// `None` when the walk ends.
     pub fn scatter(
         &mut self,
         surface: &SurfaceHit,
-        bsdf: &Bsdf,
-        wo: Vec3,
+        seen: &FixedOutgoing,
         mode: TransportMode,
         factors: &MisFactors,
         roulette_scale: f32,
     ) -> Option<LobeKind> {
         let (u_lobe, u_dir) = (self.rng.uniform(), self.rng.uniform2());
-        let sample = bsdf.sample(wo, u_lobe, u_dir, mode)?;
+        let sample = seen.sample(u_lobe, u_dir, mode, Pdfs::Both)?;
         self.throughput *= sample.f_cos / sample.pdf_fwd;
         self.mis.scatter(
             surface.cos_geometric(sample.wi),
