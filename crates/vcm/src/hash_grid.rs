@@ -8,8 +8,14 @@
 //!
 //! The build is a parallel counting sort: bucket ids in parallel, counts by atomic
 //! increments, an exclusive prefix sum, a scatter by atomic cursors, then each bucket's
-//! indices sorted so that the order inside a bucket (and hence any sum over a query) does not
+//! entries sorted so that the order inside a bucket (and hence any sum over a query) does not
 //! depend on thread timing.
+//!
+//! A query's cost is its cache misses: the grid is far larger than the caches, and the
+//! cells around a point hash to unrelated places. So each entry keeps the point's position
+//! beside its index (one miss per bucket, not two), a query reads all its bucket ranges
+//! before scanning any (the misses overlap), and cells the sphere does not reach are
+//! skipped.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -27,11 +33,19 @@ pub struct HashGrid {
     max: Vec3,
     /// `bucket_mask + 1` buckets.
     bucket_mask: u64,
-    /// Bucket b's point indices are `indices[starts[b]..starts[b + 1]]`.
+    /// Bucket b's points are `entries[starts[b]..starts[b + 1]]`.
     starts: Vec<u32>,
-    indices: Vec<u32>,
-    /// `points[indices[k]]`: the positions in bucket order, read contiguously by queries.
-    sorted_points: Vec<Vec3>,
+    /// The points in bucket order, each with its index.
+    entries: Vec<Entry>,
+}
+
+/// A point of the grid: its position and its index in the caller's list (16 bytes, so an
+/// entry never straddles two cache lines).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(16))]
+struct Entry {
+    position: Vec3,
+    index: u32,
 }
 
 impl HashGrid {
@@ -61,8 +75,7 @@ impl HashGrid {
             max,
             bucket_mask: buckets as u64 - 1,
             starts: Vec::new(),
-            indices: Vec::new(),
-            sorted_points: Vec::new(),
+            entries: Vec::new(),
         };
         let bucket_of: Vec<u32> = points
             .par_iter()
@@ -92,53 +105,78 @@ impl HashGrid {
         indices
             .par_chunk_by_mut(|&a, &b| bucket_of[a as usize] == bucket_of[b as usize])
             .for_each(|bucket| bucket.sort_unstable());
-        grid.sorted_points = indices.par_iter().map(|&i| points[i as usize]).collect();
+        grid.entries = indices
+            .par_iter()
+            .map(|&i| Entry {
+                position: points[i as usize],
+                index: i,
+            })
+            .collect();
         grid.starts = starts;
-        grid.indices = indices;
         grid
     }
 
     /// Calls `visit` with the index of every point within the radius of `query` (distance
     /// ≤ r), each once, in an order that depends only on the points.
     pub fn query(&self, query: Vec3, mut visit: impl FnMut(usize)) {
-        let r = self.radius_sq.sqrt();
-        if self.indices.is_empty()
-            || query.cmplt(self.min - r).any()
-            || query.cmpgt(self.max + r).any()
-        {
-            return;
-        }
-        let scaled = (query - self.min) * self.inv_cell_size;
-        let cell = scaled.floor();
-        let side = (scaled - cell).cmpgt(Vec3::splat(0.5));
-        let cell = cell.as_i64vec3();
-        let step = I64Vec3::select(side, I64Vec3::ONE, I64Vec3::NEG_ONE);
-        let mut visited = [u32::MAX; 8];
-        for (n, corner) in (0..8).enumerate() {
-            let offset = I64Vec3::new(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-            let bucket = self.bucket(cell + offset * step);
-            // Two neighbouring cells can share a bucket; visit it once.
-            if visited[..n].contains(&bucket) {
-                continue;
-            }
-            visited[n] = bucket;
-            let range =
-                self.starts[bucket as usize] as usize..self.starts[bucket as usize + 1] as usize;
-            for (&i, p) in self.indices[range.clone()]
-                .iter()
-                .zip(&self.sorted_points[range])
-            {
-                if p.distance_squared(query) <= self.radius_sq {
-                    visit(i as usize);
+        for range in self.bucket_ranges(query).into_iter().flatten() {
+            for entry in &self.entries[range] {
+                if entry.position.distance_squared(query) <= self.radius_sq {
+                    visit(entry.index as usize);
                 }
             }
         }
     }
 
-    /// Bytes of the bucket and index arrays.
+    /// The entry ranges of the buckets of the (at most 8) cells that points within the
+    /// radius of `query` can lie in, each bucket once.
+    fn bucket_ranges(&self, query: Vec3) -> [Option<std::ops::Range<usize>>; 8] {
+        let mut ranges = [const { None }; 8];
+        let r = self.radius_sq.sqrt();
+        if self.entries.is_empty()
+            || query.cmplt(self.min - r).any()
+            || query.cmpgt(self.max + r).any()
+        {
+            return ranges;
+        }
+        let scaled = (query - self.min) * self.inv_cell_size;
+        let cell = scaled.floor();
+        let side = (scaled - cell).cmpgt(Vec3::splat(0.5));
+        // Squared distance (in cells) from the query to the face shared with the neighbour on
+        // its side, per axis; a neighbour across several faces is at least the sum away.
+        let to_face = Vec3::select(side, cell + 1.0 - scaled, scaled - cell);
+        let to_face_sq = to_face * to_face;
+        // r is half a cell; the margin keeps cells whose distance rounding might overstate.
+        let reach_sq = 0.25 * (1.0 + 1e-4);
+        let cell = cell.as_i64vec3();
+        let step = I64Vec3::select(side, I64Vec3::ONE, I64Vec3::NEG_ONE);
+        let mut buckets = [u32::MAX; 8];
+        for (slot, corner) in (0..8_i64).enumerate() {
+            let across = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
+            let distance_sq: f32 = (0..3)
+                .filter(|&axis| across[axis] == 1)
+                .map(|axis| to_face_sq[axis])
+                .sum();
+            if distance_sq > reach_sq {
+                continue;
+            }
+            let offset = I64Vec3::from_array(across);
+            let bucket = self.bucket(cell + offset * step);
+            // Two neighbouring cells can share a bucket; visit it once.
+            if buckets.contains(&bucket) {
+                continue;
+            }
+            buckets[slot] = bucket;
+            let b = bucket as usize;
+            ranges[slot] = Some(self.starts[b] as usize..self.starts[b + 1] as usize);
+        }
+        ranges
+    }
+
+    /// Bytes of the bucket and entry arrays.
     pub fn memory_bytes(&self) -> usize {
-        (self.starts.capacity() + self.indices.capacity()) * std::mem::size_of::<u32>()
-            + self.sorted_points.capacity() * std::mem::size_of::<Vec3>()
+        self.starts.capacity() * std::mem::size_of::<u32>()
+            + self.entries.capacity() * std::mem::size_of::<Entry>()
     }
 
     fn cell_of(&self, p: Vec3) -> I64Vec3 {
@@ -181,6 +219,58 @@ mod tests {
                 expected.sort_unstable();
                 assert_eq!(found, expected, "radius {radius}, query {query}");
             }
+        }
+    }
+
+    /// Queries on and beside cell faces, edges and corners find points just inside the
+    /// radius across every face, edge and corner: skipping cells the sphere cannot reach must
+    /// never skip a point it does reach.
+    #[test]
+    fn queries_near_cell_boundaries_miss_nothing() {
+        let radius = 0.05;
+        let cell = 2.0 * radius;
+        let mut queries = Vec::new();
+        for f in [
+            0.0,
+            1e-6,
+            0.25,
+            0.5 - 1e-6,
+            0.5,
+            0.5 + 1e-6,
+            0.75,
+            1.0 - 1e-6,
+        ] {
+            for g in [0.0, 0.3, 0.5, 0.9] {
+                queries.push(Vec3::new(3.0 + f, 4.0 + g, 5.0 + f * g) * cell);
+                queries.push(Vec3::new(3.0 + g, 4.0 + f, 5.0 + f) * cell);
+            }
+        }
+        // Around every query: points at 0.999 r along all 26 lattice directions, and just
+        // outside the radius.
+        let mut points = vec![Vec3::ZERO, Vec3::splat(10.0 * cell)];
+        for q in &queries {
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        let d = Vec3::new(dx as f32, dy as f32, dz as f32);
+                        if d != Vec3::ZERO {
+                            points.push(*q + d.normalize() * radius * 0.999);
+                            points.push(*q + d.normalize() * radius * 1.001);
+                        }
+                    }
+                }
+            }
+        }
+        let grid = HashGrid::build(&points, radius);
+        for q in queries {
+            let mut found = Vec::new();
+            grid.query(q, |i| found.push(i));
+            let mut expected: Vec<usize> = (0..points.len())
+                .filter(|&i| points[i].distance_squared(q) <= radius * radius)
+                .collect();
+            found.sort_unstable();
+            expected.sort_unstable();
+            assert_eq!(found, expected, "query {q}");
         }
     }
 

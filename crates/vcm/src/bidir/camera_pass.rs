@@ -239,13 +239,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     }
     path.alive = path
         .walk
-        .scatter(
-            &surface,
-            &seen,
-            TransportMode::Radiance,
-            &ctx.factors,
-            1.0,
-        )
+        .scatter(&surface, &seen, TransportMode::Radiance, &ctx.factors, 1.0)
         .is_some();
 }
 
