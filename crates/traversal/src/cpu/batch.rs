@@ -8,6 +8,7 @@ use super::geometry::LeafGeometry;
 use super::kernel::{TraversalState, any_hit, closest_hit};
 use super::node::{NodeTest, Portable};
 use super::ray::PreparedRay;
+use super::triangle::TriangleTest;
 use crate::batch::{HitBatch, NO_HIT, RayBatch};
 
 #[cfg(target_arch = "x86_64")]
@@ -98,7 +99,7 @@ impl<F: HitFilter> Kernel<'_, F> {
     }
 
     #[inline(always)]
-    fn closest_chunk<N: NodeTest>(
+    fn closest_chunk<N: NodeTest + TriangleTest>(
         &self,
         node_test: N,
         rays: &RayBatch,
@@ -120,7 +121,7 @@ impl<F: HitFilter> Kernel<'_, F> {
     }
 
     #[inline(always)]
-    fn occluded_chunk<N: NodeTest>(
+    fn occluded_chunk<N: NodeTest + TriangleTest>(
         &self,
         node_test: N,
         rays: &RayBatch,

@@ -3,7 +3,7 @@
 use glam::Vec3;
 use obvhs::cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh};
 
-use super::triangle::LeafTriangle;
+use super::triangle::LeafTriangles;
 use crate::build::{BuildPreset, build_bvh2, cwbvh_levels};
 use crate::error::BuildError;
 
@@ -14,7 +14,7 @@ pub(crate) struct LeafGeometry {
     /// Node levels, root included: bounds the traversal stack.
     pub levels: usize,
     /// Triangles in leaf order (a triangle split by the builder appears once per leaf).
-    pub triangles: Vec<LeafTriangle>,
+    pub triangles: LeafTriangles,
     /// The caller's id of each leaf-order triangle.
     pub ids: Vec<u32>,
 }
@@ -30,10 +30,7 @@ impl LeafGeometry {
             bvh2_to_cwbvh(&bvh2, leaf_size, true, false)
         };
         let ids = std::mem::take(&mut bvh.primitive_indices);
-        let triangles = ids
-            .iter()
-            .map(|&id| LeafTriangle::new(triangles[id as usize]))
-            .collect();
+        let triangles = LeafTriangles::new(ids.iter().map(|&id| triangles[id as usize]));
         Ok(Self {
             levels: cwbvh_levels(&bvh),
             bvh,
@@ -45,7 +42,7 @@ impl LeafGeometry {
     /// Bytes used by nodes, leaf triangles and the id map.
     pub fn memory_bytes(&self) -> usize {
         size_of_val(self.bvh.nodes.as_slice())
-            + size_of_val(self.triangles.as_slice())
+            + self.triangles.memory_bytes()
             + size_of_val(self.ids.as_slice())
     }
 }

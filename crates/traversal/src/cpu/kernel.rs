@@ -8,7 +8,7 @@ use super::filter::HitFilter;
 use super::geometry::LeafGeometry;
 use super::node::NodeTest;
 use super::ray::PreparedRay;
-use super::triangle::Candidate;
+use super::triangle::{Candidate, TriangleTest};
 
 /// A node group holding just the root: one hit bit in the top byte, which resolves to
 /// relative index 0 (node 0) whatever the ray's octant.
@@ -55,7 +55,7 @@ impl TraversalState {
 /// Finds the closest accepted intersection in `[ray.tmin, ray.tmax)`, returning the leaf
 /// index of its triangle.
 #[inline(always)]
-pub(crate) fn closest_hit<N: NodeTest, F: HitFilter>(
+pub(crate) fn closest_hit<N: NodeTest + TriangleTest, F: HitFilter>(
     geometry: &LeafGeometry,
     node_test: N,
     filter: &F,
@@ -73,22 +73,34 @@ pub(crate) fn closest_hit<N: NodeTest, F: HitFilter>(
         state,
         node_test.intersect(node, ray, state.oct_inv4, tmax),
         {
-            let leaf = state.primitive_id as usize;
+            let (first, mask) = take_primitive_group(state);
             // Once something is hit, a candidate at exactly the same t wins only with a
             // smaller id, so ties resolve the same way whatever the traversal order.
-            let limit = match closest {
+            let limit = |closest: &Option<(usize, Candidate)>, tmax: f32| match closest {
                 Some(_) => tmax.next_up(),
                 None => tmax,
             };
-            if let Some(candidate) = geometry.triangles[leaf].intersect(ray, limit)
-                && closest.is_none_or(|(best, _)| {
-                    candidate.t < tmax || geometry.ids[leaf] < geometry.ids[best]
-                })
-                && filter.accepts(leaf, &candidate)
-            {
-                tmax = candidate.t;
-                closest = Some((leaf, candidate));
-            }
+            let group_limit = limit(&closest, tmax);
+            node_test.candidates(
+                &geometry.triangles,
+                ray,
+                first,
+                mask,
+                group_limit,
+                |leaf, candidate| {
+                    // The limit only shrinks while the group's candidates are taken in turn.
+                    if candidate.t < limit(&closest, tmax)
+                        && closest.is_none_or(|(best, _)| {
+                            candidate.t < tmax || geometry.ids[leaf] < geometry.ids[best]
+                        })
+                        && filter.accepts(leaf, &candidate)
+                    {
+                        tmax = candidate.t;
+                        closest = Some((leaf, candidate));
+                    }
+                    false
+                },
+            );
         }
     );
     closest
@@ -96,7 +108,7 @@ pub(crate) fn closest_hit<N: NodeTest, F: HitFilter>(
 
 /// Whether any accepted intersection lies in `[ray.tmin, ray.tmax)`; stops at the first.
 #[inline(always)]
-pub(crate) fn any_hit<N: NodeTest, F: HitFilter>(
+pub(crate) fn any_hit<N: NodeTest + TriangleTest, F: HitFilter>(
     geometry: &LeafGeometry,
     node_test: N,
     filter: &F,
@@ -113,14 +125,24 @@ pub(crate) fn any_hit<N: NodeTest, F: HitFilter>(
             state,
             node_test.intersect(node, ray, state.oct_inv4, ray.tmax),
             {
-                let leaf = state.primitive_id as usize;
-                if let Some(candidate) = geometry.triangles[leaf].intersect(ray, ray.tmax)
-                    && filter.accepts(leaf, &candidate)
-                {
+                let (first, mask) = take_primitive_group(state);
+                let accept = |leaf, candidate| filter.accepts(leaf, &candidate);
+                if node_test.candidates(&geometry.triangles, ray, first, mask, ray.tmax, accept) {
                     break 'search true;
                 }
             }
         );
         false
     }
+}
+
+/// The primitives left in the node's group, including the one `traverse!` just took: the
+/// first leaf index and a bit per leaf after it. Empties the group, so that `traverse!` goes
+/// on to the next node once they are all tested together.
+#[inline(always)]
+fn take_primitive_group(state: &mut TraversalState) -> (usize, u32) {
+    let first = state.primitive_group.x;
+    let mask = state.primitive_group.y | (1 << (state.primitive_id - first));
+    state.primitive_group.y = 0;
+    (first as usize, mask)
 }

@@ -33,10 +33,11 @@ struct AlphaState {
 
 /// CPU ray traversal over a CWBVH built with obvhs's parallel PLOC builder.
 ///
-/// Triangles are copied into BVH leaf order (transposed, 48 bytes each) so leaves index
-/// them directly; an id map turns leaf positions back into the caller's ids. Batches are
-/// split into chunks traced in parallel on the current rayon pool, one ray at a time, with
-/// 8-wide AVX2 node tests where the CPU has them.
+/// Triangles are copied into BVH leaf order (nine coordinate planes, 36 bytes each) so
+/// leaves index them directly; an id map turns leaf positions back into the caller's ids.
+/// Batches are split into chunks traced in parallel on the current rayon pool, one ray at a
+/// time, with 8-wide AVX2 node tests and the triangles of a node's hit leaves tested 8 at a
+/// time where the CPU has AVX2.
 pub struct CpuBvh {
     geometry: LeafGeometry,
     alpha: Option<AlphaState>,
