@@ -51,6 +51,7 @@ pub mod light_vertex_cache;
 pub mod metrics;
 mod path_state;
 mod path_tracer;
+mod prefetch;
 pub mod ray_offset;
 mod roulette;
 mod shade;

@@ -9,8 +9,11 @@ use crate::bidir::mis::SubpathMis;
 /// Head room of the cache over the preprocess estimate.
 const CAPACITY_MARGIN: f64 = 1.1;
 
-/// A non-specular vertex of a light path, as connections and merging need it.
+/// A non-specular vertex of a light path, as connections and merging need it. Its 64 bytes
+/// are aligned to a cache line: connections and merges read vertices from all over the
+/// cache, and each read is then one line, not two.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(align(64))]
 pub struct LightVertex {
     /// Position on the surface.
     pub position: Vec3,

@@ -20,6 +20,7 @@ use crate::hash_grid::HashGrid;
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
 use crate::path_state::ShadowRay;
+use crate::prefetch::prefetch;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::wave::{fill_extension_rays, shade_in_parallel};
@@ -223,10 +224,15 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     };
     if bsdf.has_non_delta() {
         if ctx.plan.connects {
+            // The picks lie all over the cache: fetch them while the light is sampled.
+            let picks = CachePicks::draw(&mut path.walk.rng, ctx);
+            picks
+                .indices()
+                .for_each(|i| prefetch(&ctx.cache.vertices()[i]));
             if let Some(shadow) = light_sample(ctx, path, &surface, &seen) {
                 path.shadows.push(shadow);
             }
-            connect_to_cache(ctx, path, &surface, &seen);
+            connect_to_cache(ctx, path, &surface, &seen, &picks);
         }
         if ctx.plan.merges {
             path.radiance += path.walk.throughput * merge(ctx, path, &surface, &seen);
@@ -301,23 +307,54 @@ fn light_sample(
     Some(sample.shadow_ray(surface, contribution))
 }
 
-/// Connects the camera vertex to N_c light vertices picked uniformly from the cache.
+/// The N_c light vertices a camera vertex connects to, picked uniformly from the cache.
+struct CachePicks {
+    /// The stream the picks are drawn from (a copy of the path's at the draw).
+    rng: Rng,
+    /// N_c, or 0 for an empty cache.
+    count: u32,
+    /// N_v, the vertices in the cache.
+    vertices: usize,
+}
+
+impl CachePicks {
+    /// Draws the picks of one camera vertex from `rng` (N_c numbers of it).
+    fn draw(rng: &mut Rng, ctx: &CameraContext) -> CachePicks {
+        let vertices = ctx.cache.len();
+        let count = if vertices == 0 {
+            0
+        } else {
+            ctx.settings.connections
+        };
+        let picks = CachePicks {
+            rng: rng.clone(),
+            count,
+            vertices,
+        };
+        (0..count).for_each(|_| _ = rng.next_u32());
+        picks
+    }
+
+    /// The picked cache indices, in order (the same every call).
+    fn indices(&self) -> impl Iterator<Item = usize> + use<> {
+        let (mut rng, vertices) = (self.rng.clone(), self.vertices as u64);
+        (0..self.count).map(move |_| ((u64::from(rng.next_u32()) * vertices) >> 32) as usize)
+    }
+}
+
+/// Connects the camera vertex to the light vertices `picks`.
 fn connect_to_cache(
     ctx: &CameraContext,
     path: &mut CameraPathState,
     surface: &SurfaceHit,
     seen: &FixedOutgoing,
+    picks: &CachePicks,
 ) {
     let vertices = ctx.cache.vertices();
-    if vertices.is_empty() {
-        return;
-    }
-    let picks = ctx.settings.connections;
     // c = (1 / N_c) · (N_v / N_p): each pick stands for N_v / N_c vertices of N_p paths.
-    let scale = vertices.len() as f32 / (picks as f32 * ctx.factors.light_paths);
-    for _ in 0..picks {
-        let pick = (u64::from(path.walk.rng.next_u32()) * vertices.len() as u64) >> 32;
-        let vertex = &vertices[pick as usize];
+    let scale = vertices.len() as f32 / (ctx.settings.connections as f32 * ctx.factors.light_paths);
+    for pick in picks.indices() {
+        let vertex = &vertices[pick];
         let segments = path.walk.segments.saturating_add(vertex.path_length + 1);
         if segments > ctx.max_segments() {
             continue;

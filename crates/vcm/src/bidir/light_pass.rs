@@ -101,10 +101,40 @@ pub(crate) fn count_vertices(ctx: FrameContext, scheduler: Scheduler, count: u32
 /// [`result_key`]: the order in which one batch of all its paths produces them.
 #[derive(Default)]
 pub(crate) struct LightResults {
-    /// (key, vertex).
-    pub vertices: Vec<(u64, LightVertex)>,
+    /// The vertices.
+    pub vertices: Vec<LightVertex>,
+    /// The key of each vertex while a worker collects them; empty once gathered in order.
+    keys: Vec<u64>,
     /// (key, pixel, contribution).
     pub splats: Vec<(u64, u32, Vec3)>,
+}
+
+impl LightResults {
+    /// The results of all `parts` (one per scheduler worker) in key order. The vertices are
+    /// ordered through a list of (key, part, index) and then gathered, so that the 64-byte
+    /// vertices move once.
+    fn gather(parts: Vec<LightResults>) -> LightResults {
+        let mut order: Vec<(u64, u32, u32)> = parts
+            .iter()
+            .enumerate()
+            .flat_map(|(part, results)| {
+                let keys = results.keys.iter().enumerate();
+                keys.map(move |(i, &key)| (key, part as u32, i as u32))
+            })
+            .collect();
+        order.par_sort_unstable_by_key(|&(key, ..)| key);
+        let vertices = order
+            .par_iter()
+            .map(|&(_, part, i)| parts[part as usize].vertices[i as usize])
+            .collect();
+        let mut splats: Vec<_> = parts.into_iter().flat_map(|part| part.splats).collect();
+        splats.par_sort_unstable_by_key(|&(key, ..)| key);
+        LightResults {
+            vertices,
+            keys: Vec::new(),
+            splats,
+        }
+    }
 }
 
 /// Traces the light paths of every index of a `size.0 × size.1` grid (tiles of it for the
@@ -130,18 +160,13 @@ fn trace(
     let (outputs, scheduled) = vcm_scheduler::run(scheduler, size, traversal, new_wavefront);
     stats.light_rays += scheduled.closest_rays;
     add_scheduled(stats, &scheduled);
-    let mut results: Vec<LightResults> = per_iteration();
+    let mut parts: Vec<Vec<LightResults>> = iterations.iter().map(|_| Vec::new()).collect();
     for output in outputs {
-        for (gathered, part) in results.iter_mut().zip(output) {
-            gathered.vertices.extend(part.vertices);
-            gathered.splats.extend(part.splats);
+        for (iteration_parts, part) in parts.iter_mut().zip(output) {
+            iteration_parts.push(part);
         }
     }
-    for gathered in &mut results {
-        gathered.vertices.par_sort_unstable_by_key(|&(key, _)| key);
-        gathered.splats.par_sort_unstable_by_key(|&(key, ..)| key);
-    }
-    results
+    parts.into_iter().map(LightResults::gather).collect()
 }
 
 /// The light paths one scheduler worker has in flight, and the results of their vertices.
@@ -199,10 +224,11 @@ impl Wavefront for LightWavefront<'_> {
         });
         for path in &mut self.paths {
             if let Some(vertex) = path.vertex.take() {
-                let key = result_key(vertex.path_length, path.index);
-                self.results[path.sample as usize]
-                    .vertices
-                    .push((key, vertex));
+                let results = &mut self.results[path.sample as usize];
+                results
+                    .keys
+                    .push(result_key(vertex.path_length, path.index));
+                results.vertices.push(vertex);
             }
         }
         let rays = self
