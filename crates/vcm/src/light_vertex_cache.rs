@@ -3,6 +3,7 @@
 //! GPU: Survey and Improvements").
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::bidir::mis::SubpathMis;
 
@@ -67,15 +68,12 @@ impl LightVertexCache {
         self.discarded = 0;
     }
 
-    /// Appends `vertices` in order while there is room; counts the rest as discarded.
-    pub fn extend(&mut self, vertices: impl IntoIterator<Item = LightVertex>) {
-        for vertex in vertices {
-            if self.vertices.len() < self.capacity {
-                self.vertices.push(vertex);
-            } else {
-                self.discarded += 1;
-            }
-        }
+    /// Appends `vertices` in order while there is room, in parallel and straight into the
+    /// cache's memory; counts the rest as discarded.
+    pub fn extend(&mut self, vertices: impl IndexedParallelIterator<Item = LightVertex>) {
+        let room = self.capacity.saturating_sub(self.vertices.len());
+        self.discarded += vertices.len().saturating_sub(room) as u64;
+        self.vertices.par_extend(vertices.take(room));
     }
 
     /// The stored vertices.
@@ -129,7 +127,7 @@ mod tests {
     #[test]
     fn overflow_is_discarded_and_counted() {
         let mut cache = LightVertexCache::with_capacity(3);
-        cache.extend((0..5).map(vertex));
+        cache.extend((0..5).into_par_iter().map(vertex));
         assert_eq!(cache.len(), 3);
         assert_eq!(cache.discarded(), 2);
         assert_eq!(cache.vertices()[2].triangle, 2);

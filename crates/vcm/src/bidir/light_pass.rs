@@ -94,27 +94,37 @@ pub(crate) fn count_vertices(ctx: FrameContext, scheduler: Scheduler, count: u32
         false,
         &mut stats,
     );
-    results[0].vertices.len() as u64
+    results[0].vertex_count() as u64
 }
 
-/// The vertices and unoccluded splats of one iteration's light paths, sorted by
-/// [`result_key`]: the order in which one batch of all its paths produces them.
+/// What one scheduler worker's light paths of one iteration left: their vertices and
+/// unoccluded splats, with the [`result_key`] of each.
 #[derive(Default)]
-pub(crate) struct LightResults {
-    /// The vertices.
-    pub vertices: Vec<LightVertex>,
-    /// The key of each vertex while a worker collects them; empty once gathered in order.
+struct WorkerResults {
+    vertices: Vec<LightVertex>,
+    /// The key of each vertex.
     keys: Vec<u64>,
     /// (key, pixel, contribution).
+    splats: Vec<(u64, u32, Vec3)>,
+}
+
+/// The vertices and unoccluded splats of one iteration's light paths, in [`result_key`]
+/// order: the order in which one batch of all its paths produces them.
+pub(crate) struct LightResults {
+    /// Each worker's vertices, as it found them.
+    parts: Vec<Vec<LightVertex>>,
+    /// (part, index in it) of every vertex, in key order.
+    order: Vec<(u32, u32)>,
+    /// (key, pixel, contribution), in key order.
     pub splats: Vec<(u64, u32, Vec3)>,
 }
 
 impl LightResults {
     /// The results of all `parts` (one per scheduler worker) in key order. The vertices are
-    /// ordered through a list of (key, part, index) and then gathered, so that the 64-byte
-    /// vertices move once.
-    fn gather(parts: Vec<LightResults>) -> LightResults {
-        let mut order: Vec<(u64, u32, u32)> = parts
+    /// ordered through a list of (key, part, index) and read in that order later
+    /// ([`LightResults::vertices`]), so that the 64-byte vertices move only into the cache.
+    fn gather(parts: Vec<WorkerResults>) -> LightResults {
+        let mut keyed: Vec<(u64, u32, u32)> = parts
             .iter()
             .enumerate()
             .flat_map(|(part, results)| {
@@ -122,18 +132,32 @@ impl LightResults {
                 keys.map(move |(i, &key)| (key, part as u32, i as u32))
             })
             .collect();
-        order.par_sort_unstable_by_key(|&(key, ..)| key);
-        let vertices = order
-            .par_iter()
-            .map(|&(_, part, i)| parts[part as usize].vertices[i as usize])
-            .collect();
-        let mut splats: Vec<_> = parts.into_iter().flat_map(|part| part.splats).collect();
+        keyed.par_sort_unstable_by_key(|&(key, ..)| key);
+        let order = keyed.into_iter().map(|(_, part, i)| (part, i)).collect();
+        let (mut vertex_parts, mut splats) = (Vec::new(), Vec::new());
+        for part in parts {
+            vertex_parts.push(part.vertices);
+            splats.extend(part.splats);
+        }
         splats.par_sort_unstable_by_key(|&(key, ..)| key);
         LightResults {
-            vertices,
-            keys: Vec::new(),
+            parts: vertex_parts,
+            order,
             splats,
         }
+    }
+
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.order.len()
+    }
+
+    /// The vertices in key order.
+    pub fn vertices(&self) -> impl IndexedParallelIterator<Item = LightVertex> + '_ {
+        let parts = &self.parts;
+        self.order
+            .par_iter()
+            .map(move |&(part, i)| parts[part as usize][i as usize])
     }
 }
 
@@ -147,7 +171,12 @@ fn trace(
     splat: bool,
     stats: &mut FrameStats,
 ) -> Vec<LightResults> {
-    let per_iteration = || iterations.iter().map(|_| LightResults::default()).collect();
+    let per_iteration = || {
+        iterations
+            .iter()
+            .map(|_| WorkerResults::default())
+            .collect()
+    };
     let new_wavefront = || LightWavefront {
         iterations,
         grid_width: size.0,
@@ -160,7 +189,7 @@ fn trace(
     let (outputs, scheduled) = vcm_scheduler::run(scheduler, size, traversal, new_wavefront);
     stats.light_rays += scheduled.closest_rays;
     add_scheduled(stats, &scheduled);
-    let mut parts: Vec<Vec<LightResults>> = iterations.iter().map(|_| Vec::new()).collect();
+    let mut parts: Vec<Vec<WorkerResults>> = iterations.iter().map(|_| Vec::new()).collect();
     for output in outputs {
         for (iteration_parts, part) in parts.iter_mut().zip(output) {
             iteration_parts.push(part);
@@ -180,11 +209,11 @@ struct LightWavefront<'a> {
     splat: bool,
     paths: Vec<LightPathState>,
     /// Results per iteration.
-    results: Vec<LightResults>,
+    results: Vec<WorkerResults>,
 }
 
 impl Wavefront for LightWavefront<'_> {
-    type Output = Vec<LightResults>;
+    type Output = Vec<WorkerResults>;
 
     /// Starts the light paths of the tile's indices, one per iteration.
     fn start(&mut self, tile: Tile) {
@@ -255,7 +284,7 @@ impl Wavefront for LightWavefront<'_> {
         self.paths.retain(|p| p.alive);
     }
 
-    fn finish(self) -> Vec<LightResults> {
+    fn finish(self) -> Vec<WorkerResults> {
         self.results
     }
 }

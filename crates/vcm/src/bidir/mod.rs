@@ -343,7 +343,7 @@ impl Integrator for Vcm {
         if plan.cache {
             for (cache, results) in caches.iter_mut().zip(&mut light) {
                 cache.clear();
-                cache.extend(results.vertices.drain(..));
+                cache.extend(results.vertices());
                 stats.light_vertices += cache.len() as u64;
                 stats.discarded_light_vertices += cache.discarded();
             }
