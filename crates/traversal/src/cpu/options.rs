@@ -9,15 +9,17 @@ pub struct CpuBvhOptions {
     pub preset: BuildPreset,
     /// Rays per rayon task (values below 1 count as 1).
     pub chunk_size: usize,
-    /// Which SIMD implementation of the node test to run.
+    /// Which SIMD implementation of the node and triangle tests to run.
     pub kernel: CpuKernel,
 }
 
-/// Node-test implementations of the CPU backend. Both are conservative and use the same
-/// triangle test, so they report the same hits (up to exact ties).
+/// Node- and triangle-test implementations of the CPU backend. Both node tests are
+/// conservative and both triangle tests compute the same watertight test with the same
+/// operations (the AVX2 one on 8 triangles at once), so they report the same hits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum CpuKernel {
-    /// The widest the CPU supports: 8-wide AVX2 + FMA where available, else portable.
+    /// The widest the CPU supports: 8-wide AVX2 + FMA node and leaf tests where available,
+    /// else portable.
     #[default]
     Auto,
     /// 4-wide code for any target (e.g. to compare against the AVX2 path).
