@@ -221,6 +221,11 @@ mod avx2 {
                 // block's loads stay inside the padded planes (`start` < triangle count).
                 let (block, accepted, degenerate) =
                     unsafe { test_block(triangles, ray, start, limit) };
+                let mut hits = (accepted | degenerate) & lanes;
+                if hits == 0 {
+                    continue;
+                }
+                // SAFETY: as above, the CPU supports AVX2.
                 let (t, e1, e2, det) = unsafe {
                     (
                         lanes_of(block.t),
@@ -229,7 +234,6 @@ mod avx2 {
                         lanes_of(block.det),
                     )
                 };
-                let mut hits = (accepted | degenerate) & lanes;
                 while hits != 0 {
                     let lane = hits.trailing_zeros() as usize;
                     hits &= hits - 1;
