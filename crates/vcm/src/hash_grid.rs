@@ -203,6 +203,17 @@ mod tests {
             .collect()
     }
 
+    /// The grid's query at `query` finds exactly the points within `radius`, by brute force.
+    fn assert_finds_exactly(grid: &HashGrid, points: &[Vec3], radius: f32, query: Vec3) {
+        let mut found = Vec::new();
+        grid.query(query, |i| found.push(i));
+        found.sort_unstable();
+        let expected: Vec<usize> = (0..points.len())
+            .filter(|&i| points[i].distance_squared(query) <= radius * radius)
+            .collect();
+        assert_eq!(found, expected, "radius {radius}, query {query}");
+    }
+
     #[test]
     fn queries_find_exactly_the_points_within_the_radius() {
         let mut rng = Rng::new(7, 0);
@@ -210,14 +221,7 @@ mod tests {
         for radius in [0.01, 0.07, 0.3, 3.0] {
             let grid = HashGrid::build(&points, radius);
             for query in random_points(200, &mut rng) {
-                let mut found = Vec::new();
-                grid.query(query, |i| found.push(i));
-                let mut expected: Vec<usize> = (0..points.len())
-                    .filter(|&i| points[i].distance_squared(query) <= radius * radius)
-                    .collect();
-                found.sort_unstable();
-                expected.sort_unstable();
-                assert_eq!(found, expected, "radius {radius}, query {query}");
+                assert_finds_exactly(&grid, &points, radius, query);
             }
         }
     }
@@ -262,15 +266,8 @@ mod tests {
             }
         }
         let grid = HashGrid::build(&points, radius);
-        for q in queries {
-            let mut found = Vec::new();
-            grid.query(q, |i| found.push(i));
-            let mut expected: Vec<usize> = (0..points.len())
-                .filter(|&i| points[i].distance_squared(q) <= radius * radius)
-                .collect();
-            found.sort_unstable();
-            expected.sort_unstable();
-            assert_eq!(found, expected, "query {q}");
+        for query in queries {
+            assert_finds_exactly(&grid, &points, radius, query);
         }
     }
 
