@@ -181,9 +181,11 @@ impl SpecularAlbedo {
     pub fn new(f0: Vec3, f90: Vec3, alpha: f32) -> SpecularAlbedo {
         // A layer that reflects nothing (F0 = F90 = 0, e.g. specularFactor 0) has E = 0 at any
         // roughness: the closed form below gives that without touching (or building) the tables.
-        let reflects = f0.max(f90).max_element() > 0.0;
-        let row = (alpha >= SMOOTH_ALPHA && reflects).then(|| locate(node_of_alpha(alpha), R_RES));
-        SpecularAlbedo { f0, f90, row }
+        let mut albedo = SpecularAlbedo { f0, f90, row: None };
+        if alpha >= SMOOTH_ALPHA && albedo.reflects() {
+            albedo.row = Some(locate(node_of_alpha(alpha), R_RES));
+        }
+        albedo
     }
 
     /// Whether the lobe reflects anything (E is zero everywhere when it does not).

@@ -289,11 +289,6 @@ impl FixedOutgoing<'_> {
         self.bsdf
     }
 
-    /// The fixed outgoing direction (world).
-    pub fn wo(&self) -> Vec3 {
-        self.out.world
-    }
-
     /// [`Bsdf::eval_with`] at the fixed `wo`.
     pub fn eval(&self, wi: Vec3, mode: TransportMode, pdfs: Pdfs) -> BsdfEval {
         let Some((f_cos, pdf_fwd)) = self.bsdf.eval_from(&self.out, wi, mode) else {
