@@ -94,6 +94,9 @@ pub struct Outcome {
     /// whole frames at least [`UTILIZATION_INTERVAL`] long; empty where the CPU time is
     /// unknown.
     pub utilization: Vec<(f64, f64)>,
+    /// CPU utilization over the whole render as a fraction of all worker threads; `None`
+    /// where the CPU time is unknown.
+    pub mean_utilization: Option<f64>,
 }
 
 /// Renders frames into `film` until `budget` is spent or `interrupted` is set.
@@ -111,7 +114,8 @@ pub fn render(
     let mut utilization = Vec::new();
     let threads = rayon::current_num_threads() as f64;
     let start = Instant::now();
-    let (mut spp, mut frame, mut frame_start) = (0, 0, (0.0, cpu_seconds()));
+    let cpu_start = cpu_seconds();
+    let (mut spp, mut frame, mut frame_start) = (0, 0, (0.0, cpu_start));
     while !budget.done(spp, start.elapsed()) && !interrupted.load(Ordering::SeqCst) {
         totals.accumulate(&integrator.render_frame(film, frame));
         frame += 1;
@@ -139,6 +143,9 @@ pub fn render(
     }
     progress.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
+    let mean_utilization = cpu_seconds()
+        .zip(cpu_start)
+        .map(|(end, begin)| (end - begin) / (seconds.max(1e-9) * threads));
     if let Some(reference) = reference {
         checkpoints.push(checkpoint(film, reference, seconds, spp));
     }
@@ -148,6 +155,7 @@ pub fn render(
         totals,
         checkpoints,
         utilization,
+        mean_utilization,
     }
 }
 

@@ -286,7 +286,8 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         seconds,
         totals,
         checkpoints,
-        utilization,
+        mean_utilization,
+        ..
     } = outcome;
     let pixels = f64::from(film.width()) * f64::from(film.height());
     let samples = pixels * f64::from(*spp);
@@ -331,15 +332,7 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         "queue memory: peak {:.1} MiB (paths in flight and their ray buffers)",
         totals.queue_memory as f64 / f64::from(1 << 20)
     );
-    if let Some(&(end, _)) = utilization.last() {
-        // The intervals tile [0, end]: weight each by its length.
-        let mut previous = 0.0;
-        let mut weighted = 0.0;
-        for &(t, u) in utilization {
-            weighted += u * (t - previous);
-            previous = t;
-        }
-        let mean = weighted / end;
+    if let Some(mean) = mean_utilization {
         println!(
             "cpu utilization: {:.0}% of {} threads",
             100.0 * mean,
