@@ -34,7 +34,8 @@ impl GpuDevice {
         let info = adapter.get_info();
         let descriptor = wgpu::DeviceDescriptor {
             label: Some("vcm traversal"),
-            required_features: wgpu::Features::empty(),
+            // Timestamps only time kernels for the benchmarks; traversal works without them.
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
             required_limits: adapter.limits(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -73,6 +74,13 @@ impl GpuDevice {
     /// real scenes need a few hundred at most.
     pub fn is_software(&self) -> bool {
         self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Whether compute passes can be timed with GPU timestamp queries.
+    pub fn has_timestamps(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
     }
 
     /// The largest storage buffer binding the device accepts, in bytes.

@@ -7,6 +7,9 @@ use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use vcm_traversal::build::cwbvh_levels;
 
+/// 32-bit words of one node of the wide layout.
+const WIDE_NODE_WORDS: usize = 20;
+
 /// The node formats the kernels can traverse.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum NodeLayout {
@@ -108,6 +111,77 @@ impl SceneLayout {
             ids: ids.to_vec(),
             stack_size,
         }
+    }
+
+    /// Whether every index the kernels derive from the nodes stays inside its buffer and
+    /// every path from the root fits the traversal stack: inner children within the node
+    /// array, leaf triangles within the triangle and id arrays, and no path deeper than
+    /// [`stack_size`](Self::stack_size). The host checks this before it drops the kernels'
+    /// run-time bounds checks.
+    pub fn indices_in_bounds(&self) -> bool {
+        match self.layout {
+            NodeLayout::Binary => self.binary_in_bounds(),
+            NodeLayout::Wide => self.wide_in_bounds(),
+        }
+    }
+
+    fn binary_in_bounds(&self) -> bool {
+        let nodes: &[Bvh2Node] = bytemuck::cast_slice(&self.nodes);
+        let triangles = self.ids.len() as u64;
+        let mut pending = vec![(0usize, 1u32)];
+        while let Some((index, level)) = pending.pop() {
+            let Some(node) = nodes.get(index) else {
+                return nodes.is_empty() && index == 0;
+            };
+            if level > self.stack_size {
+                return false;
+            }
+            for (child, count) in [
+                (node.left_index, node.left_count),
+                (node.right_index, node.right_count),
+            ] {
+                if count == 0 {
+                    pending.push((child as usize, level + 1));
+                } else if u64::from(child) + u64::from(count) > triangles {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    fn wide_in_bounds(&self) -> bool {
+        let node_count = self.nodes.len() / WIDE_NODE_WORDS;
+        let triangles = self.ids.len() as u64;
+        let mut pending = vec![(0usize, 1u32)];
+        while let Some((index, level)) = pending.pop() {
+            if index >= node_count {
+                return node_count == 0 && index == 0;
+            }
+            if level > self.stack_size {
+                return false;
+            }
+            // The words `traverse_cwbvh.wgsl` reads: imask in the top byte of word 3, the
+            // child and triangle bases in words 4 and 5, the child meta bytes in words 6-7.
+            let words = &self.nodes[index * WIDE_NODE_WORDS..][..8];
+            let imask = words[3] >> 24;
+            let (child_base, triangle_base) = (words[4] as usize, u64::from(words[5]));
+            let inner = imask.count_ones() as usize;
+            if child_base + inner > node_count {
+                return false;
+            }
+            pending.extend((child_base..child_base + inner).map(|child| (child, level + 1)));
+            for byte in 0..8 {
+                let meta = (words[6 + byte / 4] >> (8 * (byte % 4))) & 0xff;
+                let is_inner = meta & 0x18 == 0x18;
+                let count = u64::from((meta >> 5).count_ones());
+                let first = triangle_base + u64::from(meta & 0x1f);
+                if !is_inner && meta != 0 && first + count > triangles {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// Bytes of node, triangle and id data.
@@ -246,6 +320,32 @@ mod tests {
             }
             let expected = if n == 1 { 2 } else { 1 };
             assert!(seen.iter().all(|&s| s == expected), "n = {n}: {seen:?}");
+        }
+    }
+
+    #[test]
+    fn index_check_accepts_built_layouts_and_rejects_broken_ones() {
+        let triangles = grid_triangles(1000);
+        let bvh = build_bvh2(&triangles, BuildPreset::Fast).unwrap();
+        for kind in [NodeLayout::Binary, NodeLayout::Wide] {
+            let layout = SceneLayout::new(&bvh, &triangles, kind, 3);
+            assert!(layout.indices_in_bounds(), "{kind:?}");
+            let mut shallow = layout.clone();
+            shallow.stack_size = 1;
+            assert!(!shallow.indices_in_bounds(), "{kind:?}: stack too small");
+            let mut fewer_ids = layout.clone();
+            fewer_ids.ids.pop();
+            assert!(
+                !fewer_ids.indices_in_bounds(),
+                "{kind:?}: triangle past the end"
+            );
+        }
+        let wide = SceneLayout::new(&bvh, &triangles, NodeLayout::Wide, 3);
+        let mut cut = wide.clone();
+        cut.nodes.truncate(cut.nodes.len() - WIDE_NODE_WORDS);
+        assert!(!cut.indices_in_bounds(), "child node past the end");
+        for kind in [NodeLayout::Binary, NodeLayout::Wide] {
+            assert!(SceneLayout::new(&Bvh2::default(), &[], kind, 3).indices_in_bounds());
         }
     }
 

@@ -112,3 +112,30 @@ fn invalid_triangles_are_reported_before_touching_the_device() {
         GpuError::Build(BuildError::NonFiniteVertex { triangle: 1 })
     ));
 }
+
+/// Kernel timing for the benchmarks: a positive GPU time wherever the adapter has timestamp
+/// queries (lavapipe has), none for an empty batch, and the backend's answers unchanged by
+/// the timed dispatches.
+#[test]
+fn kernels_are_timed_where_the_adapter_has_timestamps() {
+    let Some(device) = gpu().map(Arc::new) else {
+        return;
+    };
+    let bvh = backend(&device, &uv_sphere(Vec3::ZERO, 1.0, 16, 32));
+    let rays = random_rays(
+        &mut Rng::new(5, 0),
+        Vec3::splat(-2.0),
+        Vec3::splat(2.0),
+        5000,
+    );
+    let (mut before, mut after) = (HitBatch::default(), HitBatch::default());
+    bvh.intersect(&rays, &mut before);
+    assert_eq!(bvh.kernel_time(&RayBatch::default(), false, 3), None);
+    for occlusion in [false, true] {
+        let time = bvh.kernel_time(&rays, occlusion, 3);
+        assert_eq!(time.is_some(), device.has_timestamps(), "{occlusion}");
+        assert!(time.is_none_or(|t| !t.is_zero()), "{time:?}");
+    }
+    bvh.intersect(&rays, &mut after);
+    assert_eq!(before, after);
+}
