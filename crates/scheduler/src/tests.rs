@@ -130,7 +130,8 @@ impl Wavefront for FakeWave {
 
 /// A backend that answers from the ray origins: hit distance = origin x, occluded =
 /// [`blocked`]. With `delay`, [`submit`](Traversal::submit) answers on another thread after
-/// that delay, as a GPU would, and counts the jobs in flight.
+/// that delay, as a GPU would (and says it submits asynchronously), and counts the jobs in
+/// flight.
 struct FakeTraversal {
     delay: Option<Duration>,
     in_flight: AtomicUsize,
@@ -177,6 +178,10 @@ impl Traversal for FakeTraversal {
             answer,
             in_flight: &self.in_flight,
         })
+    }
+
+    fn submits_asynchronously(&self) -> bool {
+        self.delay.is_some()
     }
 }
 

@@ -525,41 +525,52 @@ impl Launch {
 /// Packs `rays[range]` as `ray.wgsl`'s `Ray`. Rays that cannot hit anything (non-finite or
 /// zero direction, non-finite origin, NaN or empty interval) get an empty interval so the
 /// kernel skips them; an infinite `tmax` becomes the largest finite value, which the
-/// kernel's sentinels rely on.
+/// kernel's sentinels rely on. Batches below [`PARALLEL_PACK_RAYS`] are packed on the calling
+/// thread: handing them to the rayon pool would cost more than it saves, and a scheduler's
+/// submitting thread would wait there behind busy workers.
 fn pack_rays(rays: &RayBatch, range: std::ops::Range<usize>) -> Vec<[f32; 8]> {
     const SKIPPED: [f32; 8] = [0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0];
+    const CHUNK: usize = 4096;
     let mut packed = vec![SKIPPED; range.len()];
     rays.assert_consistent();
-    packed
-        .par_chunks_mut(4096)
-        .enumerate()
-        .for_each(|(chunk, out)| {
-            let start = range.start + chunk * 4096;
-            for (k, ray) in out.iter_mut().enumerate() {
-                let i = start + k;
-                let (origin, direction) = (rays.origin(i), rays.direction(i));
-                let (tmin, tmax) = (rays.tmin[i], rays.tmax[i]);
-                let valid = origin.is_finite()
-                    && direction.is_finite()
-                    && direction != Vec3::ZERO
-                    && tmin < tmax;
-                if valid {
-                    let tmax = tmax.min(f32::MAX);
-                    *ray = [
-                        origin.x,
-                        origin.y,
-                        origin.z,
-                        tmin,
-                        direction.x,
-                        direction.y,
-                        direction.z,
-                        tmax,
-                    ];
-                }
+    let pack_chunk = |(chunk, out): (usize, &mut [[f32; 8]])| {
+        let start = range.start + chunk * CHUNK;
+        for (k, ray) in out.iter_mut().enumerate() {
+            let i = start + k;
+            let (origin, direction) = (rays.origin(i), rays.direction(i));
+            let (tmin, tmax) = (rays.tmin[i], rays.tmax[i]);
+            let valid = origin.is_finite()
+                && direction.is_finite()
+                && direction != Vec3::ZERO
+                && tmin < tmax;
+            if valid {
+                let tmax = tmax.min(f32::MAX);
+                *ray = [
+                    origin.x,
+                    origin.y,
+                    origin.z,
+                    tmin,
+                    direction.x,
+                    direction.y,
+                    direction.z,
+                    tmax,
+                ];
             }
-        });
+        }
+    };
+    if range.len() < PARALLEL_PACK_RAYS {
+        packed.chunks_mut(CHUNK).enumerate().for_each(pack_chunk);
+    } else {
+        packed
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(pack_chunk);
+    }
     packed
 }
+
+/// The smallest batch whose rays [`pack_rays`] packs on the rayon pool.
+const PARALLEL_PACK_RAYS: usize = 1 << 16;
 
 impl Traversal for GpuBvh {
     fn intersect(&self, rays: &RayBatch, hits: &mut HitBatch) {
@@ -577,6 +588,10 @@ impl Traversal for GpuBvh {
         };
         let launch = self.inner.launch(job.rays(), query);
         Box::new(PendingGpu { launch, job })
+    }
+
+    fn submits_asynchronously(&self) -> bool {
+        true
     }
 }
 

@@ -32,6 +32,14 @@ pub trait Traversal: Send + Sync {
         job.run(self);
         Box::new(CompletedTraversal(job))
     }
+
+    /// Whether [`submit`](Self::submit) returns before the traversal is done and does only
+    /// light work on the calling thread (handing the rays to another device), so that a
+    /// scheduler may submit from a thread of its own rather than from a worker of its pool.
+    /// The default, false, fits backends whose `submit` traverses on the calling thread.
+    fn submits_asynchronously(&self) -> bool {
+        false
+    }
 }
 
 /// A query that owns its rays and its output buffer, so it can be in flight on another

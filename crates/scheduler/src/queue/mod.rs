@@ -4,9 +4,11 @@
 //!
 //! Threads: the traversal thread and the shading threads are plain threads, never rayon
 //! workers, because they block waiting for queues. Their work (starting, shading and
-//! resolving paths, and submitting traversal jobs, which the CPU backend runs at once)
-//! runs as jobs on the caller's rayon pool ([`Jobs`]), whose workers therefore never block
-//! on anything but rayon's own joins; waiting for a GPU job happens on the traversal thread.
+//! resolving paths, and submitting traversal jobs to a backend that traverses as it is
+//! submitted, as the CPU backend does) runs as jobs on the caller's rayon pool ([`Jobs`]),
+//! whose workers therefore never block on anything but rayon's own joins. An asynchronous
+//! backend's jobs (a GPU's) are submitted on the traversal thread itself, without waiting
+//! for a pool worker, and waiting for them happens there too.
 
 mod jobs;
 mod pool;
@@ -74,7 +76,7 @@ pub(crate) fn run<W: Wavefront>(
 /// The traversal thread: submits the job of every queue ready for traversal, oldest first,
 /// then collects the oldest job in flight and hands its queue back for shading; blocks for
 /// a ready queue only when no job is in flight. Returns the rays it traced and the time it
-/// had jobs in flight, from the moment a pool worker began submitting the first of them.
+/// had jobs in flight, from the moment the first of them began to be submitted.
 fn traverse<'s, W: Wavefront + 's>(
     pool: &Pool<W>,
     tiles: &TileCounter,
@@ -116,7 +118,7 @@ struct Flight<'t, W> {
     /// The queue, without the buffers the job holds.
     queue: Queue<W>,
     pending: Box<dyn PendingTraversal + 't>,
-    /// When a pool worker began submitting the job (not counting the wait for a worker).
+    /// When the job's submission began (not counting the wait for a pool worker).
     started: Instant,
 }
 
@@ -150,7 +152,14 @@ impl<'t, W: Wavefront + 't> Flight<'t, W> {
             }
             _ => unreachable!("the traversal thread takes queues ready for traversal only"),
         };
-        let (started, pending) = jobs.run(move || (Instant::now(), traversal.submit(job)));
+        let submit = move || (Instant::now(), traversal.submit(job));
+        // An asynchronous backend only hands the rays over: do that here rather than wait
+        // for a pool worker, which may be busy shading for a while.
+        let (started, pending) = if traversal.submits_asynchronously() {
+            submit()
+        } else {
+            jobs.run(submit)
+        };
         Self {
             index,
             queue,
