@@ -27,9 +27,10 @@ pub enum Scheduler {
     /// `size × size` tiles from a shared counter (and merging in the next one below
     /// `merge_below` of a tile, as [`Tile`](Self::Tile) does). Each queue passes through
     /// explicit states (empty, in use, ready for traversal, for shading, for shadow
-    /// traversal, for resolving); one thread submits every traversal job
+    /// traversal, for resolving); one thread collects every traversal job
     /// ([`Traversal::submit`]), keeping several in flight, while the shading threads start,
-    /// shade and resolve the queues that are ready for it. With an asynchronous backend (the
+    /// shade and resolve the queues that are ready for it and, where the backend submits
+    /// asynchronously, submit their jobs themselves. With an asynchronous backend (the
     /// GPU) the CPU shades some queues while others are traversed; the pool size bounds the
     /// memory.
     Queue {

@@ -10,9 +10,9 @@
 //!   to completion; when a worker's active paths drop below a fraction of a tile, it pulls in
 //!   the next tile's camera paths (tile merging);
 //! - [`Scheduler::Queue`]: a pool of wavefronts ("queues") in explicit states, taking tiles
-//!   from the same counter; one thread submits every traversal job
-//!   ([`Traversal::submit`](vcm_traversal::Traversal::submit)) while the others shade, so
-//!   shading overlaps traversal on an asynchronous (GPU) backend.
+//!   from the same counter; one thread collects every traversal job
+//!   ([`Traversal::submit`](vcm_traversal::Traversal::submit)) while the others shade (and,
+//!   on an asynchronous backend, submit), so shading overlaps traversal on a GPU.
 //!
 //! Paths' random numbers must not depend on which wavefront traces them (the integrators seed
 //! them from the pixel and sample), and results are gathered per path and added in a fixed

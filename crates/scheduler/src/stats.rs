@@ -9,8 +9,8 @@ pub struct SchedulerStats {
     pub wall: Duration,
     /// Time in closest-hit and occlusion queries. `none` and `tile`: the workers' total
     /// (each traverses its own batches). `queue`: the wall-clock time during which the
-    /// traversal thread had at least one job in flight, from the moment a pool worker began
-    /// submitting it to the return of its `wait`; it overlaps the shading threads' work.
+    /// traversal thread had at least one job in flight, from the moment its submission began
+    /// to the return of its `wait`; it overlaps the shading threads' work.
     pub traversal: Duration,
     /// Worker time starting, shading and retiring paths.
     pub shading: Duration,

@@ -258,6 +258,10 @@ fn check(
         stats.workers >= 1 && stats.utilization() <= 1.0,
         "{context}"
     );
+    if let Scheduler::Queue { .. } = scheduler {
+        // The traversal thread's busy periods never overlap.
+        assert!(stats.traversal <= stats.wall, "{context}: {stats:?}");
+    }
     traversal.most_in_flight.into_inner()
 }
 

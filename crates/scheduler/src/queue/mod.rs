@@ -1,19 +1,22 @@
-//! The `queue` scheduler: a pool of queues in states, one thread submitting every traversal
+//! The `queue` scheduler: a pool of queues in states, one thread collecting every traversal
 //! job and the others shading, so that shading overlaps traversal on an asynchronous
 //! backend.
 //!
 //! Threads: the traversal thread and the shading threads are plain threads, never rayon
 //! workers, because they block waiting for queues. Their work (starting, shading and
 //! resolving paths, and submitting traversal jobs to a backend that traverses as it is
-//! submitted, as the CPU backend does) runs as jobs on the caller's rayon pool ([`Jobs`]),
-//! whose workers therefore never block on anything but rayon's own joins. An asynchronous
-//! backend's jobs (a GPU's) are submitted on the traversal thread itself, without waiting
-//! for a pool worker, and waiting for them happens there too.
+//! submitted, as the CPU backend does, which the traversal thread takes from the pool) runs
+//! as jobs on the caller's rayon pool ([`Jobs`]), whose workers therefore never block on
+//! anything but rayon's own joins. An asynchronous backend's jobs (a GPU's) are submitted by
+//! the shading thread that filled the rays, on that thread, and sent to the traversal thread,
+//! which waits for them: the CPU side of a submission (packing and uploading the rays) runs on
+//! all shading threads at once rather than on one.
 
 mod jobs;
 mod pool;
 
 use std::collections::VecDeque;
+use std::sync::mpsc;
 use std::time::Instant;
 
 use vcm_traversal::{PendingTraversal, Traversal, TraversalJob};
@@ -41,10 +44,31 @@ pub(crate) fn run<W: Wavefront>(
     let shaders = rayon::current_num_threads().max(1);
     let (traversed, shaded) = Jobs::scope(|jobs| {
         std::thread::scope(|threads| {
-            let traverser = threads.spawn(|| traverse(&pool, tiles, traversal, jobs));
+            let (pool, jobs) = (&pool, jobs);
+            let (sender, flights) = mpsc::channel();
+            let submitter = traversal.submits_asynchronously().then_some(sender);
+            let traverser = match &submitter {
+                // The shading threads submit, the traversal thread collects.
+                Some(_) => threads.spawn(move || traverse(pool, |block| next(&flights, block))),
+                // The traversal thread submits what the pool has ready, on a pool worker.
+                None => threads.spawn(move || {
+                    traverse(pool, |block| {
+                        let taken = match block {
+                            true => pool.take(Role::Traversal, tiles),
+                            false => pool.try_take(Role::Traversal, tiles),
+                        };
+                        taken.map(|taken| Flight::submit(taken, traversal, jobs))
+                    })
+                }),
+            };
             let shading: Vec<_> = (0..shaders)
-                .map(|_| threads.spawn(|| shade(&pool, tiles, merge_at, jobs)))
+                .map(|_| {
+                    let submitter = submitter.clone().map(|flights| (flights, traversal));
+                    threads.spawn(move || shade(pool, tiles, merge_at, jobs, submitter))
+                })
                 .collect();
+            // The traversal thread's channel closes when the last shading thread ends.
+            drop(submitter);
             jobs.help_until(|| traverser.is_finished() && shading.iter().all(|t| t.is_finished()));
             let join = |thread: std::thread::ScopedJoinHandle<'_, SchedulerStats>| {
                 thread
@@ -73,42 +97,49 @@ pub(crate) fn run<W: Wavefront>(
     (outputs, stats)
 }
 
-/// The traversal thread: submits the job of every queue ready for traversal, oldest first,
-/// then collects the oldest job in flight and hands its queue back for shading; blocks for
-/// a ready queue only when no job is in flight. Returns the rays it traced and the time it
-/// had jobs in flight, from the moment the first of them began to be submitted.
-fn traverse<'s, W: Wavefront + 's>(
+/// The traversal thread: takes every job submitted so far from `next_flight` (which blocks,
+/// when asked to, until there is one; `None` when there will be none), then collects the
+/// oldest job in flight and hands its queue back for shading. Returns the rays it traced and
+/// the time it had jobs in flight, from the moment the first of them began to be submitted.
+fn traverse<'t, W: Wavefront + 't>(
     pool: &Pool<W>,
-    tiles: &TileCounter,
-    traversal: &'s dyn Traversal,
-    jobs: &Jobs<'_, 's>,
+    mut next_flight: impl FnMut(bool) -> Option<Flight<'t, W>>,
 ) -> SchedulerStats {
     let _abort = AbortOnPanic(pool);
     let mut stats = SchedulerStats::default();
     let mut in_flight = VecDeque::new();
-    let mut busy_since = None;
+    // Busy periods: from the first submission after the previous period ended to the
+    // landing that leaves nothing in flight. A job that another thread submitted while the
+    // previous period ran starts the next one at that period's end, so none overlap.
+    let (mut busy_since, mut last_end) = (None, None);
     loop {
-        let ready = if in_flight.is_empty() {
-            pool.take(Role::Traversal, tiles)
-        } else {
-            pool.try_take(Role::Traversal, tiles)
-        };
-        if let Some(taken) = ready {
-            let flight = Flight::submit(taken, traversal, jobs, &mut stats);
-            busy_since.get_or_insert(flight.started);
+        if let Some(flight) = next_flight(in_flight.is_empty()) {
+            let started = last_end.map_or(flight.started, |end: Instant| end.max(flight.started));
+            busy_since.get_or_insert(started);
             in_flight.push_back(flight);
             continue;
         }
         let Some(flight) = in_flight.pop_front() else {
             return stats;
         };
-        let (index, queue, state) = flight.land();
+        let (index, queue, state) = flight.land(&mut stats);
         pool.put(index, queue, state);
-        if in_flight.is_empty() {
-            stats.traversal += busy_since
-                .take()
-                .map_or_else(Default::default, |t| t.elapsed());
+        if in_flight.is_empty()
+            && let Some(since) = busy_since.take()
+        {
+            let end = Instant::now();
+            stats.traversal += end - since;
+            last_end = Some(end);
         }
+    }
+}
+
+/// The next job the shading threads submitted: waits for one if `block`, else takes one only
+/// if it is there.
+fn next<F>(flights: &mpsc::Receiver<F>, block: bool) -> Option<F> {
+    match block {
+        true => flights.recv().ok(),
+        false => flights.try_recv().ok(),
     }
 }
 
@@ -124,7 +155,7 @@ struct Flight<'t, W> {
 
 impl<'t, W: Wavefront + 't> Flight<'t, W> {
     /// Moves the rays and the output buffer of a queue ready for (shadow) traversal into a
-    /// job and submits it, counting its rays.
+    /// job and submits it.
     fn submit(
         Taken {
             index,
@@ -133,28 +164,21 @@ impl<'t, W: Wavefront + 't> Flight<'t, W> {
         }: Taken<W>,
         traversal: &'t dyn Traversal,
         jobs: &Jobs<'_, 't>,
-        stats: &mut SchedulerStats,
     ) -> Self {
         let job = match state {
-            State::ReadyForTraversal => {
-                stats.closest_rays += queue.rays.len() as u64;
-                TraversalJob::Intersect {
-                    rays: std::mem::take(&mut queue.rays),
-                    hits: std::mem::take(&mut queue.hits),
-                }
-            }
-            State::ReadyForShadowTraversal => {
-                stats.shadow_rays += queue.shadow_rays.len() as u64;
-                TraversalJob::Occluded {
-                    rays: std::mem::take(&mut queue.shadow_rays),
-                    occluded: std::mem::take(&mut queue.occluded),
-                }
-            }
-            _ => unreachable!("the traversal thread takes queues ready for traversal only"),
+            State::ReadyForTraversal => TraversalJob::Intersect {
+                rays: std::mem::take(&mut queue.rays),
+                hits: std::mem::take(&mut queue.hits),
+            },
+            State::ReadyForShadowTraversal => TraversalJob::Occluded {
+                rays: std::mem::take(&mut queue.shadow_rays),
+                occluded: std::mem::take(&mut queue.occluded),
+            },
+            _ => unreachable!("only queues ready for traversal are submitted"),
         };
         let submit = move || (Instant::now(), traversal.submit(job));
-        // An asynchronous backend only hands the rays over: do that here rather than wait
-        // for a pool worker, which may be busy shading for a while.
+        // An asynchronous backend only hands the rays over: do that on this thread rather
+        // than wait for a pool worker, which may be busy shading for a while.
         let (started, pending) = if traversal.submits_asynchronously() {
             submit()
         } else {
@@ -168,16 +192,18 @@ impl<'t, W: Wavefront + 't> Flight<'t, W> {
         }
     }
 
-    /// Waits for the job and gives the queue its buffers back: ready for shading after a
-    /// closest-hit query, for resolving after an occlusion query.
-    fn land(self) -> (usize, Queue<W>, State) {
+    /// Waits for the job, counts its rays and gives the queue its buffers back: ready for
+    /// shading after a closest-hit query, for resolving after an occlusion query.
+    fn land(self, stats: &mut SchedulerStats) -> (usize, Queue<W>, State) {
         let mut queue = self.queue;
         let state = match self.pending.wait() {
             TraversalJob::Intersect { rays, hits } => {
+                stats.closest_rays += rays.len() as u64;
                 (queue.rays, queue.hits) = (rays, hits);
                 State::ReadyForShading
             }
             TraversalJob::Occluded { rays, occluded } => {
+                stats.shadow_rays += rays.len() as u64;
                 (queue.shadow_rays, queue.occluded) = (rays, occluded);
                 State::ReadyForResolve
             }
@@ -187,13 +213,16 @@ impl<'t, W: Wavefront + 't> Flight<'t, W> {
 }
 
 /// A shading thread: takes the queue that has waited longest for shading, resolving or a
-/// tile, and advances it on the rayon pool to its next traversal (or to empty). Returns
-/// what its steps measured.
+/// tile, and advances it on the rayon pool to its next traversal (or to empty). With a
+/// `submitter` (an asynchronous backend) it submits the queue's traversal job itself and
+/// sends it to the traversal thread; otherwise the queue goes back to the pool, where the
+/// traversal thread finds it. Returns what its steps measured.
 fn shade<'s, W: Wavefront + 's>(
     pool: &Pool<W>,
     tiles: &'s TileCounter,
     merge_at: usize,
     jobs: &Jobs<'_, 's>,
+    submitter: Option<(mpsc::Sender<Flight<'s, W>>, &'s dyn Traversal)>,
 ) -> SchedulerStats {
     let _abort = AbortOnPanic(pool);
     let mut stats = SchedulerStats::default();
@@ -208,8 +237,24 @@ fn shade<'s, W: Wavefront + 's>(
             let state = advance(&mut queue, state, tiles, merge_at, &mut step);
             (queue, state, step)
         });
-        pool.put(index, queue, state);
         stats.accumulate(&step);
+        let traversal_next = matches!(
+            state,
+            State::ReadyForTraversal | State::ReadyForShadowTraversal
+        );
+        match &submitter {
+            Some((flights, traversal)) if traversal_next => {
+                let taken = Taken {
+                    index,
+                    state,
+                    queue,
+                };
+                // The queue stays out of the pool, in use, until the traversal thread lands
+                // it. The channel closes only if that thread panicked, which aborts the pool.
+                let _ = flights.send(Flight::submit(taken, *traversal, jobs));
+            }
+            _ => pool.put(index, queue, state),
+        }
     }
     stats
 }
