@@ -49,13 +49,16 @@ pub(crate) fn run<W: Wavefront>(
             let submitter = traversal.submits_asynchronously().then_some(sender);
             let traverser = match &submitter {
                 // The shading threads submit, the traversal thread collects.
-                Some(_) => threads.spawn(move || traverse(pool, |block| next(&flights, block))),
+                Some(_) => {
+                    threads.spawn(move || traverse(pool, |block| next_submitted(&flights, block)))
+                }
                 // The traversal thread submits what the pool has ready, on a pool worker.
                 None => threads.spawn(move || {
                     traverse(pool, |block| {
-                        let taken = match block {
-                            true => pool.take(Role::Traversal, tiles),
-                            false => pool.try_take(Role::Traversal, tiles),
+                        let taken = if block {
+                            pool.take(Role::Traversal, tiles)
+                        } else {
+                            pool.try_take(Role::Traversal, tiles)
                         };
                         taken.map(|taken| Flight::submit(taken, traversal, jobs))
                     })
@@ -136,10 +139,11 @@ fn traverse<'t, W: Wavefront + 't>(
 
 /// The next job the shading threads submitted: waits for one if `block`, else takes one only
 /// if it is there.
-fn next<F>(flights: &mpsc::Receiver<F>, block: bool) -> Option<F> {
-    match block {
-        true => flights.recv().ok(),
-        false => flights.try_recv().ok(),
+fn next_submitted<F>(flights: &mpsc::Receiver<F>, block: bool) -> Option<F> {
+    if block {
+        flights.recv().ok()
+    } else {
+        flights.try_recv().ok()
     }
 }
 
