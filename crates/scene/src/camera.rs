@@ -58,49 +58,80 @@ impl Camera {
         }
     }
 
-    /// Half extents of the image plane at unit distance: (tan(xfov/2), tan(yfov/2)).
-    fn half_extent(&self, width: u32, height: u32) -> Vec2 {
+    /// The camera's projection onto a `width` × `height` image.
+    pub fn projection(&self, width: u32, height: u32) -> Projection {
         let tan_y = (0.5 * self.yfov).tan();
-        Vec2::new(tan_y * width as f32 / height as f32, tan_y)
+        Projection {
+            camera: *self,
+            size: Vec2::new(width as f32, height as f32),
+            half_extent: Vec2::new(tan_y * width as f32 / height as f32, tan_y),
+        }
     }
 
+    /// The unit direction through the raster position `raster` of a `width` × `height`
+    /// image (see [`Projection::direction`]).
+    pub fn direction(&self, width: u32, height: u32, raster: Vec2) -> Vec3 {
+        self.projection(width, height).direction(raster)
+    }
+
+    /// Where `point` appears in a `width` × `height` image (see [`Projection::raster_of`]).
+    pub fn raster_of(&self, width: u32, height: u32, point: Vec3) -> Option<Vec2> {
+        self.projection(width, height).raster_of(point)
+    }
+
+    /// Area of one pixel of a `width` × `height` image (see [`Projection::pixel_area`]).
+    pub fn pixel_area(&self, width: u32, height: u32) -> f32 {
+        self.projection(width, height).pixel_area()
+    }
+}
+
+/// A camera's mapping between an image's raster positions and directions, with the image
+/// plane's extent worked out once (a tangent) for all the rays of that image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projection {
+    camera: Camera,
+    /// Image width and height in pixels.
+    size: Vec2,
+    /// Half extents of the image plane at unit distance: (tan(xfov/2), tan(yfov/2)).
+    half_extent: Vec2,
+}
+
+impl Projection {
     /// The unit direction through the raster position `raster` (pixels; (0,0) is the top-left
     /// corner of the image, (width, height) the bottom-right).
-    pub fn direction(&self, width: u32, height: u32, raster: Vec2) -> Vec3 {
-        let h = self.half_extent(width, height);
+    pub fn direction(&self, raster: Vec2) -> Vec3 {
+        let (c, h) = (&self.camera, self.half_extent);
         let ndc = Vec2::new(
-            2.0 * raster.x / width as f32 - 1.0,
-            1.0 - 2.0 * raster.y / height as f32,
+            2.0 * raster.x / self.size.x - 1.0,
+            1.0 - 2.0 * raster.y / self.size.y,
         );
-        (self.forward + self.right * (ndc.x * h.x) + self.up * (ndc.y * h.y)).normalize()
+        (c.forward + c.right * (ndc.x * h.x) + c.up * (ndc.y * h.y)).normalize()
     }
 
     /// The raster position where `point` appears, or `None` when it is behind the camera or
     /// outside the image.
-    pub fn raster_of(&self, width: u32, height: u32, point: Vec3) -> Option<Vec2> {
-        let d = point - self.position;
-        let z = d.dot(self.forward);
+    pub fn raster_of(&self, point: Vec3) -> Option<Vec2> {
+        let (c, h) = (&self.camera, self.half_extent);
+        let d = point - c.position;
+        let z = d.dot(c.forward);
         if z <= 0.0 {
             return None;
         }
-        let h = self.half_extent(width, height);
-        let ndc = Vec2::new(d.dot(self.right) / (z * h.x), d.dot(self.up) / (z * h.y));
+        let ndc = Vec2::new(d.dot(c.right) / (z * h.x), d.dot(c.up) / (z * h.y));
         let raster = Vec2::new(
-            (ndc.x + 1.0) * 0.5 * width as f32,
-            (1.0 - ndc.y) * 0.5 * height as f32,
+            (ndc.x + 1.0) * 0.5 * self.size.x,
+            (1.0 - ndc.y) * 0.5 * self.size.y,
         );
-        let inside = raster.x >= 0.0
-            && raster.y >= 0.0
-            && raster.x < width as f32
-            && raster.y < height as f32;
+        let inside =
+            raster.x >= 0.0 && raster.y >= 0.0 && raster.x < self.size.x && raster.y < self.size.y;
         inside.then_some(raster)
     }
 
     /// Area of one pixel on the image plane at unit distance from the eye. The camera's
     /// directional pdf per pixel sample is `distance² / (pixel_area · cos³θ)` in solid angle.
-    pub fn pixel_area(&self, width: u32, height: u32) -> f32 {
-        let h = self.half_extent(width, height);
-        4.0 * h.x * h.y / (width as f32 * height as f32)
+    pub fn pixel_area(&self) -> f32 {
+        let h = self.half_extent;
+        4.0 * h.x * h.y / (self.size.x * self.size.y)
     }
 }
 

@@ -38,7 +38,7 @@ pub mod shapes;
 pub mod testing;
 pub mod texture;
 
-pub use camera::Camera;
+pub use camera::{Camera, Projection};
 pub use decision::Decision;
 pub use error::SceneError;
 pub use features::SceneFeatures;

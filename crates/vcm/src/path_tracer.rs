@@ -168,6 +168,7 @@ impl Wavefront for PtWavefront<'_> {
         } = *self.settings;
         let (iteration, samples) = (u64::from(self.iteration), self.samples);
         let camera = &self.scene.camera;
+        let projection = camera.projection(width, height);
         let starts: Vec<(u32, u32)> = tile
             .pixels(width)
             .flat_map(|pixel| (0..samples).map(move |sample| (pixel, sample)))
@@ -180,7 +181,7 @@ impl Wavefront for PtWavefront<'_> {
                 let mut rng = Rng::from_key(&key);
                 let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
                 let raster: Vec2 = xy + rng.uniform2();
-                let direction = camera.direction(width, height, raster);
+                let direction = projection.direction(raster);
                 PathState::new(pixel, sample, rng, camera.position, direction)
             });
         self.paths.par_extend(new_paths);

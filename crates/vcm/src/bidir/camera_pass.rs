@@ -167,19 +167,14 @@ impl Wavefront for CameraWavefront<'_> {
 /// Starts the camera path of `pixel` in iteration `ctx` (the frame's `sample`), its position
 /// jittered uniformly over the pixel.
 fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
-    let VcmSettings {
-        width,
-        height,
-        seed,
-        ..
-    } = *ctx.settings;
+    let VcmSettings { width, seed, .. } = *ctx.settings;
     let camera = &ctx.scene.camera;
     let mut rng = Rng::from_key(&[seed, ctx.iteration, u64::from(pixel), 0]);
     let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
     let raster: Vec2 = xy + rng.uniform2();
-    let direction = camera.direction(width, height, raster);
+    let direction = ctx.projection.direction(raster);
     let cos_camera = camera.forward.dot(direction);
-    let camera_pdf_w = 1.0 / (camera.pixel_area(width, height) * cos_camera.powi(3));
+    let camera_pdf_w = 1.0 / (ctx.projection.pixel_area() * cos_camera.powi(3));
     CameraPathState {
         pixel,
         sample,

@@ -395,7 +395,7 @@ fn connect_to_camera(
 ) -> Option<Splat> {
     let camera = &ctx.scene.camera;
     let VcmSettings { width, height, .. } = *ctx.settings;
-    let raster = camera.raster_of(width, height, vertex.position)?;
+    let raster = ctx.projection.raster_of(vertex.position)?;
     let to_camera = camera.position - vertex.position;
     let distance_sq = to_camera.length_squared();
     let direction = to_camera / distance_sq.sqrt();
@@ -406,7 +406,7 @@ fn connect_to_camera(
     // The camera's solid-angle pdf per pixel sample is d_image² / (pixel_area · cos θ) with
     // d_image = 1 / cos θ; its area pdf at the vertex adds |cos θ_surface| / d².
     let cos_camera = camera.forward.dot(-direction);
-    let camera_pdf_w = 1.0 / (camera.pixel_area(width, height) * cos_camera.powi(3));
+    let camera_pdf_w = 1.0 / (ctx.projection.pixel_area() * cos_camera.powi(3));
     let camera_pdf_a = camera_pdf_w * surface.cos_geometric(direction) / distance_sq;
     let weight = if ctx.settings.algorithm == Algorithm::LightTracing {
         1.0

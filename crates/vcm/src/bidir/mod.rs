@@ -35,7 +35,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use vcm_scene::{Decision, Scene};
+use vcm_scene::{Decision, Projection, Scene};
 use vcm_scheduler::SchedulerStats;
 use vcm_traversal::Traversal;
 
@@ -156,6 +156,8 @@ pub(crate) struct FrameContext<'a> {
     pub scene: &'a Scene,
     pub traversal: &'a dyn Traversal,
     pub settings: &'a VcmSettings,
+    /// The camera's projection onto the image.
+    pub projection: &'a Projection,
     /// The iteration, counted over the whole render (seeds the paths).
     pub iteration: u64,
     /// The iteration's merge radius.
@@ -177,6 +179,8 @@ pub struct Vcm {
     scene: Arc<Scene>,
     traversal: Arc<dyn Traversal>,
     settings: VcmSettings,
+    /// The camera's projection onto the image.
+    projection: Projection,
     plan: BidirPlan,
     base_radius: f32,
     schedule: Schedule,
@@ -217,6 +221,7 @@ impl Vcm {
         let base_radius = settings.radius_fraction * scene.features.bounds.radius();
         let plan = BidirPlan::new(settings.algorithm, &scene.features, settings.prune);
         let mut vcm = Vcm {
+            projection: scene.camera.projection(width, height),
             scene,
             traversal,
             settings,
@@ -278,6 +283,7 @@ impl Vcm {
                     scene: &self.scene,
                     traversal: self.traversal.as_ref(),
                     settings: &self.settings,
+                    projection: &self.projection,
                     iteration,
                     radius,
                     factors: MisFactors::new(
@@ -300,6 +306,7 @@ impl Vcm {
             scene: &self.scene,
             traversal: self.traversal.as_ref(),
             settings: &self.settings,
+            projection: &self.projection,
             iteration: 0,
             radius: 1.0,
             factors: MisFactors::new(false, false, 1.0, 1.0),
