@@ -60,7 +60,7 @@ pub(crate) fn run<W: Wavefront>(
                         } else {
                             pool.try_take(Role::Traversal, tiles)
                         };
-                        taken.map(|taken| Flight::submit(taken, traversal, jobs))
+                        taken.map(|taken| Flight::submit(taken, traversal, Some(jobs)))
                     })
                 }),
             };
@@ -159,7 +159,8 @@ struct Flight<'t, W> {
 
 impl<'t, W: Wavefront + 't> Flight<'t, W> {
     /// Moves the rays and the output buffer of a queue ready for (shadow) traversal into a
-    /// job and submits it.
+    /// job and submits it: on a worker of the pool with `on_pool` (a backend that traverses
+    /// as it is submitted), else on this thread (one that only hands the rays over).
     fn submit(
         Taken {
             index,
@@ -167,7 +168,7 @@ impl<'t, W: Wavefront + 't> Flight<'t, W> {
             mut queue,
         }: Taken<W>,
         traversal: &'t dyn Traversal,
-        jobs: &Jobs<'_, 't>,
+        on_pool: Option<&Jobs<'_, 't>>,
     ) -> Self {
         let job = match state {
             State::ReadyForTraversal => TraversalJob::Intersect {
@@ -181,12 +182,9 @@ impl<'t, W: Wavefront + 't> Flight<'t, W> {
             _ => unreachable!("only queues ready for traversal are submitted"),
         };
         let submit = move || (Instant::now(), traversal.submit(job));
-        // An asynchronous backend only hands the rays over: do that on this thread rather
-        // than wait for a pool worker, which may be busy shading for a while.
-        let (started, pending) = if traversal.submits_asynchronously() {
-            submit()
-        } else {
-            jobs.run(submit)
+        let (started, pending) = match on_pool {
+            Some(jobs) => jobs.run(submit),
+            None => submit(),
         };
         Self {
             index,
@@ -255,7 +253,7 @@ fn shade<'s, W: Wavefront + 's>(
                 };
                 // The queue stays out of the pool, in use, until the traversal thread lands
                 // it. The channel closes only if that thread panicked, which aborts the pool.
-                let _ = flights.send(Flight::submit(taken, *traversal, jobs));
+                let _ = flights.send(Flight::submit(taken, *traversal, None));
             }
             _ => pool.put(index, queue, state),
         }
