@@ -75,7 +75,7 @@ impl Default for Scheduler {
 /// output, in no particular order, and what the pass measured.
 ///
 /// Call it from any thread, a rayon worker included: the work runs on the caller's rayon
-/// pool.
+/// pool (the global pool when the caller belongs to none).
 pub fn run<W: Wavefront>(
     scheduler: Scheduler,
     (width, height): (u32, u32),
@@ -107,7 +107,11 @@ pub fn run<W: Wavefront>(
         drive(&mut wave, traversal, &tiles, merge_at, &mut stats);
         (wave.finish(), stats)
     };
-    let results: Vec<_> = (0..workers).into_par_iter().map(worker).collect();
+    // A single worker would run on the calling thread, which need not belong to the pool;
+    // every parallel loop inside it (traversal, shading) would then hand its work to the
+    // pool and sleep until it returns, two context switches per batch. `scope` moves the
+    // workers onto the pool first.
+    let results: Vec<_> = rayon::scope(|_| (0..workers).into_par_iter().map(worker).collect());
     let mut stats = SchedulerStats {
         workers,
         ..SchedulerStats::default()

@@ -386,3 +386,42 @@ fn queue_memory_follows_the_paths_in_flight() {
         "queues {queues} vs one batch {one_batch}"
     );
 }
+
+/// Counts the traversal calls made from a thread outside every rayon pool.
+struct OffPoolCalls(FakeTraversal, AtomicUsize);
+
+impl OffPoolCalls {
+    fn note(&self) {
+        if rayon::current_thread_index().is_none() {
+            self.1.fetch_add(1, Ordering::SeqCst);
+        }
+    }
+}
+
+impl Traversal for OffPoolCalls {
+    fn intersect(&self, rays: &RayBatch, hits: &mut HitBatch) {
+        self.note();
+        self.0.intersect(rays, hits);
+    }
+
+    fn occluded(&self, rays: &RayBatch, occluded: &mut Vec<bool>) {
+        self.note();
+        self.0.occluded(rays, occluded);
+    }
+}
+
+#[test]
+fn none_and_tile_workers_run_on_the_pool_when_called_from_outside_it() {
+    // A worker on the calling thread would hand every parallel loop of the backend and
+    // the shading to the pool and sleep until it came back, once per batch.
+    let tile = Scheduler::Tile {
+        size: 64,
+        merge_below: 0.5,
+    };
+    for scheduler in [Scheduler::None, tile] {
+        let traversal = OffPoolCalls(FakeTraversal::new(None), AtomicUsize::new(0));
+        let (outputs, _) = run(scheduler, (13, 7), &traversal, || FakeWave::new(13, None));
+        assert_eq!(outputs.len(), 1, "{scheduler:?}: one worker for one tile");
+        assert_eq!(traversal.1.into_inner(), 0, "{scheduler:?}");
+    }
+}
