@@ -4,6 +4,7 @@
 use std::sync::Arc;
 
 use crate::Backend;
+use crate::frames::FrameSizes;
 use vcm::{
     Algorithm as VcmAlgorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer,
     PtSettings, RenderError, Schedule, Scheduler, Vcm, VcmSettings,
@@ -127,43 +128,48 @@ pub struct ScheduleOptions {
     /// threads + 1: one per shading thread and one being traversed).
     #[arg(long)]
     pub queues: Option<usize>,
-    /// Samples per pixel each frame renders (default 1).
+    /// Samples per pixel each frame renders (default: 1 on the CPU backend; on the GPU as
+    /// many as keep a frame within a second, up to 16).
     #[arg(long)]
     pub spp_per_frame: Option<u32>,
 }
 
 impl ScheduleOptions {
-    /// The schedule these options ask for, or `None` when they ask for nothing.
-    pub fn schedule(&self) -> Option<Schedule> {
-        if *self == Self::default() {
-            return None;
-        }
+    /// The scheduler these options name: `--scheduler`, or tiles where only a tile option is
+    /// given; `None` where they name neither.
+    fn named_scheduler(&self) -> Option<Scheduler> {
         let size = self.tile_size.unwrap_or(Scheduler::DEFAULT_TILE_SIZE);
         let merge_below = self.tile_merge.unwrap_or(Scheduler::DEFAULT_MERGE_BELOW);
-        let scheduler = match self.scheduler {
-            Some(SchedulerKind::None) => Scheduler::None,
-            Some(SchedulerKind::Tile) | None => Scheduler::Tile { size, merge_below },
-            Some(SchedulerKind::Queue) => Scheduler::Queue {
+        let tiles = Scheduler::Tile { size, merge_below };
+        match self.scheduler {
+            Some(SchedulerKind::None) => Some(Scheduler::None),
+            Some(SchedulerKind::Tile) => Some(tiles),
+            Some(SchedulerKind::Queue) => Some(Scheduler::Queue {
                 queues: self.queues.unwrap_or_else(Scheduler::default_queues),
                 size,
                 merge_below,
-            },
-        };
-        Some(Schedule {
-            scheduler,
-            samples_per_frame: self.spp_per_frame.unwrap_or(1),
-        })
+            }),
+            None => (self.tile_size.is_some() || self.tile_merge.is_some()).then_some(tiles),
+        }
     }
 
-    /// The schedule to render with on `backend`: what these options ask for, with the
-    /// backend's [preferred scheduler](Backend::preferred_scheduler) where they name neither a
-    /// scheduler nor a tile option.
-    pub fn schedule_on(&self, backend: Backend) -> Schedule {
-        let mut schedule = self.schedule().unwrap_or_default();
-        if self.scheduler.is_none() && self.tile_size.is_none() && self.tile_merge.is_none() {
-            schedule.scheduler = backend.preferred_scheduler();
+    /// The schedule of a frame of `samples_per_frame` on `backend`: the scheduler these
+    /// options name, else the backend's [preferred one](Backend::preferred_scheduler) for
+    /// that frame size.
+    pub fn schedule_on(&self, backend: Backend, samples_per_frame: u32) -> Schedule {
+        Schedule {
+            scheduler: self
+                .named_scheduler()
+                .unwrap_or_else(|| backend.preferred_scheduler(samples_per_frame)),
+            samples_per_frame,
         }
-        schedule
+    }
+
+    /// How frames are sized on `backend`: `--spp-per-frame` in every frame where given, else
+    /// the backend's [preference](Backend::preferred_frame_sizes).
+    pub fn frame_sizes(&self, backend: Backend) -> FrameSizes {
+        self.spp_per_frame
+            .map_or_else(|| backend.preferred_frame_sizes(), FrameSizes::Fixed)
     }
 }
 
@@ -227,32 +233,50 @@ mod tests {
     #[test]
     fn the_backend_picks_the_scheduler_only_where_the_options_name_none() {
         let none = ScheduleOptions::default();
-        assert_eq!(none.schedule_on(Backend::Cpu), Schedule::default());
-        assert_eq!(none.schedule_on(Backend::Gpu), Schedule::ONE_BATCH);
-        let four = ScheduleOptions {
-            spp_per_frame: Some(4),
-            ..ScheduleOptions::default()
-        };
-        let on_gpu = four.schedule_on(Backend::Gpu);
-        assert_eq!(
-            (on_gpu.scheduler, on_gpu.samples_per_frame),
-            (Scheduler::None, 4)
-        );
-        let tiles = ScheduleOptions {
-            tile_size: Some(64),
-            ..ScheduleOptions::default()
-        };
-        assert!(matches!(
-            tiles.schedule_on(Backend::Gpu).scheduler,
-            Scheduler::Tile { size: 64, .. }
-        ));
+        assert_eq!(none.schedule_on(Backend::Cpu, 1), Schedule::default());
+        assert_eq!(none.schedule_on(Backend::Gpu, 1), Schedule::ONE_BATCH);
+        // The GPU takes tiles once frames are big enough to fill their batches.
+        let big = none.schedule_on(Backend::Gpu, Backend::GPU_TILE_SAMPLES);
+        assert!(matches!(big.scheduler, Scheduler::Tile { size: 64, .. }));
         let one_batch = ScheduleOptions {
             scheduler: Some(SchedulerKind::None),
             ..ScheduleOptions::default()
         };
         assert_eq!(
-            one_batch.schedule_on(Backend::Cpu).scheduler,
+            one_batch.schedule_on(Backend::Gpu, 16),
+            Schedule {
+                scheduler: Scheduler::None,
+                samples_per_frame: 16
+            }
+        );
+        let tiles = ScheduleOptions {
+            tile_size: Some(48),
+            ..ScheduleOptions::default()
+        };
+        assert!(matches!(
+            tiles.schedule_on(Backend::Gpu, 1).scheduler,
+            Scheduler::Tile { size: 48, .. }
+        ));
+        assert_eq!(
+            one_batch.schedule_on(Backend::Cpu, 1).scheduler,
             Scheduler::None
         );
+    }
+
+    #[test]
+    fn frames_are_paced_on_the_gpu_unless_the_options_fix_their_size() {
+        let none = ScheduleOptions::default();
+        assert_eq!(none.frame_sizes(Backend::Cpu), FrameSizes::Fixed(1));
+        assert_eq!(
+            none.frame_sizes(Backend::Gpu),
+            FrameSizes::Paced(crate::frames::Frames::MOST_PACED)
+        );
+        let four = ScheduleOptions {
+            spp_per_frame: Some(4),
+            ..ScheduleOptions::default()
+        };
+        for backend in Backend::ALL {
+            assert_eq!(four.frame_sizes(*backend), FrameSizes::Fixed(4));
+        }
     }
 }

@@ -26,6 +26,7 @@
 use std::sync::Arc;
 
 mod backend;
+pub mod frames;
 pub mod integrators;
 pub mod plot;
 

@@ -205,9 +205,13 @@ fn schedulers_render_the_same_image() {
         args.extend_from_slice(&["-o", exr.to_str().unwrap()]);
         let output = vcm(&args);
         assert!(output.status.success(), "{name}: {}", stderr(&output));
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        assert!(stdout.contains("rendered 4 spp"), "{name}: {stdout}");
         vcm::image_io::RgbImage::read_exr(&exr).unwrap().pixels
     };
     let none = render("none", &["--scheduler", "none", "--spp-per-frame", "2"]);
+    // Frames of 3 stop at the 4 samples asked for: 3 + 1, the same samples.
+    let threes = render("threes", &["--spp-per-frame", "3"]);
     let tiles = render(
         "tile",
         &[
@@ -233,6 +237,7 @@ fn schedulers_render_the_same_image() {
     assert!(none.iter().any(|p| p.max_element() > 0.0));
     assert_eq!(none, tiles);
     assert_eq!(none, queue);
+    assert_eq!(none, threes);
     let vcm_one = render("vcm-1", &["--algo", "vcm", "--scheduler", "none"]);
     let vcm_four = render(
         "vcm-4",

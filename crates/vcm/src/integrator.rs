@@ -8,14 +8,19 @@ use vcm_scheduler::Scheduler;
 use crate::error::RenderError;
 use crate::film::Film;
 
-/// A progressive renderer: frame after frame, each adding one sample per pixel (and, for
-/// algorithms with light tracing, splats) to a [`Film`].
+/// A progressive renderer: frame after frame, each adding [`samples_per_frame`] samples per
+/// pixel (and, for algorithms with light tracing, splats) to a [`Film`].
+///
+/// [`samples_per_frame`]: Integrator::samples_per_frame
 pub trait Integrator: Send {
-    /// Renders frame `iteration` (0, 1, 2, …) into `film`.
+    /// Renders samples `first_sample`, `first_sample + 1`, … (`samples_per_frame` of them,
+    /// for every pixel) into `film`. Sample `s` is iteration `s` of algorithms that iterate
+    /// (the merge radius shrinks with it); a render that covers samples 0 … n − 1 adds the
+    /// same film whatever frames they came in.
     ///
-    /// The result depends only on the scene, the settings and `iteration`, not on the number
-    /// of threads. Panics if `film` does not have the integrator's image size.
-    fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats;
+    /// The result depends only on the scene, the settings and the samples, not on the number
+    /// of threads or the schedule. Panics if `film` does not have the integrator's image size.
+    fn render_frame(&mut self, film: &mut Film, first_sample: u32) -> FrameStats;
 
     /// (width, height) of the image in pixels: the size of the films it renders into.
     fn image_size(&self) -> (u32, u32);

@@ -30,9 +30,10 @@
 //! let settings = VcmSettings::new(Algorithm::Vcm, 256, 256);
 //! let mut vcm = Vcm::new(scene, traversal, settings)?;
 //! let mut film = Film::new(settings.width, settings.height);
-//! for iteration in 0..16 {
-//!     let stats = vcm.render_frame(&mut film, iteration);
-//!     eprintln!("frame {iteration}: {} light vertices", stats.light_vertices);
+//! // One sample per pixel per frame (the default schedule): frame i renders sample i.
+//! for sample in 0..16 {
+//!     let stats = vcm.render_frame(&mut film, sample);
+//!     eprintln!("sample {sample}: {} light vertices", stats.light_vertices);
 //! }
 //! let radiance = film.mean(); // W·sr⁻¹·m⁻² per pixel, row by row from the top left
 //! # Ok::<(), Box<dyn std::error::Error>>(())

@@ -73,9 +73,9 @@ impl PathTracer {
 }
 
 impl Integrator for PathTracer {
-    /// Renders frame `iteration`: `samples_per_frame` paths per pixel, each added to `film`
+    /// Renders samples `first_sample …`: `samples_per_frame` paths per pixel, each added to `film`
     /// once it ends, in pixel and sample order whatever the scheduler.
-    fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats {
+    fn render_frame(&mut self, film: &mut Film, first_sample: u32) -> FrameStats {
         let PtSettings { width, height, .. } = self.settings;
         assert_eq!(
             (film.width(), film.height()),
@@ -86,7 +86,7 @@ impl Integrator for PathTracer {
         let new_wavefront = || PtWavefront {
             scene: &self.scene,
             settings: &self.settings,
-            iteration,
+            first_sample,
             samples,
             paths: Vec::new(),
             finished: Vec::new(),
@@ -148,7 +148,7 @@ impl Integrator for PathTracer {
 struct PtWavefront<'a> {
     scene: &'a Scene,
     settings: &'a PtSettings,
-    iteration: u32,
+    first_sample: u32,
     samples: u32,
     paths: Vec<PathState>,
     finished: Vec<(u64, Vec3)>,
@@ -158,7 +158,7 @@ impl Wavefront for PtWavefront<'_> {
     type Output = Vec<(u64, Vec3)>;
 
     /// `samples` paths per pixel of `tile`, each through a uniformly jittered point of its
-    /// pixel, with random numbers keyed by (seed, frame, pixel, sample).
+    /// pixel, with random numbers keyed by (seed, sample index of the render, pixel).
     fn start(&mut self, tile: Tile) {
         let PtSettings {
             width,
@@ -166,7 +166,7 @@ impl Wavefront for PtWavefront<'_> {
             seed,
             ..
         } = *self.settings;
-        let (iteration, samples) = (u64::from(self.iteration), self.samples);
+        let (first_sample, samples) = (self.first_sample, self.samples);
         let camera = &self.scene.camera;
         let projection = camera.projection(width, height);
         let starts: Vec<(u32, u32)> = tile
@@ -177,7 +177,7 @@ impl Wavefront for PtWavefront<'_> {
             .into_par_iter()
             .with_min_len(256)
             .map(|(pixel, sample)| {
-                let key = [seed, iteration, u64::from(pixel), u64::from(sample)];
+                let key = [seed, u64::from(first_sample + sample), u64::from(pixel)];
                 let mut rng = Rng::from_key(&key);
                 let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
                 let raster: Vec2 = xy + rng.uniform2();

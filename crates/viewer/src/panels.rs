@@ -7,6 +7,7 @@ use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
 use vcm::Scheduler;
 use vcm_rs::Backend;
+use vcm_rs::frames::Frames;
 use vcm_rs::integrators::{Algorithm, ScheduleOptions, SchedulerKind};
 
 use crate::app::ViewerApp;
@@ -151,7 +152,11 @@ fn schedule_rows(schedule: &mut ScheduleOptions, backend: Backend, ui: &mut egui
     ui.end_row();
 
     ui.label("Tile size");
-    let tiled = !matches!(schedule.schedule_on(backend).scheduler, Scheduler::None);
+    // Whether some frame size runs tiles (the GPU's own choice does from a few samples on).
+    let tiled = !matches!(
+        schedule.schedule_on(backend, Frames::MOST_PACED).scheduler,
+        Scheduler::None
+    );
     let mut size = schedule.tile_size.unwrap_or(Scheduler::DEFAULT_TILE_SIZE);
     let edited = ui.add_enabled(
         tiled,
@@ -165,10 +170,18 @@ fn schedule_rows(schedule: &mut ScheduleOptions, backend: Backend, ui: &mut egui
     ui.end_row();
 
     ui.label("Samples/frame");
-    let mut samples = schedule.spp_per_frame.unwrap_or(1);
-    if ui.add(egui::Slider::new(&mut samples, 1..=64)).changed() {
-        schedule.spp_per_frame = Some(samples);
-    }
+    ui.horizontal(|ui| {
+        // Automatic: the backend's choice (one on the CPU, paced frames on the GPU).
+        let mut automatic = schedule.spp_per_frame.is_none();
+        if ui.checkbox(&mut automatic, "auto").changed() {
+            schedule.spp_per_frame = (!automatic).then_some(1);
+        }
+        let mut samples = schedule.spp_per_frame.unwrap_or(1);
+        let slider = egui::Slider::new(&mut samples, 1..=64);
+        if ui.add_enabled(!automatic, slider).changed() {
+            schedule.spp_per_frame = Some(samples);
+        }
+    });
     ui.end_row();
 }
 

@@ -11,6 +11,7 @@ use glam::Vec3;
 use vcm::image_io::RgbImage;
 use vcm::{Film, FrameStats, Integrator};
 use vcm_rs::Backend;
+use vcm_rs::frames::{Frames, Remaining};
 use vcm_rs::integrators;
 use vcm_scene::Scene;
 use vcm_traversal::Traversal;
@@ -183,7 +184,8 @@ impl Worker {
             &settings.integrator,
         )
         .map_err(|e| format!("cannot start {name}: {e}"))?;
-        let schedule = settings.schedule.schedule_on(settings.backend);
+        let first = settings.schedule.frame_sizes(settings.backend).first();
+        let schedule = settings.schedule.schedule_on(settings.backend, first);
         integrator
             .set_schedule(schedule)
             .map_err(|e| format!("cannot schedule {name}: {e}"))?;
@@ -229,7 +231,9 @@ impl Worker {
         let mut film = Film::new(width, height);
         let mut totals = FrameStats::default();
         let mut elapsed = Duration::ZERO;
-        let (mut frame, mut spp) = (0, 0);
+        let settings = &job.view.settings;
+        let mut frames = Frames::new(settings.schedule, settings.backend);
+        let mut frame = 0;
         loop {
             match inbox.try_recv() {
                 Ok(newer) => return latest_job(newer, inbox),
@@ -240,10 +244,20 @@ impl Worker {
                 return wait_for_job(inbox);
             }
             let start = Instant::now();
-            totals.accumulate(&integrator.render_frame(&mut film, frame));
+            match frames.render_next(integrator.as_mut(), &mut film, Remaining::default()) {
+                Ok(stats) => totals.accumulate(&stats),
+                Err(e) => {
+                    let name = settings.algorithm.name();
+                    self.publish(Update::Failed {
+                        generation: job.generation,
+                        message: format!("cannot schedule {name}: {e}"),
+                    });
+                    return wait_for_job(inbox);
+                }
+            }
             elapsed += start.elapsed();
             frame += 1;
-            spp += integrator.samples_per_frame();
+            let spp = frames.samples();
             let mean = film.mean();
             let relmse = self.relmse(job.view.size, &mean);
             self.publish(Update::Frames(Snapshot {
@@ -385,8 +399,8 @@ mod tests {
             integrators::build(Algorithm::Vcm, scene, traversal, size, &settings.integrator)
                 .unwrap();
         let mut film = Film::new(size.0, size.1);
-        for iteration in 0..frames {
-            integrator.render_frame(&mut film, iteration);
+        for sample in 0..frames {
+            integrator.render_frame(&mut film, sample);
         }
         film.mean()
     }

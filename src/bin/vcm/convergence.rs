@@ -61,11 +61,12 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
         let mut film = Film::new(size.0, size.1);
         let outcome = progressive::render(
             integrator.as_mut(),
+            args.setup.frames(),
             &mut film,
             budget,
             Some(&reference),
             &interrupted,
-        );
+        )?;
         outcomes.push((algorithm, outcome));
         if interrupted.load(Ordering::SeqCst) {
             eprintln!("interrupted: writing the results so far");

@@ -8,13 +8,14 @@ use anyhow::bail;
 use glam::Vec3;
 use vcm::metrics::{ErrorMetrics, compare};
 use vcm::{Film, FrameStats, Integrator};
+use vcm_rs::frames::{FrameCounts, Frames, Remaining};
 
 use crate::process::cpu_seconds;
 
 /// When to stop rendering.
 #[derive(Clone, Copy, Debug)]
 pub enum Budget {
-    /// This many samples per pixel (rounded up to whole frames).
+    /// This many samples per pixel.
     Samples(u32),
     /// This many seconds of wall-clock time.
     Seconds(f64),
@@ -37,6 +38,20 @@ impl Budget {
         match *self {
             Budget::Samples(n) => spp >= n,
             Budget::Seconds(s) => elapsed.as_secs_f64() >= s,
+        }
+    }
+
+    /// What is left of the budget after `spp` samples per pixel and `elapsed`.
+    fn remaining(&self, spp: u32, elapsed: Duration) -> Remaining {
+        match *self {
+            Budget::Samples(n) => Remaining {
+                samples: Some(n.saturating_sub(spp)),
+                time: None,
+            },
+            Budget::Seconds(s) => Remaining {
+                samples: None,
+                time: Some(Duration::from_secs_f64(s).saturating_sub(elapsed)),
+            },
         }
     }
 
@@ -84,6 +99,8 @@ impl Checkpoint {
 pub struct Outcome {
     /// Samples per pixel rendered.
     pub spp: u32,
+    /// The frames they came in.
+    pub frames: FrameCounts,
     /// Wall-clock seconds.
     pub seconds: f64,
     /// Work summed over all frames.
@@ -99,14 +116,15 @@ pub struct Outcome {
     pub mean_utilization: Option<f64>,
 }
 
-/// Renders frames into `film` until `budget` is spent or `interrupted` is set.
+/// Renders `frames` into `film` until `budget` is spent or `interrupted` is set.
 pub fn render(
     integrator: &mut dyn Integrator,
+    mut frames: Frames,
     film: &mut Film,
     budget: Budget,
     reference: Option<&[Vec3]>,
     interrupted: &AtomicBool,
-) -> Outcome {
+) -> anyhow::Result<Outcome> {
     let progress = budget.progress_bar();
     let mut totals = FrameStats::default();
     let mut checkpoints = Vec::new();
@@ -115,11 +133,11 @@ pub fn render(
     let threads = rayon::current_num_threads() as f64;
     let start = Instant::now();
     let cpu_start = cpu_seconds();
-    let (mut spp, mut frame, mut frame_start) = (0, 0, (0.0, cpu_start));
-    while !budget.done(spp, start.elapsed()) && !interrupted.load(Ordering::SeqCst) {
-        totals.accumulate(&integrator.render_frame(film, frame));
-        frame += 1;
-        spp += integrator.samples_per_frame();
+    let mut frame_start = (0.0, cpu_start);
+    while !budget.done(frames.samples(), start.elapsed()) && !interrupted.load(Ordering::SeqCst) {
+        let remaining = budget.remaining(frames.samples(), start.elapsed());
+        totals.accumulate(&frames.render_next(integrator, film, remaining)?);
+        let spp = frames.samples();
         let seconds = start.elapsed().as_secs_f64();
         if seconds - frame_start.0 >= UTILIZATION_INTERVAL {
             let frame_end = (seconds, cpu_seconds());
@@ -146,17 +164,19 @@ pub fn render(
     let mean_utilization = cpu_seconds()
         .zip(cpu_start)
         .map(|(end, begin)| (end - begin) / (seconds.max(1e-9) * threads));
+    let spp = frames.samples();
     if let Some(reference) = reference {
         checkpoints.push(checkpoint(film, reference, seconds, spp));
     }
-    Outcome {
+    Ok(Outcome {
         spp,
+        frames: frames.counts(),
         seconds,
         totals,
         checkpoints,
         utilization,
         mean_utilization,
-    }
+    })
 }
 
 fn checkpoint(film: &Film, reference: &[Vec3], seconds: f64, spp: u32) -> Checkpoint {

@@ -11,6 +11,7 @@ use vcm::atomic_write::write_atomically;
 use vcm::image_io::RgbImage;
 use vcm::{Film, Integrator};
 use vcm_rs::Backend;
+use vcm_rs::frames::Frames;
 use vcm_rs::scene::Scene;
 use vcm_rs::traversal::Traversal;
 
@@ -41,7 +42,7 @@ pub struct RenderSetup {
 
 impl RenderSetup {
     /// The integrator of `algorithm` for `scene` at `size`, traced by `traversal`, with the
-    /// schedule these options ask for on their backend.
+    /// schedule of the first frame these options ask for on their backend (which checks it).
     pub fn integrator(
         &self,
         algorithm: Algorithm,
@@ -51,8 +52,14 @@ impl RenderSetup {
     ) -> anyhow::Result<Box<dyn Integrator>> {
         let mut integrator =
             integrators::build(algorithm, scene, traversal, size, &self.integrator)?;
-        integrator.set_schedule(self.schedule.schedule_on(self.backend))?;
+        let first = self.schedule.frame_sizes(self.backend).first();
+        integrator.set_schedule(self.schedule.schedule_on(self.backend, first))?;
         Ok(integrator)
+    }
+
+    /// The frames to render with: sized and scheduled as these options ask on their backend.
+    pub fn frames(&self) -> Frames {
+        Frames::new(self.schedule, self.backend)
     }
 }
 
@@ -115,11 +122,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let mut film = Film::new(width, height);
     let outcome = progressive::render(
         integrator.as_mut(),
+        args.setup.frames(),
         &mut film,
         budget,
         reference.as_deref(),
         &interrupted,
-    );
+    )?;
     if interrupted.load(Ordering::SeqCst) {
         eprintln!(
             "interrupted: writing the {} samples per pixel rendered so far",
@@ -287,6 +295,7 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         totals,
         checkpoints,
         mean_utilization,
+        frames,
         ..
     } = outcome;
     let pixels = f64::from(film.width()) * f64::from(film.height());
@@ -303,6 +312,12 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         film.height(),
         samples / elapsed / 1e6
     );
+    let sizes = if frames.fewest == frames.most {
+        format!("{}", frames.most)
+    } else {
+        format!("{} to {}", frames.fewest, frames.most)
+    };
+    println!("frames: {} ({sizes} samples per pixel each)", frames.count);
     println!(
         "rays: {:.2} M/s (camera {:.2}, continuation {:.2}, light {:.2}, shadow {:.2})",
         per_second(totals.rays()),

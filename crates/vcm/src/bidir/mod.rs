@@ -3,7 +3,7 @@
 //! photon mapping, all from one integrator.
 //!
 //! An iteration of the algorithm renders one sample per pixel; a frame renders
-//! `samples_per_frame` iterations side by side (iteration `frame · S + s` for its sample `s`),
+//! `samples_per_frame` iterations side by side (iteration `first + s` for its sample `s`),
 //! each with its own merge radius, light vertex cache and hash grid, in two passes run as
 //! waves of ray batches over a [`Traversal`]:
 //! 1. **Light pass**: one light path per pixel and sample. Every non-specular vertex is stored
@@ -271,13 +271,14 @@ impl Vcm {
         self.grids.resize_with(samples, HashGrid::default);
     }
 
-    /// The contexts of frame `frame`'s iterations, one per sample per pixel.
-    fn iterations(&self, frame: u32) -> Vec<FrameContext<'_>> {
+    /// The contexts of the frame's iterations, one per sample per pixel, from
+    /// `first_sample` on.
+    fn iterations(&self, first_sample: u32) -> Vec<FrameContext<'_>> {
         let samples = self.schedule.samples_per_frame;
         let light_paths = self.light_paths() as f32;
         (0..samples)
             .map(|sample| {
-                let iteration = u64::from(frame) * u64::from(samples) + u64::from(sample);
+                let iteration = u64::from(first_sample) + u64::from(sample);
                 let radius = self.radius(iteration);
                 FrameContext {
                     scene: &self.scene,
@@ -327,8 +328,9 @@ impl Vcm {
 }
 
 impl Integrator for Vcm {
-    /// Renders frame `iteration`: `samples_per_frame` iterations of the algorithm at once.
-    fn render_frame(&mut self, film: &mut Film, iteration: u32) -> FrameStats {
+    /// Renders iterations `first_sample …`: `samples_per_frame` iterations of the algorithm
+    /// at once.
+    fn render_frame(&mut self, film: &mut Film, first_sample: u32) -> FrameStats {
         let VcmSettings { width, height, .. } = self.settings;
         let plan = self.plan;
         assert_eq!(
@@ -341,7 +343,7 @@ impl Integrator for Vcm {
         let scheduler = self.schedule.scheduler;
         let mut caches = std::mem::take(&mut self.caches);
         let mut grids = std::mem::take(&mut self.grids);
-        let iterations = self.iterations(iteration);
+        let iterations = self.iterations(first_sample);
         let mut light = if plan.light_paths() {
             light_pass::run(&iterations, scheduler, plan.splats, &mut stats)
         } else {
