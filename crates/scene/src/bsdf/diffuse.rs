@@ -59,6 +59,14 @@ impl Lobe for CompensatedDiffuse {
         (f * wi.z, cosine_hemisphere_pdf(wi.z))
     }
 
+    /// The cosine pdf, without the layer's albedo lookups.
+    fn pdf(&self, _wo: Vec3, wi: Vec3, _eta: f32) -> f32 {
+        if wi.z <= 0.0 {
+            return 0.0;
+        }
+        cosine_hemisphere_pdf(wi.z)
+    }
+
     fn sample(
         &self,
         _wo: Vec3,

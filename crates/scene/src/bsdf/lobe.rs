@@ -60,6 +60,12 @@ pub(super) trait Lobe {
     /// of `wi`. Zero for delta lobes.
     fn eval(&self, wo: Vec3, wi: Vec3, eta: f32, mode: TransportMode) -> (Vec3, f32);
 
+    /// The pdf [`eval`](Lobe::eval) returns, without the value: reverse pdfs need only
+    /// this, and lobes whose value costs more than their pdf skip that work.
+    fn pdf(&self, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
+        self.eval(wo, wi, eta, TransportMode::Radiance).1
+    }
+
     /// Draws a direction with the remapped lobe-selection number `u_sub` ∈ [0, 1) (for
     /// reflection/transmission choices) and `u` ∈ [0, 1)².
     fn sample(

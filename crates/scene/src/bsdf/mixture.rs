@@ -199,6 +199,14 @@ impl Mixture {
         (f_cos, pdf)
     }
 
+    /// The mixture pdf of [`Mixture::eval`] alone.
+    pub fn pdf(&self, p: &Selection, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
+        let lobes = p.iter().zip(self.lobes());
+        lobes
+            .filter_map(|(pk, lobe)| Some(pk * lobe?.pdf(wo, wi, eta)))
+            .sum()
+    }
+
     /// Samples one lobe with `u_lobe` from the [selection](Mixture::selection) `p` at `wo`,
     /// then a direction from it with `u`. Non-delta samples carry no value: the caller
     /// evaluates [`Mixture::eval`] at the final direction.

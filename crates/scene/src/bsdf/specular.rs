@@ -57,6 +57,16 @@ impl Lobe for SchlickReflection {
         (f_cos, ggx.visible_pdf(wo, m) / (4.0 * wo.dot(m)))
     }
 
+    /// The visible-normal pdf, without the Fresnel term and the masking of `wi`.
+    fn pdf(&self, wo: Vec3, wi: Vec3, _eta: f32) -> f32 {
+        let Some(ggx) = self.ggx.filter(|_| wi.z > 0.0) else {
+            return 0.0;
+        };
+        (wo + wi)
+            .try_normalize()
+            .map_or(0.0, |m| ggx.visible_pdf(wo, m) / (4.0 * wo.dot(m)))
+    }
+
     fn sample(
         &self,
         wo: Vec3,

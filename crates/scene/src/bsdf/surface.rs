@@ -252,9 +252,21 @@ impl Bsdf {
     /// Solid-angle pdf of sampling `wi` from `wo` (the `pdf_fwd` of [`Bsdf::eval`], without
     /// the reverse pdf); it does not depend on the transport mode.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.outgoing(wo)
-            .and_then(|out| self.eval_from(&out, wi, TransportMode::Radiance))
-            .map_or(0.0, |(_, pdf)| pdf)
+        let Some(out) = self.outgoing(wo) else {
+            return 0.0;
+        };
+        let wi_l = self.to_local(out.side, wi);
+        if self.consistent(out.side, wi, wi_l).is_none() {
+            return 0.0;
+        }
+        let pdf = self
+            .mixture
+            .pdf(&out.selection, out.local, wi_l, out.side.eta);
+        if pdf.is_finite() && pdf > 0.0 {
+            pdf
+        } else {
+            0.0
+        }
     }
 
     /// The shading normal (front orientation): radiance-mode `f_cos` is f·|ωi·n_s|, so

@@ -50,6 +50,32 @@ fn sample_matches_eval() {
 }
 
 #[test]
+fn pdf_alone_is_the_pdf_of_eval() {
+    // Bsdf::pdf skips the value (Fresnel, masking of wi, the layer's albedo lookups) but must
+    // return exactly the pdf eval() does, for every lobe mix, side and mode.
+    let mut rng = Rng::new(23, 0);
+    let mut non_zero = 0;
+    for &roughness in &ROUGHNESS_SWEEP {
+        for (name, params) in material_classes(roughness) {
+            for tilt in [0.0, 0.25] {
+                let b = Bsdf::new(&params, n_g(), tilted_normal(tilt), false);
+                for _ in 0..400 {
+                    let random_direction = |rng: &mut Rng| {
+                        let (c, phi) = (2.0 * rng.uniform() - 1.0, TAU * rng.uniform());
+                        direction(n_g(), c, phi)
+                    };
+                    let (wo, wi) = (random_direction(&mut rng), random_direction(&mut rng));
+                    let expected = b.eval(wo, wi, TransportMode::Radiance).pdf_fwd;
+                    assert_eq!(b.pdf(wo, wi), expected, "{name} tilt {tilt}: {wo} -> {wi}");
+                    non_zero += usize::from(expected > 0.0);
+                }
+            }
+        }
+    }
+    assert!(non_zero > 1000, "only {non_zero} pairs with a non-zero pdf");
+}
+
+#[test]
 fn delta_reverse_pdfs_of_pure_interfaces() {
     // For a single smooth interface the reverse choice has the same probability: R(θo) =
     // R(θi) for the mirror, and T is the same on both sides of a refraction.
