@@ -165,6 +165,12 @@ impl ScheduleOptions {
         }
     }
 
+    /// The schedule of the first frame on `backend` (what an integrator is set up with, which
+    /// also checks the options).
+    pub fn first_schedule_on(&self, backend: Backend) -> Schedule {
+        self.schedule_on(backend, self.frame_sizes(backend).first())
+    }
+
     /// How frames are sized on `backend`: `--spp-per-frame` in every frame where given, else
     /// the backend's [preference](Backend::preferred_frame_sizes).
     pub fn frame_sizes(&self, backend: Backend) -> FrameSizes {

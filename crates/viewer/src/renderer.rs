@@ -184,8 +184,7 @@ impl Worker {
             &settings.integrator,
         )
         .map_err(|e| format!("cannot start {name}: {e}"))?;
-        let first = settings.schedule.frame_sizes(settings.backend).first();
-        let schedule = settings.schedule.schedule_on(settings.backend, first);
+        let schedule = settings.schedule.first_schedule_on(settings.backend);
         integrator
             .set_schedule(schedule)
             .map_err(|e| format!("cannot schedule {name}: {e}"))?;
@@ -233,14 +232,16 @@ impl Worker {
         let mut elapsed = Duration::ZERO;
         let settings = &job.view.settings;
         let mut frames = Frames::new(settings.schedule, settings.backend);
-        let mut frame = 0;
         loop {
             match inbox.try_recv() {
                 Ok(newer) => return latest_job(newer, inbox),
                 Err(TryRecvError::Disconnected) => return Next::Quit,
                 Err(TryRecvError::Empty) => {}
             }
-            if job.frame_limit.is_some_and(|limit| frame >= limit) {
+            if job
+                .frame_limit
+                .is_some_and(|limit| frames.counts().count >= limit)
+            {
                 return wait_for_job(inbox);
             }
             let start = Instant::now();
@@ -256,7 +257,6 @@ impl Worker {
                 }
             }
             elapsed += start.elapsed();
-            frame += 1;
             let spp = frames.samples();
             let mean = film.mean();
             let relmse = self.relmse(job.view.size, &mean);

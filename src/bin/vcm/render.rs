@@ -52,8 +52,7 @@ impl RenderSetup {
     ) -> anyhow::Result<Box<dyn Integrator>> {
         let mut integrator =
             integrators::build(algorithm, scene, traversal, size, &self.integrator)?;
-        let first = self.schedule.frame_sizes(self.backend).first();
-        integrator.set_schedule(self.schedule.schedule_on(self.backend, first))?;
+        integrator.set_schedule(self.schedule.first_schedule_on(self.backend))?;
         Ok(integrator)
     }
 
