@@ -42,15 +42,30 @@ pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n_g: Vec3, w: Vec3) -> Vec3 {
     let offset = if w.dot(n_g) < 0.0 { -d * n_g } else { d * n_g };
     let moved = p + offset;
     Vec3::from_array(std::array::from_fn(|axis| {
-        let (x, o) = (moved[axis], offset[axis]);
-        if o > 0.0 {
-            x.next_up()
-        } else if o < 0.0 {
-            x.next_down()
-        } else {
-            x
-        }
+        step_toward(moved[axis], offset[axis])
     }))
+}
+
+/// `x` moved to the next float above it when `o` > 0, below it when `o` < 0, and left as it
+/// is when `o` is zero or NaN or `x` is not finite: `next_up` / `next_down` without branches
+/// on the signs, which are as likely one way as the other here. Finite floats read as
+/// sign-magnitude integers are ordered like the numbers they stand for, ±0 both being 0.
+fn step_toward(x: f32, o: f32) -> f32 {
+    let step = i32::from(o > 0.0) - i32::from(o < 0.0);
+    let bits = x.to_bits() as i32;
+    let magnitude = bits & i32::MAX;
+    let ordinal = if bits < 0 { -magnitude } else { magnitude };
+    let moved = ordinal + step;
+    let moved_bits = if moved < 0 {
+        moved.unsigned_abs() | 0x8000_0000
+    } else {
+        moved as u32
+    };
+    if step != 0 && x.is_finite() {
+        f32::from_bits(moved_bits)
+    } else {
+        x
+    }
 }
 
 #[cfg(test)]
@@ -83,6 +98,37 @@ mod tests {
         let [a, b, c] = tri.map(Vec3::as_dvec3);
         let n: DVec3 = (b - a).cross(c - a).normalize();
         (p.as_dvec3() - a).dot(n)
+    }
+
+    #[test]
+    fn step_toward_moves_like_next_up_and_next_down() {
+        let mut rng = Rng::from_key(&[5]);
+        let random = (0..1000).map(|_| f32::from_bits(rng.uniform().to_bits() ^ 0x1234_5678));
+        let special = [
+            0.0,
+            -0.0,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            1.0,
+            -1.0,
+            f32::MAX,
+            f32::MIN,
+        ];
+        for x in special.into_iter().chain(random).filter(|x| x.is_finite()) {
+            // ±0 compare equal: stepping from the smallest subnormal toward zero may give
+            // either zero.
+            assert_eq!(step_toward(x, 3.0), x.next_up(), "{x:e} up");
+            assert_eq!(step_toward(x, -1e-30), x.next_down(), "{x:e} down");
+            assert_eq!(step_toward(x, 0.0).to_bits(), x.to_bits(), "{x:e} stays");
+            assert_eq!(step_toward(x, f32::NAN).to_bits(), x.to_bits(), "{x:e} NaN");
+        }
+        for x in [f32::INFINITY, f32::NEG_INFINITY] {
+            assert_eq!(step_toward(x, 1.0), x);
+            assert_eq!(step_toward(x, -1.0), x);
+        }
+        assert!(step_toward(f32::NAN, 1.0).is_nan());
     }
 
     #[test]
