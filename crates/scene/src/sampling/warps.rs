@@ -4,21 +4,25 @@
 //! uniform with respect to area.
 
 use glam::{Vec2, Vec3};
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
 /// Uniform point on the unit disk by Shirley & Chiu's concentric mapping (1997), which keeps
 /// strata compact (low distortion). Pdf 1/π per unit area.
+///
+/// Written without branches on which coordinate dominates (a coin flip for random input):
+/// the angle within the dominant axis's quadrant, φ = π/4 · minor / major, always lies in
+/// [−π/4, π/4], and the half where y dominates, at angle π/2 − φ, takes sin φ and cos φ
+/// swapped.
 pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     let p = 2.0 * u - Vec2::ONE;
     if p.x == 0.0 && p.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if p.x.abs() > p.y.abs() {
-        (p.x, FRAC_PI_4 * (p.y / p.x))
-    } else {
-        (p.y, FRAC_PI_2 - FRAC_PI_4 * (p.x / p.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
+    let x_major = p.x.abs() > p.y.abs();
+    let (major, minor) = if x_major { (p.x, p.y) } else { (p.y, p.x) };
+    let (sin, cos) = (FRAC_PI_4 * (minor / major)).sin_cos();
+    let (x, y) = if x_major { (cos, sin) } else { (sin, cos) };
+    major * Vec2::new(x, y)
 }
 
 /// Cosine-weighted direction on the hemisphere around +z (Malley's method: a concentric-disk
