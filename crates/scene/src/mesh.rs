@@ -77,6 +77,12 @@ pub struct SurfacePoint {
     pub triangle: u32,
 }
 
+/// Unit normal of the triangle with corners `[a, b, c]` (counter-clockwise winding faces it),
+/// zero for a degenerate triangle.
+fn normal_of([a, b, c]: &[Vec3; 3]) -> Vec3 {
+    (*b - *a).cross(*c - *a).normalize_or_zero()
+}
+
 impl Mesh {
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
@@ -96,8 +102,7 @@ impl Mesh {
 
     /// Unit geometric normal of triangle `t` (counter-clockwise winding faces it).
     pub fn geometric_normal(&self, t: usize) -> Vec3 {
-        let [a, b, c] = self.corners(t);
-        (b - a).cross(c - a).normalize_or_zero()
+        normal_of(&self.corners(t))
     }
 
     /// Texture coordinates at barycentrics (u, v) on triangle `t`.
@@ -133,8 +138,8 @@ impl Mesh {
         uv: Vec2,
         normal_map: Option<Vec3>,
     ) -> SurfacePoint {
-        let [a, b, c] = self.corners(t);
-        let geometric_normal = self.geometric_normal(t);
+        let corners = self.corners(t);
+        let geometric_normal = normal_of(&corners);
         let mut shading = self.interpolated_normal(t, u, v, geometric_normal);
         if let Some(m) = normal_map {
             let tangent = self.interpolated_tangent(t, u, v);
@@ -150,7 +155,7 @@ impl Mesh {
             shading = -shading;
         }
         SurfacePoint {
-            position: a * (1.0 - u - v) + b * u + c * v,
+            position: corners[0] * (1.0 - u - v) + corners[1] * u + corners[2] * v,
             geometric_normal,
             shading_normal: shading,
             uv,
