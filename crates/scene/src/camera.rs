@@ -70,6 +70,7 @@ impl Camera {
 
     /// The unit direction through the raster position `raster` of a `width` × `height`
     /// image (see [`Projection::direction`]).
+    #[inline]
     pub fn direction(&self, width: u32, height: u32, raster: Vec2) -> Vec3 {
         self.projection(width, height).direction(raster)
     }
@@ -99,6 +100,7 @@ pub struct Projection {
 impl Projection {
     /// The unit direction through the raster position `raster` (pixels; (0,0) is the top-left
     /// corner of the image, (width, height) the bottom-right).
+    #[inline]
     pub fn direction(&self, raster: Vec2) -> Vec3 {
         let (c, h) = (&self.camera, self.half_extent);
         let ndc = Vec2::new(

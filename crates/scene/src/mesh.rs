@@ -79,6 +79,7 @@ pub struct SurfacePoint {
 
 /// Unit normal of the triangle with corners `[a, b, c]` (counter-clockwise winding faces it),
 /// zero for a degenerate triangle.
+#[inline]
 fn normal_of([a, b, c]: &[Vec3; 3]) -> Vec3 {
     (*b - *a).cross(*c - *a).normalize_or_zero()
 }
@@ -90,6 +91,7 @@ impl Mesh {
     }
 
     /// The three corner positions of triangle `t`.
+    #[inline]
     pub fn corners(&self, t: usize) -> [Vec3; 3] {
         self.triangles[t].map(|i| self.positions[i as usize])
     }
@@ -101,11 +103,13 @@ impl Mesh {
     }
 
     /// Unit geometric normal of triangle `t` (counter-clockwise winding faces it).
+    #[inline]
     pub fn geometric_normal(&self, t: usize) -> Vec3 {
         normal_of(&self.corners(t))
     }
 
     /// Texture coordinates at barycentrics (u, v) on triangle `t`.
+    #[inline]
     pub fn uv_at(&self, t: usize, u: f32, v: f32) -> Vec2 {
         let [i0, i1, i2] = self.triangles[t].map(|i| i as usize);
         self.uvs[i0] * (1.0 - u - v) + self.uvs[i1] * u + self.uvs[i2] * v
@@ -113,6 +117,7 @@ impl Mesh {
 
     /// The unit-length interpolated vertex normal at (u, v), or `fallback` where the
     /// interpolation vanishes.
+    #[inline]
     fn interpolated_normal(&self, t: usize, u: f32, v: f32, fallback: Vec3) -> Vec3 {
         let [i0, i1, i2] = self.triangles[t].map(|i| i as usize);
         let n = self.normals[i0] * (1.0 - u - v) + self.normals[i1] * u + self.normals[i2] * v;
@@ -130,6 +135,7 @@ impl Mesh {
     ///
     /// `normal_map` is the tangent-space normal from the material's normal map, if any; only
     /// then are tangents interpolated.
+    #[inline]
     pub fn surface_point(
         &self,
         t: usize,

@@ -102,12 +102,14 @@ impl Scene {
     }
 
     /// The material of triangle `triangle`.
+    #[inline]
     pub fn material_of(&self, triangle: u32) -> &Material {
         &self.materials[self.mesh.material_ids[triangle as usize] as usize]
     }
 
     /// The surface point at barycentrics (u, v) of `triangle`, with the normal map applied
     /// (texture coordinates and normal maps as far as [`Scene::shading`] plans them).
+    #[inline]
     pub fn surface_point(&self, triangle: u32, u: f32, v: f32) -> SurfacePoint {
         let t = triangle as usize;
         let plan = &self.shading;
@@ -128,6 +130,7 @@ impl Scene {
     }
 
     /// The BSDF at a surface point.
+    #[inline]
     pub fn bsdf(&self, point: &SurfacePoint) -> Bsdf {
         let index = point.material as usize;
         let material = &self.materials[index];
@@ -143,6 +146,7 @@ impl Scene {
 
     /// Emission seen by a ray with unit direction `ray_dir` that hits `triangle` at (u, v), or
     /// `None` when the triangle does not emit toward the ray.
+    #[inline]
     pub fn emission_on_hit(
         &self,
         triangle: u32,

@@ -53,6 +53,7 @@ impl RayBatch {
     }
 
     /// Appends the ray `origin + t · direction`, `t ∈ [tmin, tmax)`.
+    #[inline]
     pub fn push(&mut self, origin: Vec3, direction: Vec3, tmin: f32, tmax: f32) {
         self.origin_x.push(origin.x);
         self.origin_y.push(origin.y);
@@ -65,16 +66,19 @@ impl RayBatch {
     }
 
     /// Number of rays in the batch.
+    #[inline]
     pub fn len(&self) -> usize {
         self.tmin.len()
     }
 
     /// Whether the batch holds no rays.
+    #[inline]
     pub fn is_empty(&self) -> bool {
         self.tmin.is_empty()
     }
 
     /// Removes all rays, keeping the allocations.
+    #[inline]
     pub fn clear(&mut self) {
         for array in self.arrays_mut() {
             array.clear();
@@ -82,11 +86,13 @@ impl RayBatch {
     }
 
     /// Origin of ray `i`. Panics if `i >= len()`.
+    #[inline]
     pub fn origin(&self, i: usize) -> Vec3 {
         Vec3::new(self.origin_x[i], self.origin_y[i], self.origin_z[i])
     }
 
     /// Direction of ray `i`. Panics if `i >= len()`.
+    #[inline]
     pub fn direction(&self, i: usize) -> Vec3 {
         Vec3::new(self.dir_x[i], self.dir_y[i], self.dir_z[i])
     }
@@ -172,16 +178,19 @@ impl HitBatch {
     }
 
     /// Number of entries.
+    #[inline]
     pub fn len(&self) -> usize {
         self.prim.len()
     }
 
     /// Whether the batch holds no entries.
+    #[inline]
     pub fn is_empty(&self) -> bool {
         self.prim.is_empty()
     }
 
     /// Whether ray `i` hit something. Panics if `i >= len()`.
+    #[inline]
     pub fn is_hit(&self, i: usize) -> bool {
         self.prim[i] != NO_HIT
     }

@@ -162,6 +162,7 @@ impl Mixture {
 
     /// Selection probabilities at `wo` (all zero when no lobe can scatter): what
     /// [`Mixture::eval`] and [`Mixture::sample`] take, so that one `wo` computes them once.
+    #[inline]
     pub fn selection(&self, wo: Vec3, eta: f32) -> Selection {
         let mut p = [0.0; LOBES];
         for (pk, lobe) in p.iter_mut().zip(self.lobes()) {
@@ -180,6 +181,7 @@ impl Mixture {
 
     /// f·|cos θi| of the non-delta lobes and the mixture pdf of `wi` (local, `wo.z > 0`),
     /// `p` being the [selection](Mixture::selection) at `wo`.
+    #[inline]
     pub fn eval(
         &self,
         p: &Selection,
@@ -200,6 +202,7 @@ impl Mixture {
     }
 
     /// The mixture pdf of [`Mixture::eval`] alone.
+    #[inline]
     pub fn pdf(&self, p: &Selection, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
         let lobes = p.iter().zip(self.lobes());
         lobes
@@ -210,6 +213,7 @@ impl Mixture {
     /// Samples one lobe with `u_lobe` from the [selection](Mixture::selection) `p` at `wo`,
     /// then a direction from it with `u`. Non-delta samples carry no value: the caller
     /// evaluates [`Mixture::eval`] at the final direction.
+    #[inline]
     pub fn sample(
         &self,
         p: &Selection,

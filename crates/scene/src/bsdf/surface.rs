@@ -72,11 +72,13 @@ impl Bsdf {
 
     /// [`Bsdf::new`] with lobes built beforehand: the same BSDF as `Bsdf::new` with the
     /// parameters `lobes` was built from, without building them again.
+    #[inline]
     pub fn from_lobes(lobes: &Lobes, n_g: Vec3, n_s: Vec3, double_sided: bool) -> Bsdf {
         Bsdf::placed(lobes.0.clone(), n_g, n_s, double_sided)
     }
 
     /// `mixture` placed at a surface point (see [`Bsdf::new`]).
+    #[inline]
     fn placed(mixture: Mixture, n_g: Vec3, n_s: Vec3, double_sided: bool) -> Bsdf {
         let n_s = if !n_s.is_finite() || n_s.length_squared() < 0.25 {
             n_g
@@ -95,6 +97,7 @@ impl Bsdf {
     }
 
     /// Side of `w`, or `None` when `w` is grazing/NaN, or behind a one-sided opaque material.
+    #[inline]
     fn side(&self, w: Vec3) -> Option<Side> {
         let cos_g = w.dot(self.n_g);
         if cos_g.is_nan() || cos_g.abs() <= GRAZING_COS {
@@ -111,6 +114,7 @@ impl Bsdf {
     }
 
     /// `w` in the shading frame of `side` (mirrored for the back side).
+    #[inline]
     fn to_local(&self, side: Side, w: Vec3) -> Vec3 {
         let l = self.frame.to_local(w);
         if side.back {
@@ -120,6 +124,7 @@ impl Bsdf {
         }
     }
 
+    #[inline]
     fn to_world(&self, side: Side, l: Vec3) -> Vec3 {
         self.frame.to_world(if side.back {
             Vec3::new(l.x, l.y, -l.z)
@@ -130,6 +135,7 @@ impl Bsdf {
 
     /// `wo` seen from the surface, if it is in the upper shading hemisphere of its side (not
     /// grazing) and the material scatters from that side.
+    #[inline]
     fn outgoing(&self, wo: Vec3) -> Option<Outgoing> {
         let side = self.side(wo)?;
         let local = self.to_local(side, wo);
@@ -143,6 +149,7 @@ impl Bsdf {
 
     /// Whether (wo, wi_local) is a consistent pair: `wi` not grazing, and reflection vs
     /// transmission the same by n_g and by n_s. Returns |wi·n_g| when consistent.
+    #[inline]
     fn consistent(&self, side: Side, wi: Vec3, wi_local: Vec3) -> Option<f32> {
         let cos_gi = if side.back {
             -wi.dot(self.n_g)
@@ -157,6 +164,7 @@ impl Bsdf {
 
     /// Multiplies by Veach's shading-normal correction in importance mode (Veach 1997,
     /// §5.3): f·|wi·n_s| becomes f·|wo·n_s||wi·n_g| / |wo·n_g|.
+    #[inline]
     fn adjoint(
         &self,
         f_cos: Vec3,
@@ -179,11 +187,13 @@ impl Bsdf {
     /// radiance mode and f·|wo·n_s||wi·n_g|/|wo·n_g| in importance mode; `pdf_fwd` is the
     /// solid-angle pdf of sampling `wi` from `wo`, `pdf_rev` that of `wo` from `wi`.
     /// All zero for delta-only materials, inconsistent or degenerate pairs.
+    #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> BsdfEval {
         self.eval_with(wo, wi, mode, Pdfs::Both)
     }
 
     /// [`Bsdf::eval`] with only the `pdfs` asked for.
+    #[inline]
     pub fn eval_with(&self, wo: Vec3, wi: Vec3, mode: TransportMode, pdfs: Pdfs) -> BsdfEval {
         self.fix_outgoing(wo)
             .map_or_else(BsdfEval::default, |fixed| fixed.eval(wi, mode, pdfs))
@@ -193,6 +203,7 @@ impl Bsdf {
     /// evaluations or a sample from the same `wo`; `None` when nothing scatters toward `wo`
     /// (it is grazing, below the shading hemisphere, or on the black side of a one-sided
     /// material), where every evaluation would be zero and every sample `None`.
+    #[inline]
     pub fn fix_outgoing(&self, wo: Vec3) -> Option<FixedOutgoing<'_>> {
         Some(FixedOutgoing {
             bsdf: self,
@@ -201,6 +212,7 @@ impl Bsdf {
     }
 
     /// f_cos and the forward pdf of the pair (`out`, `wi`), if both are non-zero and finite.
+    #[inline]
     fn eval_from(&self, out: &Outgoing, wi: Vec3, mode: TransportMode) -> Option<(Vec3, f32)> {
         let wi_l = self.to_local(out.side, wi);
         let cos_gi = self.consistent(out.side, wi, wi_l)?;
@@ -214,6 +226,7 @@ impl Bsdf {
     /// Samples `wi` given `wo` with `u_lobe` (lobe choice) and `u` (direction), both in
     /// [0, 1). `None` when nothing is scattered (black side, degenerate input, or a sampled
     /// direction that is below the surface or inconsistent between n_g and n_s).
+    #[inline]
     pub fn sample(
         &self,
         wo: Vec3,
@@ -225,6 +238,7 @@ impl Bsdf {
     }
 
     /// [`Bsdf::sample`] with only the `pdfs` asked for.
+    #[inline]
     pub fn sample_with(
         &self,
         wo: Vec3,
@@ -251,6 +265,7 @@ impl Bsdf {
 
     /// Solid-angle pdf of sampling `wi` from `wo` (the `pdf_fwd` of [`Bsdf::eval`], without
     /// the reverse pdf); it does not depend on the transport mode.
+    #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let Some(out) = self.outgoing(wo) else {
             return 0.0;
@@ -271,17 +286,20 @@ impl Bsdf {
 
     /// The shading normal (front orientation): radiance-mode `f_cos` is f·|ωi·n_s|, so
     /// f alone (density estimation) is `f_cos / |ωi·n_s|`.
+    #[inline]
     pub fn shading_normal(&self) -> Vec3 {
         self.frame.z
     }
 
     /// Whether every lobe is a Dirac delta (also true for a black material): no connection
     /// or merge is possible at this vertex.
+    #[inline]
     pub fn is_delta(&self) -> bool {
         !self.mixture.has_non_delta()
     }
 
     /// Whether some lobe is not a delta (the negation of [`Bsdf::is_delta`]).
+    #[inline]
     pub fn has_non_delta(&self) -> bool {
         self.mixture.has_non_delta()
     }
@@ -290,6 +308,7 @@ impl Bsdf {
     /// otherwise the most specular class among the non-delta lobes ([`LobeKind::Glossy`] if
     /// any rough GGX lobe exists, else [`LobeKind::Diffuse`]). Delta lobes of a mixed
     /// material (a smooth coat over diffuse) are ignored: connections use the rest.
+    #[inline]
     pub fn classify(&self) -> LobeKind {
         self.mixture.classify()
     }
@@ -297,11 +316,13 @@ impl Bsdf {
 
 impl FixedOutgoing<'_> {
     /// The BSDF.
+    #[inline]
     pub fn bsdf(&self) -> &Bsdf {
         self.bsdf
     }
 
     /// [`Bsdf::eval_with`] at the fixed `wo`.
+    #[inline]
     pub fn eval(&self, wi: Vec3, mode: TransportMode, pdfs: Pdfs) -> BsdfEval {
         let Some((f_cos, pdf_fwd)) = self.bsdf.eval_from(&self.out, wi, mode) else {
             return BsdfEval::default();
@@ -317,6 +338,7 @@ impl FixedOutgoing<'_> {
     }
 
     /// [`Bsdf::sample_with`] at the fixed `wo`.
+    #[inline]
     pub fn sample(
         &self,
         u_lobe: f32,

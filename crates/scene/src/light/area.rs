@@ -42,6 +42,7 @@ impl AreaLight {
         }
     }
 
+    #[inline]
     pub(super) fn illuminate(
         &self,
         textures: &[Texture],
@@ -89,6 +90,7 @@ impl AreaLight {
 
     /// Radiance seen by a ray with unit direction `ray_dir` hitting the light at barycentrics
     /// (u, v); zero from behind.
+    #[inline]
     pub fn radiance_on_hit(
         &self,
         textures: &[Texture],

@@ -86,6 +86,7 @@ impl Light {
     ///
     /// Returns `None` when the sample cannot contribute (back of a one-sided emitter, outside a
     /// spot cone, receiver on the light).
+    #[inline]
     pub fn illuminate(
         &self,
         textures: &[Texture],
@@ -101,6 +102,7 @@ impl Light {
     }
 
     /// Samples an emitted ray with two pairs of uniform numbers (position, direction).
+    #[inline]
     pub fn emit(&self, textures: &[Texture], u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
         match self {
             Light::Area(l) => l.emit(textures, u_pos, u_dir),
@@ -122,11 +124,13 @@ impl Light {
 
     /// True for lights with a delta position or direction (point, spot, directional): paths
     /// cannot hit them, only light sampling reaches them.
+    #[inline]
     pub fn is_delta(&self) -> bool {
         !matches!(self, Light::Area(_))
     }
 
     /// True for lights at a finite position (all but directional).
+    #[inline]
     pub fn is_finite(&self) -> bool {
         !matches!(self, Light::Directional(_))
     }

@@ -32,16 +32,19 @@ impl LightSampler {
 
     /// Picks a light with probability proportional to power: (light index, probability).
     /// `None` when the scene has no light with positive power.
+    #[inline]
     pub fn sample(&self, u: f32) -> Option<(usize, f32)> {
         self.distribution.as_ref().map(|d| d.sample(u))
     }
 
     /// Probability of picking light `index`.
+    #[inline]
     pub fn pmf(&self, index: usize) -> f32 {
         self.distribution.as_ref().map_or(0.0, |d| d.pmf(index))
     }
 
     /// The area light behind triangle `triangle`, if it emits.
+    #[inline]
     pub fn light_of_triangle(&self, triangle: u32) -> Option<usize> {
         let light = *self.light_of_triangle.get(triangle as usize)?;
         (light != NOT_A_LIGHT).then_some(light as usize)

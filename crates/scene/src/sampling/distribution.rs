@@ -43,6 +43,7 @@ impl Distribution1D {
     }
 
     /// Probability of selecting entry `i` (0 for zero weights and out-of-range indices).
+    #[inline]
     pub fn pmf(&self, i: usize) -> f32 {
         if i >= self.len() {
             return 0.0;
@@ -53,6 +54,7 @@ impl Distribution1D {
     /// Selects an entry with `u` in [0, 1) (clamped into it) and returns it with its
     /// probability. An entry with zero weight is never selected: the result is the first
     /// entry whose cumulative sum exceeds `u · total`.
+    #[inline]
     pub fn sample(&self, u: f32) -> (usize, f32) {
         let target = (u as f64).clamp(0.0, 1.0) * self.total();
         // First i with cdf[i + 1] > target; partition_point over cdf[1..].

@@ -45,6 +45,7 @@ impl Rng {
     /// The key is hashed with splitmix64 (each element mixed, then folded into the running
     /// hash, so the order matters), and the hash derives both the seed and the stream:
     /// nearby keys give statistically independent sequences.
+    #[inline]
     pub fn from_key(key: &[u64]) -> Rng {
         let mut h = 0x243F_6A88_85A3_08D3_u64; // digits of pi: an arbitrary non-zero start
         for &k in key {
@@ -64,11 +65,13 @@ impl Rng {
 
     /// Uniform `f32` in [0, 1): multiples of 2^-24, so the largest value is 1 − 2^-24 and
     /// 1.0 is never returned.
+    #[inline]
     pub fn uniform(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * F32_FROM_24_BITS
     }
 
     /// Two independent uniforms in [0, 1)².
+    #[inline]
     pub fn uniform2(&mut self) -> Vec2 {
         let x = self.uniform();
         Vec2::new(x, self.uniform())

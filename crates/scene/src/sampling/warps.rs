@@ -13,6 +13,7 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 /// the angle within the dominant axis's quadrant, φ = π/4 · minor / major, always lies in
 /// [−π/4, π/4], and the half where y dominates, at angle π/2 − φ, takes sin φ and cos φ
 /// swapped.
+#[inline]
 pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     let p = 2.0 * u - Vec2::ONE;
     if p.x == 0.0 && p.y == 0.0 {
@@ -27,6 +28,7 @@ pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
 
 /// Cosine-weighted direction on the hemisphere around +z (Malley's method: a concentric-disk
 /// sample lifted onto the hemisphere). Pdf: [`cosine_hemisphere_pdf`].
+#[inline]
 pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
     let d = sample_concentric_disk(u);
     let z = (1.0 - d.length_squared()).max(0.0).sqrt();
@@ -34,6 +36,7 @@ pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
 }
 
 /// Solid-angle pdf of [`sample_cosine_hemisphere`]: cos θ / π (0 below the horizon).
+#[inline]
 pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
     cos_theta.max(0.0) * FRAC_1_PI
 }
@@ -69,6 +72,7 @@ pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
 /// Uniform point on a triangle as barycentrics (b0, b1, b2), summing to 1, by the
 /// area-preserving square-root parameterization (Shirley 1992):
 /// b0 = 1 − √u₀, b1 = u₁ √u₀. Pdf 1/area.
+#[inline]
 pub fn sample_uniform_triangle(u: Vec2) -> Vec3 {
     let su = u.x.sqrt();
     let b0 = 1.0 - su;
@@ -79,6 +83,7 @@ pub fn sample_uniform_triangle(u: Vec2) -> Vec3 {
 /// Veach's power heuristic (β = 2) for `nf` samples from a technique with pdf `f_pdf`
 /// combined with `ng` samples from one with pdf `g_pdf`: (nf·f)² / ((nf·f)² + (ng·g)²).
 /// Returns 1 when `f_pdf` is infinite (delta) and 0 when both pdfs are zero.
+#[inline]
 pub fn power_heuristic(nf: f32, f_pdf: f32, ng: f32, g_pdf: f32) -> f32 {
     let f = nf * f_pdf;
     let g = ng * g_pdf;
