@@ -211,11 +211,18 @@ impl Bsdf {
         })
     }
 
+    /// `wi` in the shading frame of `out`'s side and |wi·n_g|, when (`out`, `wi`) is a
+    /// consistent pair ([`Bsdf::consistent`]).
+    #[inline]
+    fn incoming(&self, out: &Outgoing, wi: Vec3) -> Option<(Vec3, f32)> {
+        let wi_l = self.to_local(out.side, wi);
+        Some((wi_l, self.consistent(out.side, wi, wi_l)?))
+    }
+
     /// f_cos and the forward pdf of the pair (`out`, `wi`), if both are non-zero and finite.
     #[inline]
     fn eval_from(&self, out: &Outgoing, wi: Vec3, mode: TransportMode) -> Option<(Vec3, f32)> {
-        let wi_l = self.to_local(out.side, wi);
-        let cos_gi = self.consistent(out.side, wi, wi_l)?;
+        let (wi_l, cos_gi) = self.incoming(out, wi)?;
         let (f_cos, pdf) = self
             .mixture
             .eval(&out.selection, out.local, wi_l, out.side.eta, mode);
@@ -267,21 +274,15 @@ impl Bsdf {
     /// the reverse pdf); it does not depend on the transport mode.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let Some(out) = self.outgoing(wo) else {
-            return 0.0;
-        };
-        let wi_l = self.to_local(out.side, wi);
-        if self.consistent(out.side, wi, wi_l).is_none() {
-            return 0.0;
-        }
-        let pdf = self
-            .mixture
-            .pdf(&out.selection, out.local, wi_l, out.side.eta);
-        if pdf.is_finite() && pdf > 0.0 {
-            pdf
-        } else {
-            0.0
-        }
+        let pdf = self.outgoing(wo).and_then(|out| {
+            let (wi_l, _) = self.incoming(&out, wi)?;
+            Some(
+                self.mixture
+                    .pdf(&out.selection, out.local, wi_l, out.side.eta),
+            )
+        });
+        pdf.filter(|pdf| pdf.is_finite() && *pdf > 0.0)
+            .unwrap_or(0.0)
     }
 
     /// The shading normal (front orientation): radiance-mode `f_cos` is f·|ωi·n_s|, so
