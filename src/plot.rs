@@ -5,6 +5,7 @@
 //! Text needs a TrueType font: `VCM_PLOT_FONT` names one, else common system fonts (DejaVu,
 //! Liberation) are tried; without any, the plot is drawn without labels and a warning says so.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -146,7 +147,11 @@ where
 {
     let labels = font_available();
     if !labels {
-        eprintln!("warning: no TrueType font found (set VCM_PLOT_FONT); the plot has no labels");
+        // Not `eprintln!`, which panics when stderr is a pipe nobody reads any more.
+        let _ = writeln!(
+            std::io::stderr(),
+            "warning: no TrueType font found (set VCM_PLOT_FONT); the plot has no labels"
+        );
     }
     // The bitmap backend picks the encoder from the extension, which the temporary name keeps.
     write_atomically(

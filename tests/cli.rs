@@ -365,3 +365,47 @@ fn utilization_is_recorded_over_time() {
     let summary = String::from_utf8_lossy(&output.stdout);
     assert!(summary.contains("cpu utilization: "), "{summary}");
 }
+
+/// Runs `vcm` with stdout and stderr going into pipes whose readers have already left, as in
+/// `vcm compare a b | head -1` once `head` is done.
+/// Returns its exit status.
+fn vcm_into_closed_pipes(args: &[&str]) -> std::process::ExitStatus {
+    let (out_reader, out_writer) = std::io::pipe().unwrap();
+    let (err_reader, err_writer) = std::io::pipe().unwrap();
+    drop((out_reader, err_reader));
+    Command::new(env!("CARGO_BIN_EXE_vcm"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(out_writer)
+        .stderr(err_writer)
+        .status()
+        .expect("the vcm binary runs")
+}
+
+/// A reader that stops reading (a broken pipe on stdout and stderr) ends neither `compare` nor
+/// `info` with a panic, and does not stop a render from writing its image.
+#[test]
+fn readers_that_leave_early_do_not_break_the_commands() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("box.exr");
+    let exr_arg = exr.to_str().unwrap();
+    let render = [
+        "render",
+        "--spp",
+        "1",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--explain",
+        "-o",
+        exr_arg,
+    ];
+    let status = vcm_into_closed_pipes(&render);
+    assert!(status.success(), "render: {status}");
+    assert!(exr.is_file() && exr.with_extension("png").is_file());
+    let status = vcm_into_closed_pipes(&["compare", exr_arg, exr_arg]);
+    assert!(status.success(), "compare: {status}");
+    let status = vcm_into_closed_pipes(&["info"]);
+    assert!(status.success(), "info: {status}");
+}

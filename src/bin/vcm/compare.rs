@@ -35,14 +35,16 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     }
     let m = compare(&image.pixels, &reference.pixels)
         .ok_or_else(|| anyhow::anyhow!("{}: the image is empty", args.image.display()))?;
-    println!(
+    say!(
         "rmse {:.6e}\nrelmse {:.6e}\nmae {:.6e}",
-        m.rmse, m.relmse, m.mae
+        m.rmse,
+        m.relmse,
+        m.mae
     );
     if let Some(diff) = &args.diff {
         let errors = relative_error_per_pixel(&image.pixels, &reference.pixels);
         write_error_png(diff, image.width, image.height, &errors)?;
-        println!("wrote {}", diff.display());
+        say!("wrote {}", diff.display());
     }
     Ok(())
 }

@@ -55,7 +55,7 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
     let interrupted = interrupt_flag()?;
     let mut outcomes = Vec::new();
     for &algorithm in &args.algos {
-        eprintln!("rendering with {} for {} s", algorithm.name(), args.time);
+        tell!("rendering with {} for {} s", algorithm.name(), args.time);
         let traversal = Arc::clone(&traversal) as _;
         let mut integrator = args.setup.integrator(algorithm, &scene, traversal, size)?;
         let mut film = Film::new(size.0, size.1);
@@ -69,7 +69,7 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
         )?;
         outcomes.push((algorithm, outcome));
         if interrupted.load(Ordering::SeqCst) {
-            eprintln!("interrupted: writing the results so far");
+            tell!("interrupted: writing the results so far");
             break;
         }
     }
@@ -91,15 +91,20 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
     let title = format!("relMSE over time: {}", args.scene.display());
     plot_relmse(&args.output, &title, &series)?;
     print_table(&outcomes, size);
-    println!("wrote {} and {}", args.output.display(), csv_path.display());
+    say!("wrote {} and {}", args.output.display(), csv_path.display());
     Ok(())
 }
 
 /// Throughput and final error per algorithm (the thesis's Table 5.1).
 fn print_table(outcomes: &[(Algorithm, Outcome)], (width, height): (u32, u32)) {
-    println!(
+    say!(
         "{:<5} {:>10} {:>12} {:>10} {:>8} {:>12}",
-        "algo", "M rays/s", "M samples/s", "frames/s", "frames", "final relMSE"
+        "algo",
+        "M rays/s",
+        "M samples/s",
+        "frames/s",
+        "frames",
+        "final relMSE"
     );
     let pixels = f64::from(width) * f64::from(height);
     for (algorithm, outcome) in outcomes {
@@ -109,7 +114,7 @@ fn print_table(outcomes: &[(Algorithm, Outcome)], (width, height): (u32, u32)) {
             .checkpoints
             .last()
             .map_or(f64::NAN, |c| c.metrics.relmse);
-        println!(
+        say!(
             "{:<5} {:>10.2} {:>12.3} {:>10.2} {:>8} {:>12.4e}",
             algorithm.name(),
             outcome.totals.rays() as f64 / seconds / 1e6,

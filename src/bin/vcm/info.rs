@@ -19,12 +19,12 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
     let scene = std::sync::Arc::new(Scene::load(&args.scene)?);
     let load_time = start.elapsed();
     for warning in &scene.warnings {
-        eprintln!("warning: {warning}");
+        tell!("warning: {warning}");
     }
-    println!("scene: {}", scene.path.display());
-    println!("loaded in {:.3} s", load_time.as_secs_f64());
-    println!("{}", scene.features);
-    println!(
+    say!("scene: {}", scene.path.display());
+    say!("loaded in {:.3} s", load_time.as_secs_f64());
+    say!("{}", scene.features);
+    say!(
         "materials: {}, textures: {}, lights: {}, dropped degenerate triangles: {}",
         scene.materials.len(),
         scene.textures.len(),
@@ -32,7 +32,7 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
         scene.dropped_triangles
     );
     let c = &scene.camera;
-    println!(
+    say!(
         "camera: at {} looking along {}, vertical fov {:.2}°",
         c.position,
         c.forward,
@@ -40,7 +40,7 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
     );
     let bvh = vcm_rs::cpu_traversal(&scene).context("building the CPU BVH")?;
     let triangles = scene.mesh.triangle_count().max(1);
-    println!(
+    say!(
         "cpu bvh: built in {:.3} s, {:.1} bytes/triangle",
         bvh.build_time().as_secs_f64(),
         bvh.memory_bytes() as f64 / triangles as f64

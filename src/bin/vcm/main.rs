@@ -1,5 +1,9 @@
 //! `vcm`: the command line front end of vcm-rs.
 
+// First, so that its `say!` and `tell!` macros are in scope in the modules below.
+#[macro_use]
+mod say;
+
 mod compare;
 mod convergence;
 mod info;
@@ -42,7 +46,7 @@ fn main() -> std::process::ExitCode {
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {error:#}");
+            tell!("error: {error:#}");
             std::process::ExitCode::FAILURE
         }
     }

@@ -128,7 +128,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         &interrupted,
     )?;
     if interrupted.load(Ordering::SeqCst) {
-        eprintln!(
+        tell!(
             "interrupted: writing the {} samples per pixel rendered so far",
             outcome.spp
         );
@@ -150,7 +150,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         };
         let title = format!("relMSE over time: {}", args.scene.display());
         plot_relmse(&plot, &title, &[series])?;
-        println!("wrote {} and {}", report.display(), plot.display());
+        say!("wrote {} and {}", report.display(), plot.display());
     }
     if let Some(path) = &args.utilization {
         write_utilization(path, &outcome.utilization)?;
@@ -165,18 +165,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         let plot = path.with_extension("png");
         let title = format!("CPU utilization: {}", args.scene.display());
         plot_utilization(&plot, &title, &[series])?;
-        println!("wrote {} and {}", path.display(), plot.display());
+        say!("wrote {} and {}", path.display(), plot.display());
     }
     print_summary(&film, &outcome);
-    println!("wrote {} and {}", args.output.display(), png.display());
+    say!("wrote {} and {}", args.output.display(), png.display());
     Ok(())
 }
 
 /// Prints the scene's features and every part of the render with whether it runs and why.
 fn print_explanation(scene: &Scene, setup: &RenderSetup, integrator: &dyn Integrator) {
-    println!("scene {}:", scene.path.display());
+    say!("scene {}:", scene.path.display());
     for line in scene.features.to_string().lines() {
-        println!("  {line}");
+        say!("  {line}");
     }
     let shading = setup.integrator.shading_plan(scene);
     let decisions = integrator
@@ -184,9 +184,9 @@ fn print_explanation(scene: &Scene, setup: &RenderSetup, integrator: &dyn Integr
         .into_iter()
         .chain(shading.decisions(&scene.features))
         .chain(setup.backend.decisions(scene));
-    println!("plan:");
+    say!("plan:");
     for decision in decisions {
-        println!("  {decision}");
+        say!("  {decision}");
     }
 }
 
@@ -195,7 +195,7 @@ pub fn build_traversal(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<A
     let built = backend
         .build(scene)
         .context("building the ray traversal backend")?;
-    eprintln!("traversal: {}", built.description);
+    tell!("traversal: {}", built.description);
     Ok(built.traversal)
 }
 
@@ -214,7 +214,7 @@ pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
 pub fn load_scene(path: &Path) -> anyhow::Result<Arc<Scene>> {
     let scene = Scene::load(path)?;
     for warning in &scene.warnings {
-        eprintln!("warning: {warning}");
+        tell!("warning: {warning}");
     }
     Ok(Arc::new(scene))
 }
@@ -305,7 +305,7 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         .as_secs_f64()
         .max(1e-9);
     let share = |d: std::time::Duration| 100.0 * d.as_secs_f64() / busy;
-    println!(
+    say!(
         "rendered {spp} spp at {}×{} in {seconds:.2} s: {:.2} M samples/s",
         film.width(),
         film.height(),
@@ -316,8 +316,8 @@ fn print_summary(film: &Film, outcome: &Outcome) {
     } else {
         format!("{} to {}", frames.fewest, frames.most)
     };
-    println!("frames: {} ({sizes} samples per pixel each)", frames.count);
-    println!(
+    say!("frames: {} ({sizes} samples per pixel each)", frames.count);
+    say!(
         "rays: {:.2} M/s (camera {:.2}, continuation {:.2}, light {:.2}, shadow {:.2})",
         per_second(totals.rays()),
         per_second(totals.camera_rays),
@@ -325,7 +325,7 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         per_second(totals.light_rays),
         per_second(totals.shadow_rays)
     );
-    println!(
+    say!(
         "time: traversal {:.2} s ({:.0}%), shading {:.2} s ({:.0}%), hash grid {:.2} s ({:.0}%)",
         totals.traversal_time.as_secs_f64(),
         share(totals.traversal_time),
@@ -335,32 +335,34 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         share(totals.grid_build_time)
     );
     if totals.light_vertices + totals.discarded_light_vertices > 0 {
-        println!(
+        say!(
             "light vertex cache: {:.0} vertices per iteration, {} discarded for lack of room",
             totals.light_vertices as f64 / f64::from((*spp).max(1)),
             totals.discarded_light_vertices
         );
     }
-    println!("dropped non-finite samples: {}", film.dropped());
-    println!(
+    say!("dropped non-finite samples: {}", film.dropped());
+    say!(
         "queue memory: peak {:.1} MiB (paths in flight and their ray buffers)",
         totals.queue_memory as f64 / f64::from(1 << 20)
     );
     if let Some(mean) = mean_utilization {
-        println!(
+        say!(
             "cpu utilization: {:.0}% of {} threads",
             100.0 * mean,
             rayon::current_num_threads()
         );
     }
     if let Some(mib) = crate::process::peak_memory_mib() {
-        println!("peak memory: {mib:.0} MiB");
+        say!("peak memory: {mib:.0} MiB");
     }
     if let Some(last) = checkpoints.last() {
         let m = &last.metrics;
-        println!(
+        say!(
             "error: rmse {:.4e}, relMSE {:.4e}, mae {:.4e}",
-            m.rmse, m.relmse, m.mae
+            m.rmse,
+            m.relmse,
+            m.mae
         );
     }
 }
