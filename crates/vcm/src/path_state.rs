@@ -34,10 +34,7 @@ pub(crate) struct ShadowRay {
 impl ShadowRay {
     /// Refills `batch` with `shadows`, in order, for one occlusion query.
     pub fn fill_batch<'a>(batch: &mut RayBatch, shadows: impl Iterator<Item = &'a ShadowRay>) {
-        batch.clear();
-        for shadow in shadows {
-            batch.push(shadow.origin, shadow.direction, 0.0, shadow.tmax);
-        }
+        batch.refill(shadows.map(|s| (s.origin, s.direction, 0.0, s.tmax)));
     }
 }
 

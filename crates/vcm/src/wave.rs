@@ -12,10 +12,7 @@ pub(crate) fn fill_extension_rays(
     rays: &mut RayBatch,
     segments: impl Iterator<Item = (Vec3, Vec3)>,
 ) {
-    rays.clear();
-    for (origin, direction) in segments {
-        rays.push(origin, direction, 0.0, f32::INFINITY);
-    }
+    rays.refill(segments.map(|(origin, direction)| (origin, direction, 0.0, f32::INFINITY)));
 }
 
 /// Calls `shade` for every path with its closest hit (`hits[i]` for path `i`), in parallel.
