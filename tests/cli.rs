@@ -366,9 +366,8 @@ fn utilization_is_recorded_over_time() {
     assert!(summary.contains("cpu utilization: "), "{summary}");
 }
 
-/// Runs `vcm` with stdout and stderr going into pipes whose readers have already left, as in
-/// `vcm compare a b | head -1` once `head` is done.
-/// Returns its exit status.
+/// Runs `vcm` with stdout and stderr going into pipes whose readers have already left (as in
+/// `vcm compare a b | head -1` once `head` is done) and returns its exit status.
 fn vcm_into_closed_pipes(args: &[&str]) -> std::process::ExitStatus {
     let (out_reader, out_writer) = std::io::pipe().unwrap();
     let (err_reader, err_writer) = std::io::pipe().unwrap();
