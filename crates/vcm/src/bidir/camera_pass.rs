@@ -5,6 +5,7 @@ use std::f32::consts::PI;
 
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
+use smallvec::SmallVec;
 use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
 use vcm_scene::sampling::Rng;
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
@@ -24,6 +25,10 @@ use crate::prefetch::prefetch;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::wave::{fill_extension_rays, shade_in_parallel};
+
+/// Shadow rays a camera path state holds without a heap allocation: the light sample and
+/// one connection, the default (`--connections 1`).
+const INLINE_SHADOW_RAYS: usize = 2;
 
 /// What the camera paths of one iteration read: the iteration, and its light pass's results.
 pub(crate) struct CameraContext<'a> {
@@ -51,8 +56,10 @@ struct CameraPathState {
     walk: Walk,
     radiance: Vec3,
     alive: bool,
-    /// Occlusion rays queued by the last shading step: the light sample and connections.
-    shadows: Vec<ShadowRay>,
+    /// Occlusion rays queued by the last shading step: the light sample and connections
+    /// (held in the path state up to [`INLINE_SHADOW_RAYS`], so that the common case allocates
+    /// nothing per path).
+    shadows: SmallVec<[ShadowRay; INLINE_SHADOW_RAYS]>,
 }
 
 /// Traces one camera path per pixel for each iteration of `iterations`, grouped as
@@ -120,7 +127,8 @@ impl Wavefront for CameraWavefront<'_> {
 
     /// The paths and the shadow rays they queued.
     fn memory_bytes(&self) -> usize {
-        let shadows: usize = self.paths.iter().map(|p| p.shadows.capacity()).sum();
+        let spilled = self.paths.iter().filter(|p| p.shadows.spilled());
+        let shadows: usize = spilled.map(|p| p.shadows.capacity()).sum();
         self.paths.capacity() * size_of::<CameraPathState>() + shadows * size_of::<ShadowRay>()
     }
 
@@ -188,7 +196,7 @@ fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
         },
         radiance: Vec3::ZERO,
         alive: true,
-        shadows: Vec::new(),
+        shadows: SmallVec::new(),
     }
 }
 
