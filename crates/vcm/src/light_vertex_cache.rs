@@ -35,8 +35,8 @@ pub struct LightVertex {
     pub path_length: u32,
 }
 
-/// The light vertices of one frame, in light path order then wave order. Vertices arriving
-/// after the cache is full are discarded and counted.
+/// The light vertices of one frame, path by path, each path's from the light on. Vertices
+/// beyond the capacity (those of the last paths) are discarded and counted.
 #[derive(Clone, Debug, Default)]
 pub struct LightVertexCache {
     vertices: Vec<LightVertex>,

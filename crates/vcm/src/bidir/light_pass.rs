@@ -1,6 +1,8 @@
 //! The light pass: light paths traced in waves, their vertices stored in the light vertex
 //! cache and (for light tracing, BPT and VCM) connected to the camera.
 
+use std::sync::{Mutex, PoisonError};
+
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
@@ -9,6 +11,7 @@ use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
 use super::mis::{SubpathMis, camera_connection_weight};
+use super::path_order::{PathOrder, path_key};
 use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::integrator::FrameStats;
@@ -29,8 +32,6 @@ const PREPROCESS_STREAM: u64 = 2;
 struct Splat {
     /// The pixel the light vertex projects to.
     pixel: u32,
-    /// Path length of the light vertex.
-    path_length: u32,
     /// The ray from the light vertex to the camera and its contribution.
     ray: ShadowRay,
 }
@@ -53,13 +54,10 @@ struct LightPathState {
     vertex: Option<LightVertex>,
     /// The camera connection the last shading step produced.
     splat: Option<Splat>,
-}
-
-/// The place of a vertex (or its splat) in the results: by the vertex's path length, then by
-/// its path's index, the order in which one batch of all paths produces them, whatever the
-/// scheduler.
-fn result_key(path_length: u32, index: u32) -> u64 {
-    (u64::from(path_length) << 32) | u64::from(index)
+    /// Vertices of the path kept so far (the next one's ordinal, [`path_key`]).
+    kept_vertices: u32,
+    /// Unoccluded splats of the path so far.
+    kept_splats: u32,
 }
 
 /// Traces one light path per pixel for each iteration of `iterations`, grouped as `scheduler`
@@ -69,15 +67,18 @@ pub(crate) fn run(
     iterations: &[FrameContext],
     scheduler: Scheduler,
     splat: bool,
+    buffers: &ResultBuffers,
     stats: &mut FrameStats,
 ) -> Vec<LightResults> {
     let VcmSettings { width, height, .. } = *iterations[0].settings;
+    let size = (width, height);
     trace(
         iterations,
         scheduler,
-        (width, height),
+        size,
         LIGHT_STREAM,
         splat,
+        buffers,
         stats,
     )
 }
@@ -92,13 +93,14 @@ pub(crate) fn count_vertices(ctx: FrameContext, scheduler: Scheduler, count: u32
         (count, 1),
         PREPROCESS_STREAM,
         false,
+        &ResultBuffers::default(),
         &mut stats,
     );
     results[0].vertex_count() as u64
 }
 
 /// What one scheduler worker's light paths of one iteration left: their vertices and
-/// unoccluded splats, with the [`result_key`] of each.
+/// unoccluded splats, with the [`path_key`] of each.
 #[derive(Default)]
 struct WorkerResults {
     vertices: Vec<LightVertex>,
@@ -108,11 +110,45 @@ struct WorkerResults {
     splats: Vec<(u64, u32, Vec3)>,
 }
 
-/// The vertices and unoccluded splats of one iteration's light paths, in [`result_key`]
-/// order: the order in which one batch of all its paths produces them.
+impl WorkerResults {
+    /// Empties the lists, keeping their memory.
+    fn clear(&mut self) {
+        self.vertices.clear();
+        self.keys.clear();
+        self.splats.clear();
+    }
+}
+
+/// Worker result lists kept from frame to frame. A worker's vertex list grows to a good share
+/// of the cache; growing it anew every frame (reallocating, copying and faulting in fresh
+/// pages) cost VCM about 6% of its time on the Cornell box.
+#[derive(Default)]
+pub(crate) struct ResultBuffers {
+    spare: Mutex<Vec<WorkerResults>>,
+}
+
+impl ResultBuffers {
+    /// A spare set of empty lists, or new ones.
+    fn take(&self) -> WorkerResults {
+        let mut spare = self.spare.lock().unwrap_or_else(PoisonError::into_inner);
+        spare.pop().unwrap_or_default()
+    }
+
+    /// Keeps the lists of `results` (emptied) for later frames.
+    pub fn recycle(&self, results: Vec<LightResults>) {
+        let mut spare = self.spare.lock().unwrap_or_else(PoisonError::into_inner);
+        for mut part in results.into_iter().flat_map(|r| r.parts) {
+            part.clear();
+            spare.push(part);
+        }
+    }
+}
+
+/// The vertices and unoccluded splats of one iteration's light paths, in [`path_key`]
+/// order: path by path, each path's from the light on, whatever worker traced it.
 pub(crate) struct LightResults {
-    /// Each worker's vertices, as it found them.
-    parts: Vec<Vec<LightVertex>>,
+    /// Each worker's results, as it found them.
+    parts: Vec<WorkerResults>,
     /// (part, index in it) of every vertex, in key order.
     order: Vec<(u32, u32)>,
     /// (key, pixel, contribution), in key order.
@@ -120,28 +156,23 @@ pub(crate) struct LightResults {
 }
 
 impl LightResults {
-    /// The results of all `parts` (one per scheduler worker) in key order. The vertices are
-    /// ordered through a list of (key, part, index) and read in that order later
-    /// ([`LightResults::vertices`]), so that the 64-byte vertices move only into the cache.
-    fn gather(parts: Vec<WorkerResults>) -> LightResults {
-        let mut keyed: Vec<(u64, u32, u32)> = parts
-            .iter()
-            .enumerate()
-            .flat_map(|(part, results)| {
+    /// The results of all `parts` (one per scheduler worker) of the paths `0..paths`, in key
+    /// order. The vertices are ordered through a (part, index) per vertex and read in that
+    /// order later ([`LightResults::vertices`]), so that the 64-byte vertices move only into
+    /// the cache.
+    fn gather(parts: Vec<WorkerResults>, paths: usize) -> LightResults {
+        let keys = || parts.iter().flat_map(|part| part.keys.iter().copied());
+        let order = PathOrder::new(paths, keys()).arrange(parts.iter().enumerate().flat_map(
+            |(part, results)| {
                 let keys = results.keys.iter().enumerate();
-                keys.map(move |(i, &key)| (key, part as u32, i as u32))
-            })
-            .collect();
-        keyed.par_sort_unstable_by_key(|&(key, ..)| key);
-        let order = keyed.into_iter().map(|(_, part, i)| (part, i)).collect();
-        let (mut vertex_parts, mut splats) = (Vec::new(), Vec::new());
-        for part in parts {
-            vertex_parts.push(part.vertices);
-            splats.extend(part.splats);
-        }
-        splats.par_sort_unstable_by_key(|&(key, ..)| key);
+                keys.map(move |(i, &key)| (key, (part as u32, i as u32)))
+            },
+        ));
+        let splats = || parts.iter().flat_map(|part| part.splats.iter().copied());
+        let splats = PathOrder::new(paths, splats().map(|(key, ..)| key))
+            .arrange(splats().map(|splat| (splat.0, splat)));
         LightResults {
-            parts: vertex_parts,
+            parts,
             order,
             splats,
         }
@@ -157,26 +188,23 @@ impl LightResults {
         let parts = &self.parts;
         self.order
             .par_iter()
-            .map(move |&(part, i)| parts[part as usize][i as usize])
+            .map(move |&(part, i)| parts[part as usize].vertices[i as usize])
     }
 }
 
 /// Traces the light paths of every index of a `size.0 × size.1` grid (tiles of it for the
-/// tile scheduler), one per iteration, and gathers each iteration's results in a fixed order.
+/// tile scheduler), one per iteration, and gathers each iteration's results in a fixed order
+/// (the workers' lists come from `buffers`).
 fn trace(
     iterations: &[FrameContext],
     scheduler: Scheduler,
     size: (u32, u32),
     stream: u64,
     splat: bool,
+    buffers: &ResultBuffers,
     stats: &mut FrameStats,
 ) -> Vec<LightResults> {
-    let per_iteration = || {
-        iterations
-            .iter()
-            .map(|_| WorkerResults::default())
-            .collect()
-    };
+    let per_iteration = || iterations.iter().map(|_| buffers.take()).collect();
     let new_wavefront = || LightWavefront {
         iterations,
         grid_width: size.0,
@@ -195,7 +223,9 @@ fn trace(
             iteration_parts.push(part);
         }
     }
-    parts.into_iter().map(LightResults::gather).collect()
+    let paths = size.0 as usize * size.1 as usize;
+    let gather = |parts| LightResults::gather(parts, paths);
+    parts.into_iter().map(gather).collect()
 }
 
 /// The light paths one scheduler worker has in flight, and the results of their vertices.
@@ -226,9 +256,11 @@ impl Wavefront for LightWavefront<'_> {
         let new_paths = keys
             .into_par_iter()
             .with_min_len(256)
-            .map(|(index, sample)| emit(&iterations[sample as usize], index, sample, stream))
-            .filter(|path| path.alive);
+            .map(|(index, sample)| emit(&iterations[sample as usize], index, sample, stream));
+        // Extending by an exact count writes the paths in place; the few that could not
+        // start (a light that emits nothing) are dropped afterwards.
         self.paths.par_extend(new_paths);
+        self.paths.retain(|path| path.alive);
     }
 
     fn active(&self) -> usize {
@@ -254,10 +286,9 @@ impl Wavefront for LightWavefront<'_> {
         for path in &mut self.paths {
             if let Some(vertex) = path.vertex.take() {
                 let results = &mut self.results[path.sample as usize];
-                results
-                    .keys
-                    .push(result_key(vertex.path_length, path.index));
+                results.keys.push(path_key(path.index, path.kept_vertices));
                 results.vertices.push(vertex);
+                path.kept_vertices += 1;
             }
         }
         let rays = self
@@ -273,12 +304,13 @@ impl Wavefront for LightWavefront<'_> {
         for (path, &blocked) in with_splat.zip(occluded) {
             let splat = path.splat.take().expect("filtered on a queued splat");
             if !blocked {
-                let key = result_key(splat.path_length, path.index);
+                let key = path_key(path.index, path.kept_splats);
                 self.results[path.sample as usize].splats.push((
                     key,
                     splat.pixel,
                     splat.ray.contribution,
                 ));
+                path.kept_splats += 1;
             }
         }
         self.paths.retain(|p| p.alive);
@@ -310,6 +342,8 @@ fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathSt
         alive: false,
         vertex: None,
         splat: None,
+        kept_vertices: 0,
+        kept_splats: 0,
     };
     let scene = ctx.scene;
     let Some((light_index, pick_pmf)) = scene.light_sampler.sample(u_pick) else {
@@ -421,7 +455,6 @@ fn connect_to_camera(
     let pixel = raster.as_uvec2().min(UVec2::new(width - 1, height - 1));
     Some(Splat {
         pixel: pixel.y * width + pixel.x,
-        path_length: vertex.path_length,
         ray: ShadowRay {
             origin,
             direction: ray_direction,

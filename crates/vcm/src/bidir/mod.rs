@@ -27,6 +27,7 @@
 mod camera_pass;
 mod light_pass;
 pub(crate) mod mis;
+mod path_order;
 mod plan;
 mod walk;
 
@@ -44,6 +45,7 @@ use crate::film::Film;
 use crate::hash_grid::HashGrid;
 use crate::integrator::{FrameStats, Integrator, Schedule};
 use crate::light_vertex_cache::LightVertexCache;
+use light_pass::ResultBuffers;
 use mis::MisFactors;
 use plan::BidirPlan;
 
@@ -190,6 +192,8 @@ pub struct Vcm {
     caches: Vec<LightVertexCache>,
     /// One hash grid per sample of a frame (empty unless the frame merged).
     grids: Vec<HashGrid>,
+    /// The light pass workers' result lists, reused from frame to frame.
+    light_buffers: ResultBuffers,
 }
 
 impl Vcm {
@@ -231,6 +235,7 @@ impl Vcm {
             cache_capacity: 0,
             caches: Vec::new(),
             grids: Vec::new(),
+            light_buffers: ResultBuffers::default(),
         };
         if plan.cache {
             vcm.cache_capacity = vcm.estimate_cache_capacity();
@@ -345,7 +350,8 @@ impl Integrator for Vcm {
         let mut grids = std::mem::take(&mut self.grids);
         let iterations = self.iterations(first_sample);
         let mut light = if plan.light_paths() {
-            light_pass::run(&iterations, scheduler, plan.splats, &mut stats)
+            let buffers = &self.light_buffers;
+            light_pass::run(&iterations, scheduler, plan.splats, buffers, &mut stats)
         } else {
             Vec::new()
         };
@@ -385,6 +391,7 @@ impl Integrator for Vcm {
                 film.add(pixel as usize, radiance);
             }
         }
+        self.light_buffers.recycle(light);
         (self.caches, self.grids) = (caches, grids);
         stats.shading_time = start
             .elapsed()
