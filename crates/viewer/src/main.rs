@@ -15,6 +15,7 @@ mod settings;
 mod stats;
 mod viewport;
 
+use std::io::Write;
 use std::process::ExitCode;
 use std::sync::PoisonError;
 
@@ -40,17 +41,14 @@ enum Failure {
 
 fn main() -> ExitCode {
     let options = Options::parse();
-    match run(options) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(Failure::NoWindow(error)) => {
-            eprintln!("error: {error:#}");
-            ExitCode::from(NO_WINDOW)
-        }
-        Err(Failure::Other(error)) => {
-            eprintln!("error: {error:#}");
-            ExitCode::FAILURE
-        }
-    }
+    let (error, code) = match run(options) {
+        Ok(()) => return ExitCode::SUCCESS,
+        Err(Failure::NoWindow(error)) => (error, ExitCode::from(NO_WINDOW)),
+        Err(Failure::Other(error)) => (error, ExitCode::FAILURE),
+    };
+    // Not `eprintln!`, which panics when stderr is a closed pipe: the exit status must stay.
+    let _ = writeln!(std::io::stderr(), "error: {error:#}");
+    code
 }
 
 fn run(options: Options) -> Result<(), Failure> {
@@ -110,7 +108,8 @@ fn run(options: Options) -> Result<(), Failure> {
         .take();
     match outcome.context("the window closed before the screenshot was taken") {
         Ok(Ok(summary)) => {
-            println!("{summary}");
+            // A reader that has gone away is no reason to fail the screenshot, already saved.
+            let _ = writeln!(std::io::stdout(), "{summary}");
             Ok(())
         }
         Ok(Err(message)) => Err(Failure::Other(anyhow!(message))),
