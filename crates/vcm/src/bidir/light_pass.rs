@@ -161,16 +161,20 @@ impl LightResults {
     /// order later ([`LightResults::vertices`]), so that the 64-byte vertices move only into
     /// the cache.
     fn gather(parts: Vec<WorkerResults>, paths: usize) -> LightResults {
-        let keys = || parts.iter().flat_map(|part| part.keys.iter().copied());
-        let order = PathOrder::new(paths, keys()).arrange(parts.iter().enumerate().flat_map(
-            |(part, results)| {
+        let vertex_order = || {
+            let keys = || parts.iter().flat_map(|part| part.keys.iter().copied());
+            let places = parts.iter().enumerate().flat_map(|(part, results)| {
                 let keys = results.keys.iter().enumerate();
                 keys.map(move |(i, &key)| (key, (part as u32, i as u32)))
-            },
-        ));
-        let splats = || parts.iter().flat_map(|part| part.splats.iter().copied());
-        let splats = PathOrder::new(paths, splats().map(|(key, ..)| key))
-            .arrange(splats().map(|splat| (splat.0, splat)));
+            });
+            PathOrder::new(paths, keys()).arrange(places)
+        };
+        let ordered_splats = || {
+            let splats = || parts.iter().flat_map(|part| part.splats.iter().copied());
+            PathOrder::new(paths, splats().map(|(key, ..)| key))
+                .arrange(splats().map(|splat| (splat.0, splat)))
+        };
+        let (order, splats) = rayon::join(vertex_order, ordered_splats);
         LightResults {
             parts,
             order,
@@ -225,7 +229,7 @@ fn trace(
     }
     let paths = size.0 as usize * size.1 as usize;
     let gather = |parts| LightResults::gather(parts, paths);
-    parts.into_iter().map(gather).collect()
+    parts.into_par_iter().map(gather).collect()
 }
 
 /// The light paths one scheduler worker has in flight, and the results of their vertices.
