@@ -71,11 +71,10 @@ pub(crate) fn run(
     stats: &mut FrameStats,
 ) -> Vec<LightResults> {
     let VcmSettings { width, height, .. } = *iterations[0].settings;
-    let size = (width, height);
     trace(
         iterations,
         scheduler,
-        size,
+        (width, height),
         LIGHT_STREAM,
         splat,
         buffers,

@@ -53,9 +53,13 @@ impl PathOrder {
     /// The `items` (each with its key, in any order) in key order.
     pub fn arrange<T: Copy + Default>(&self, items: impl Iterator<Item = (u64, T)>) -> Vec<T> {
         let mut arranged = vec![T::default(); self.len()];
+        let mut count = 0;
         for (key, item) in items {
             arranged[self.place(key)] = item;
+            count += 1;
         }
+        // Fewer items than places: some path's ordinals had a gap, leaving defaults behind.
+        debug_assert_eq!(count, arranged.len(), "ordinals must run 0, 1, … per path");
         arranged
     }
 }
