@@ -11,7 +11,7 @@ use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
 use super::mis::{SubpathMis, camera_connection_weight};
-use super::path_order::{PathOrder, path_key};
+use super::path_order::{in_path_order, path_key};
 use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::integrator::FrameStats;
@@ -160,20 +160,15 @@ impl LightResults {
     /// order later ([`LightResults::vertices`]), so that the 64-byte vertices move only into
     /// the cache.
     fn gather(parts: Vec<WorkerResults>, paths: usize) -> LightResults {
-        let vertex_order = || {
-            let keys = || parts.iter().flat_map(|part| part.keys.iter().copied());
-            let places = parts.iter().enumerate().flat_map(|(part, results)| {
-                let keys = results.keys.iter().enumerate();
-                keys.map(move |(i, &key)| (key, (part as u32, i as u32)))
-            });
-            PathOrder::new(paths, keys()).arrange(places)
-        };
-        let ordered_splats = || {
-            let splats = || parts.iter().flat_map(|part| part.splats.iter().copied());
-            PathOrder::new(paths, splats().map(|(key, ..)| key))
-                .arrange(splats().map(|splat| (splat.0, splat)))
-        };
-        let (order, splats) = rayon::join(vertex_order, ordered_splats);
+        let places = parts.iter().enumerate().flat_map(|(part, results)| {
+            let keys = results.keys.iter().enumerate();
+            keys.map(move |(i, &key)| (key, (part as u32, i as u32)))
+        });
+        let splats = parts.iter().flat_map(|part| &part.splats);
+        let (order, splats) = rayon::join(
+            || in_path_order(paths, places),
+            || in_path_order(paths, splats.map(|&splat| (splat.0, splat))),
+        );
         LightResults {
             parts,
             order,

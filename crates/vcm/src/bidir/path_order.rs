@@ -18,15 +18,24 @@ fn split(key: u64) -> (usize, usize) {
     ((key >> 32) as usize, key as u32 as usize)
 }
 
+/// The `items` (each with its [`path_key`], in any order) of paths `0..paths` in key order:
+/// one pass counts each path's results, a second puts every item in its place.
+pub(crate) fn in_path_order<T: Copy + Default>(
+    paths: usize,
+    items: impl Iterator<Item = (u64, T)> + Clone,
+) -> Vec<T> {
+    PathOrder::new(paths, items.clone().map(|(key, _)| key)).arrange(items)
+}
+
 /// Where each result of a set goes in key order: the first place of each path's results.
-pub(crate) struct PathOrder {
+struct PathOrder {
     /// `starts[p]`: the place of path p's first result; `starts[paths]`: the number of results.
     starts: Vec<usize>,
 }
 
 impl PathOrder {
     /// The order of the results with `keys` (in any order) of paths `0..paths`.
-    pub fn new(paths: usize, keys: impl Iterator<Item = u64>) -> PathOrder {
+    fn new(paths: usize, keys: impl Iterator<Item = u64>) -> PathOrder {
         // starts[p + 1] first counts path p's results: one more than its largest ordinal.
         let mut starts = vec![0; paths + 1];
         for key in keys {
@@ -40,7 +49,7 @@ impl PathOrder {
     }
 
     /// Number of results.
-    pub fn len(&self) -> usize {
+    fn len(&self) -> usize {
         self.starts[self.starts.len() - 1]
     }
 
@@ -51,7 +60,7 @@ impl PathOrder {
     }
 
     /// The `items` (each with its key, in any order) in key order.
-    pub fn arrange<T: Copy + Default>(&self, items: impl Iterator<Item = (u64, T)>) -> Vec<T> {
+    fn arrange<T: Copy + Default>(&self, items: impl Iterator<Item = (u64, T)>) -> Vec<T> {
         let mut arranged = vec![T::default(); self.len()];
         let mut count = 0;
         for (key, item) in items {
@@ -82,12 +91,10 @@ mod tests {
     fn arranging_equals_sorting_by_key() {
         let keys =
             [(7, 0), (2, 0), (7, 1), (2, 1), (0, 0), (9, 0), (2, 2)].map(|(p, o)| path_key(p, o));
-        let order = PathOrder::new(10, keys.iter().copied());
-        let arranged = order.arrange(keys.iter().map(|&key| (key, key)));
+        let arranged = in_path_order(10, keys.iter().map(|&key| (key, key)));
         let mut sorted = keys.to_vec();
         sorted.sort_unstable();
         assert_eq!(arranged, sorted);
-        let none = PathOrder::new(3, std::iter::empty());
-        assert!(none.arrange(std::iter::empty::<(u64, u32)>()).is_empty());
+        assert!(in_path_order(3, std::iter::empty::<(u64, u32)>()).is_empty());
     }
 }
