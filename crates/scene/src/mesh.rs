@@ -212,7 +212,9 @@ impl Mesh {
                 let i = i as usize;
                 let n = self.normals[i].try_normalize().unwrap_or(Vec3::ZERO);
                 let t = (tangent[i] - n * n.dot(tangent[i])).normalize_or_zero();
-                let sign = if n.cross(t).dot(bitangent[i]) < 0.0 {
+                // glTF's v runs down the image while a normal map's +Y points up it, so the
+                // bitangent N × T · w must point along −∂P/∂v (as MikkTSpace's does).
+                let sign = if n.cross(t).dot(bitangent[i]) > 0.0 {
                     -1.0
                 } else {
                     1.0
@@ -227,11 +229,13 @@ impl Mesh {
 mod tests {
     use super::*;
 
+    /// The unit square in z = 0 facing +z, textured as glTF maps an image onto it: v = 0 at
+    /// the top of the image, here y = 1.
     fn quad() -> Mesh {
         Mesh {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
             normals: vec![Vec3::Z; 4],
-            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+            uvs: vec![Vec2::Y, Vec2::ONE, Vec2::X, Vec2::ZERO],
             tangents: vec![Vec4::ZERO; 4],
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             material_ids: vec![0, 0],
@@ -248,6 +252,8 @@ mod tests {
         assert_eq!(m.bounds().max, Vec3::new(1.0, 1.0, 0.0));
     }
 
+    /// Generated tangents follow +u, and a normal map's +X and +Y (green: up the image) tilt
+    /// the shading normal toward the image's right and top, as MikkTSpace tangents do.
     #[test]
     fn generated_tangents_follow_u_and_normal_map_tilts_shading_normal() {
         let mut m = quad();
@@ -256,9 +262,10 @@ mod tests {
             assert!((t.truncate() - Vec3::X).length() < 1e-5, "{t}");
             assert_eq!(t.w, 1.0);
         }
-        let tilted = Vec3::new(0.6, 0.0, 0.8);
-        let p = m.surface_point(0, 0.3, 0.3, m.uv_at(0, 0.3, 0.3), Some(tilted));
-        assert!((p.shading_normal - tilted).length() < 1e-5);
+        for tilted in [Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.0, 0.6, 0.8)] {
+            let p = m.surface_point(0, 0.3, 0.3, m.uv_at(0, 0.3, 0.3), Some(tilted));
+            assert!((p.shading_normal - tilted).length() < 1e-5, "{tilted}");
+        }
     }
 
     #[test]
