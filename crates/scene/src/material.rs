@@ -88,6 +88,30 @@ fn lookup(textures: &[Texture], texture: Option<TextureRef>, uv: Vec2) -> Vec4 {
     texture.map_or(Vec4::ONE, |t| textures[t.index].sample(uv))
 }
 
+/// Coverage alpha at `uv`: `alpha` times the alpha of `texture`.
+fn coverage(textures: &[Texture], alpha: f32, texture: Option<TextureRef>, uv: Vec2) -> f32 {
+    alpha * lookup(textures, texture, uv).w
+}
+
+/// Where the surface of an alpha-masked material is (glTF `alphaMode` MASK): wherever its
+/// coverage alpha reaches the cutoff; rays pass through the rest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlphaMask {
+    /// The base color factor's alpha.
+    pub alpha: f32,
+    /// The base color texture, whose alpha multiplies `alpha`.
+    pub texture: Option<TextureRef>,
+    /// `alphaCutoff`: the surface is present where the coverage is at least this.
+    pub cutoff: f32,
+}
+
+impl AlphaMask {
+    /// Whether the surface is present at `uv`.
+    pub fn covers(&self, textures: &[Texture], uv: Vec2) -> bool {
+        coverage(textures, self.alpha, self.texture, uv) >= self.cutoff
+    }
+}
+
 impl Material {
     /// A pure Lambertian diffuse material (metallic 0, roughness 1, specular 0).
     pub fn diffuse(name: &str, albedo: Vec3) -> Self {
@@ -137,14 +161,24 @@ impl Material {
 
     /// Coverage alpha at `uv`: base color alpha times the base color texture's alpha.
     pub fn alpha_at(&self, textures: &[Texture], uv: Vec2) -> f32 {
-        self.base_color.w * lookup(textures, self.base_color_texture, uv).w
+        coverage(textures, self.base_color.w, self.base_color_texture, uv)
     }
 
     /// For alpha-masked materials: whether the surface is present at `uv`.
     pub fn is_opaque_at(&self, textures: &[Texture], uv: Vec2) -> bool {
+        self.alpha_mask()
+            .is_none_or(|mask| mask.covers(textures, uv))
+    }
+
+    /// The cut-out of an alpha-masked material (`None`: the surface is present everywhere).
+    pub fn alpha_mask(&self) -> Option<AlphaMask> {
         match self.alpha_mode {
-            AlphaMode::Opaque => true,
-            AlphaMode::Mask { cutoff } => self.alpha_at(textures, uv) >= cutoff,
+            AlphaMode::Opaque => None,
+            AlphaMode::Mask { cutoff } => Some(AlphaMask {
+                alpha: self.base_color.w,
+                texture: self.base_color_texture,
+                cutoff,
+            }),
         }
     }
 

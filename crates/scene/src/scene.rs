@@ -74,6 +74,7 @@ impl Scene {
                         area: mesh.area(t),
                         emission: material.emission,
                         texture: material.emissive_texture,
+                        cut_out: material.alpha_mask(),
                     })
                 })
             })

@@ -4,6 +4,7 @@ use glam::{Vec2, Vec3};
 
 use super::{Emission, HitEmission, Illumination, channel_mean};
 use crate::frame::Frame;
+use crate::material::AlphaMask;
 use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_triangle};
 use crate::texture::{Texture, TextureRef};
 
@@ -24,6 +25,8 @@ pub struct AreaLight {
     pub emission: Vec3,
     /// Optional emissive texture (multiplies `emission`).
     pub texture: Option<TextureRef>,
+    /// The cut-out of an alpha-masked emitter: no light leaves where rays pass through it.
+    pub cut_out: Option<AlphaMask>,
 }
 
 impl AreaLight {
@@ -31,15 +34,22 @@ impl AreaLight {
         self.corners[0] * b.x + self.corners[1] * b.y + self.corners[2] * b.z
     }
 
+    fn uv_at(&self, b: Vec3) -> Vec2 {
+        self.uvs[0] * b.x + self.uvs[1] * b.y + self.uvs[2] * b.z
+    }
+
     /// Emitted radiance at barycentric coordinates `b`.
     fn radiance_at(&self, textures: &[Texture], b: Vec3) -> Vec3 {
         match self.texture {
             None => self.emission,
-            Some(t) => {
-                let uv = self.uvs[0] * b.x + self.uvs[1] * b.y + self.uvs[2] * b.z;
-                self.emission * textures[t.index].sample(uv).truncate()
-            }
+            Some(t) => self.emission * textures[t.index].sample(self.uv_at(b)).truncate(),
         }
+    }
+
+    /// Whether the emitter's surface is present at barycentric coordinates `b` (not cut out).
+    fn present_at(&self, textures: &[Texture], b: Vec3) -> bool {
+        self.cut_out
+            .is_none_or(|mask| mask.covers(textures, self.uv_at(b)))
     }
 
     #[inline]
@@ -50,6 +60,9 @@ impl AreaLight {
         u: Vec2,
     ) -> Option<Illumination> {
         let b = sample_uniform_triangle(u);
+        if !self.present_at(textures, b) {
+            return None;
+        }
         let to_light = self.point_at(b) - receiver;
         let distance_sq = to_light.length_squared();
         let distance = distance_sq.sqrt();
@@ -74,7 +87,7 @@ impl AreaLight {
         let b = sample_uniform_triangle(u_pos);
         let local = sample_cosine_hemisphere(u_dir);
         let cos_at_light = local.z;
-        if cos_at_light <= 0.0 {
+        if cos_at_light <= 0.0 || !self.present_at(textures, b) {
             return None;
         }
         let inv_area = 1.0 / self.area;

@@ -85,7 +85,7 @@ impl Light {
     /// Samples a point on the light as seen from `receiver`, with two uniform numbers `u`.
     ///
     /// Returns `None` when the sample cannot contribute (back of a one-sided emitter, outside a
-    /// spot cone, receiver on the light).
+    /// spot cone, receiver on the light, a cut-out part of an alpha-masked emitter).
     #[inline]
     pub fn illuminate(
         &self,
@@ -101,7 +101,8 @@ impl Light {
         }
     }
 
-    /// Samples an emitted ray with two pairs of uniform numbers (position, direction).
+    /// Samples an emitted ray with two pairs of uniform numbers (position, direction);
+    /// `None` where no light leaves (a cut-out part of an alpha-masked emitter).
     #[inline]
     pub fn emit(&self, textures: &[Texture], u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
         match self {
@@ -112,7 +113,8 @@ impl Light {
         }
     }
 
-    /// Total emitted power (W in scene units, averaged over RGB): the selection weight.
+    /// Total emitted power (W in scene units, averaged over RGB): the selection weight (of an
+    /// alpha-masked emitter, as if nothing were cut out).
     pub fn power(&self, textures: &[Texture]) -> f32 {
         match self {
             Light::Area(l) => l.power(textures),

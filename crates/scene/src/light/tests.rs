@@ -4,7 +4,9 @@
 use glam::{Vec2, Vec3};
 
 use super::*;
+use crate::material::AlphaMask;
 use crate::sampling::Rng;
+use crate::texture::{ColorEncoding, TextureRef};
 
 /// Mean and standard error of `n` samples of `f`.
 fn estimate(n: usize, seed: u64, mut f: impl FnMut(&mut Rng) -> f64) -> (f64, f64) {
@@ -50,6 +52,7 @@ fn ceiling_triangle(radiance: Vec3) -> AreaLight {
                 .length(),
         emission: radiance,
         texture: None,
+        cut_out: None,
     }
 }
 
@@ -113,6 +116,50 @@ fn emission_sampling_integrates_to_the_light_power() {
             f64::from(light.power(&[])),
         );
     }
+}
+
+/// A cut-out emitter sends light only from where its surface is: both sampling routines
+/// refuse points in the cut-away part, so the emitted power is that of the rest.
+#[test]
+fn cut_out_emitters_emit_only_where_present() {
+    // Alpha 0, 0, 1, 1 across; bilinear filtering ramps it from 0 at u = 3/8 to 1 at u = 5/8.
+    let texels = vec![[0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 255], [0, 0, 0, 255]];
+    let textures = [Texture::new("mask".into(), 4, 1, texels, ColorEncoding::Linear).unwrap()];
+    let mut light = ceiling_triangle(Vec3::new(2.0, 1.0, 0.5));
+    // u = 1/4 + b1/2: the surface (alpha ≥ ½, u ≥ ½) is where b1 ≥ ½, a quarter of the area.
+    light.uvs = [
+        Vec2::new(0.25, 0.5),
+        Vec2::new(0.75, 0.5),
+        Vec2::new(0.25, 0.5),
+    ];
+    light.cut_out = Some(AlphaMask {
+        alpha: 1.0,
+        texture: Some(TextureRef {
+            index: 0,
+            tex_coord: 0,
+        }),
+        cutoff: 0.5,
+    });
+    let [c0, c1, c2] = light.corners;
+    let b1 = |p: Vec3| (p - c0).cross(c2 - c0).length() / (c1 - c0).cross(c2 - c0).length();
+    let full_power = f64::from(light.power(&textures));
+    let light = Light::Area(light);
+    let estimate = estimate(200_000, 7, |rng| {
+        let Some(e) = light.emit(&textures, rng.uniform2(), rng.uniform2()) else {
+            return 0.0;
+        };
+        assert!(b1(e.position) >= 0.5 - 1e-4, "emitted from a cut-out point");
+        f64::from(channel_mean(e.value) * e.cos_at_light / e.emission_pdf_w)
+    });
+    assert_close("power of the present quarter", estimate, 0.25 * full_power);
+    let mut rng = Rng::new(8, 0);
+    let illuminated = (0..10_000).filter_map(|_| {
+        let s = light.illuminate(&textures, Vec3::ZERO, rng.uniform2())?;
+        Some(s.direction * s.distance)
+    });
+    let points: Vec<Vec3> = illuminated.collect();
+    assert!((2_000..3_000).contains(&points.len()), "{}", points.len());
+    assert!(points.iter().all(|&p| b1(p) >= 0.5 - 1e-4));
 }
 
 #[test]
