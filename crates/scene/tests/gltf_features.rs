@@ -172,3 +172,47 @@ fn a_scene_without_camera_is_framed_from_plus_z() {
     assert!((scene.camera.yfov - 45f32.to_radians()).abs() < 1e-6);
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
 }
+
+/// Vertex colors, morph targets and skins would change the image; they are not supported, so
+/// each is reported once, naming the file.
+#[test]
+fn unsupported_geometry_features_are_warned_once() {
+    let triangle = r#""attributes": {"POSITION": 0}"#;
+    let extended = r#""attributes": {"POSITION": 0, "COLOR_0": 0}, "targets": [{"POSITION": 0}]"#;
+    let nodes = r#"[{"children": [1, 2]}, {"mesh": 0, "skin": 0}, {"mesh": 0}]"#;
+    let json =
+        document(nodes, MATTE, r#", "skins": [{"joints": [0]}]"#).replace(triangle, extended);
+    let scene = load(&json).unwrap();
+    for feature in ["COLOR_0", "morph targets", "skins"] {
+        let warnings = scene.warnings.iter().filter(|w| w.contains(feature));
+        let named: Vec<_> = warnings
+            .filter(|w| w.starts_with("memory.gltf: "))
+            .collect();
+        assert_eq!(named.len(), 1, "{feature}: {:?}", scene.warnings);
+    }
+    let plain = load(&document(r#"[{"mesh": 0}]"#, MATTE, "")).unwrap();
+    assert!(plain.warnings.is_empty(), "{:?}", plain.warnings);
+}
+
+/// Textures are always filtered bilinearly; a sampler asking for nearest texels is reported.
+#[test]
+fn nearest_texture_filtering_is_warned() {
+    let dir = tempfile::tempdir().unwrap();
+    let white = image::RgbaImage::from_pixel(2, 2, image::Rgba([255, 255, 255, 255]));
+    white.save(dir.path().join("white.png")).unwrap();
+    let material = r#"[{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]"#;
+    let load_with = |sampler: &str| {
+        let extra = format!(
+            r#", "images": [{{"uri": "white.png"}}], "samplers": [{{{sampler}}}],
+            "textures": [{{"source": 0, "sampler": 0}}]"#
+        );
+        let json = document(r#"[{"mesh": 0}]"#, material, &extra);
+        let path = dir.path().join("scene.gltf");
+        load_gltf_from_bytes(&path, json.as_bytes()).unwrap()
+    };
+    let nearest = load_with(r#""magFilter": 9728"#);
+    let warned = nearest.warnings.iter().filter(|w| w.contains("nearest"));
+    assert_eq!(warned.count(), 1, "{:?}", nearest.warnings);
+    let linear = load_with(r#""magFilter": 9729"#);
+    assert!(linear.warnings.is_empty(), "{:?}", linear.warnings);
+}

@@ -144,7 +144,10 @@ fn generated_tangents_match_the_authored_ones() {
     }
     assert_eq!(same_w, vertices, "handedness");
     // Per-vertex averaging differs from MikkTSpace's at seams; most agree closely.
-    assert!(close * 10 >= vertices * 9, "{close} of {vertices} within 26°");
+    assert!(
+        close * 10 >= vertices * 9,
+        "{close} of {vertices} within 26°"
+    );
 }
 
 /// Copies a model's folder into a temporary directory so it can be damaged.

@@ -91,6 +91,12 @@ impl<'a> TextureLoader<'a> {
         let sampler = texture.sampler();
         tex.wrap_u = wrap_mode(sampler.wrap_s());
         tex.wrap_v = wrap_mode(sampler.wrap_t());
+        if sampler.mag_filter() == Some(gltf::texture::MagFilter::Nearest) {
+            unsupported(
+                builder,
+                "nearest-texel texture filtering (textures are filtered bilinearly)",
+            );
+        }
         let index = builder.textures.len();
         builder.textures.push(tex);
         self.loaded.insert(key, index);

@@ -168,6 +168,9 @@ impl NodeReader<'_> {
             return Err(SceneError::gltf(&path, reason));
         }
         if let Some(mesh) = node.mesh() {
+            if node.skin().is_some() {
+                self.warn_ignored("skins", "skinned meshes are rendered in their bind pose");
+            }
             self.read_mesh(&mesh, world)?;
         }
         if let Some(camera) = node.camera() {
@@ -188,6 +191,13 @@ impl NodeReader<'_> {
             .map_or(format!("mesh {}", mesh.index()), |n| format!("mesh '{n}'"));
         for primitive in mesh.primitives() {
             let name = format!("{mesh_name} primitive {}", primitive.index());
+            if primitive.get(&gltf::Semantic::Colors(0)).is_some() {
+                let effect = "base colors come from the materials alone";
+                self.warn_ignored("vertex colors (COLOR_0)", effect);
+            }
+            if primitive.morph_targets().len() > 0 {
+                self.warn_ignored("morph targets", "meshes keep their base shape");
+            }
             let material = primitive
                 .material()
                 .index()
@@ -208,6 +218,15 @@ impl NodeReader<'_> {
             }
         }
         Ok(())
+    }
+
+    /// Warns (once per file) that `feature` is ignored and what that does to the image.
+    fn warn_ignored(&mut self, feature: &str, effect: &str) {
+        let message = format!(
+            "{}: {feature} are not supported and are ignored: {effect}",
+            self.builder.path().display()
+        );
+        self.builder.warn(message);
     }
 
     fn read_camera(&mut self, camera: &gltf::Camera, world: Mat4) {
