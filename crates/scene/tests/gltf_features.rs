@@ -183,7 +183,7 @@ fn unsupported_geometry_features_are_warned_once() {
     let json =
         document(nodes, MATTE, r#", "skins": [{"joints": [0]}]"#).replace(triangle, extended);
     let scene = load(&json).unwrap();
-    for feature in ["COLOR_0", "morph targets", "skins"] {
+    for feature in ["COLOR_0", "morph targets", "skinning"] {
         let warnings = scene.warnings.iter().filter(|w| w.contains(feature));
         let named: Vec<_> = warnings
             .filter(|w| w.starts_with("memory.gltf: "))

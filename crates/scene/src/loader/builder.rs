@@ -71,6 +71,15 @@ impl SceneBuilder {
         }
     }
 
+    /// Warns (once) that `feature` of the file is not supported and is ignored.
+    pub fn warn_unsupported(&mut self, feature: &str) {
+        let message = format!(
+            "{}: {feature} is not supported and is ignored",
+            self.path().display()
+        );
+        self.warn(message);
+    }
+
     /// Adds a point or spot light.
     pub fn add_light(&mut self, light: Light) {
         self.lights.push(light);

@@ -92,8 +92,7 @@ impl<'a> TextureLoader<'a> {
         tex.wrap_u = wrap_mode(sampler.wrap_s());
         tex.wrap_v = wrap_mode(sampler.wrap_t());
         if sampler.mag_filter() == Some(gltf::texture::MagFilter::Nearest) {
-            unsupported(
-                builder,
+            builder.warn_unsupported(
                 "nearest-texel texture filtering (textures are filtered bilinearly)",
             );
         }
@@ -114,15 +113,6 @@ impl<'a> TextureLoader<'a> {
             None => Ok(None),
         }
     }
-}
-
-/// Warns about a material feature that is ignored.
-fn unsupported(builder: &mut SceneBuilder, feature: &str) {
-    let message = format!(
-        "{}: {feature} is not supported and is ignored",
-        builder.path().display()
-    );
-    builder.warn(message);
 }
 
 /// Converts one glTF material (loading its textures).
@@ -146,8 +136,7 @@ pub(super) fn read_material(
         None => (None, 1.0),
     };
     if m.occlusion_texture().is_some() {
-        unsupported(
-            builder,
+        builder.warn_unsupported(
             "occlusionTexture (baked ambient occlusion; light transport computes it)",
         );
     }
@@ -157,14 +146,14 @@ pub(super) fn read_material(
             cutoff: m.alpha_cutoff().unwrap_or(0.5),
         },
         gltf::material::AlphaMode::Blend => {
-            unsupported(builder, "alphaMode BLEND (rendered as OPAQUE)");
+            builder.warn_unsupported("alphaMode BLEND (rendered as OPAQUE)");
             AlphaMode::Opaque
         }
     };
     let (specular, specular_color) = match m.specular() {
         Some(s) => {
             if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
-                unsupported(builder, "KHR_materials_specular textures");
+                builder.warn_unsupported("KHR_materials_specular textures");
             }
             (s.specular_factor(), Vec3::from(s.specular_color_factor()))
         }
@@ -172,13 +161,13 @@ pub(super) fn read_material(
     };
     let transmission = m.transmission().map_or(0.0, |t| {
         if t.transmission_texture().is_some() {
-            unsupported(builder, "KHR_materials_transmission textures");
+            builder.warn_unsupported("KHR_materials_transmission textures");
         }
         t.transmission_factor()
     });
     let thin_walled = m.volume().is_none_or(|v| {
         if v.attenuation_distance().is_finite() {
-            unsupported(builder, "KHR_materials_volume attenuation");
+            builder.warn_unsupported("KHR_materials_volume attenuation");
         }
         v.thickness_factor() <= 0.0
     });

@@ -169,7 +169,8 @@ impl NodeReader<'_> {
         }
         if let Some(mesh) = node.mesh() {
             if node.skin().is_some() {
-                self.warn_ignored("skins", "skinned meshes are rendered in their bind pose");
+                let feature = "skinning (meshes are rendered in their bind pose)";
+                self.builder.warn_unsupported(feature);
             }
             self.read_mesh(&mesh, world)?;
         }
@@ -192,11 +193,12 @@ impl NodeReader<'_> {
         for primitive in mesh.primitives() {
             let name = format!("{mesh_name} primitive {}", primitive.index());
             if primitive.get(&gltf::Semantic::Colors(0)).is_some() {
-                let effect = "base colors come from the materials alone";
-                self.warn_ignored("vertex colors (COLOR_0)", effect);
+                let feature = "COLOR_0 (base colors come from the materials alone)";
+                self.builder.warn_unsupported(feature);
             }
             if primitive.morph_targets().len() > 0 {
-                self.warn_ignored("morph targets", "meshes keep their base shape");
+                self.builder
+                    .warn_unsupported("morph targets (meshes keep their base shape)");
             }
             let material = primitive
                 .material()
@@ -218,15 +220,6 @@ impl NodeReader<'_> {
             }
         }
         Ok(())
-    }
-
-    /// Warns (once per file) that `feature` is ignored and what that does to the image.
-    fn warn_ignored(&mut self, feature: &str, effect: &str) {
-        let message = format!(
-            "{}: {feature} are not supported and are ignored: {effect}",
-            self.builder.path().display()
-        );
-        self.builder.warn(message);
     }
 
     fn read_camera(&mut self, camera: &gltf::Camera, world: Mat4) {
