@@ -37,7 +37,7 @@ pub use vcm_traversal_wgpu as traversal_wgpu;
 pub use backend::{Backend, BackendError, BuiltTraversal};
 
 use vcm_scene::texture::WrapMode;
-use vcm_scene::{AlphaMode, Scene, Texture};
+use vcm_scene::{Scene, Texture};
 use vcm_traversal::{AlphaTest, BuildError, CpuBvh, CpuBvhOptions};
 use vcm_traversal_wgpu::{
     AlphaMasks, AlphaTexture, GpuBvh, GpuBvhOptions, GpuDevice, GpuError, MaskedTriangle, Wrap,
@@ -90,11 +90,8 @@ pub fn alpha_masks(scene: &Scene) -> AlphaMasks {
     let mut used = vec![None; scene.textures.len()];
     let triangles = (0..scene.mesh.triangle_count() as u32)
         .map(|t| {
-            let material = scene.material_of(t);
-            let AlphaMode::Mask { cutoff } = material.alpha_mode else {
-                return None;
-            };
-            let texture = material.base_color_texture.map(|r| {
+            let mask = scene.material_of(t).alpha_mask()?;
+            let texture = mask.texture.map(|r| {
                 *used[r.index].get_or_insert_with(|| {
                     textures.push(alpha_texture(&scene.textures[r.index]));
                     textures.len() as u32 - 1
@@ -104,8 +101,8 @@ pub fn alpha_masks(scene: &Scene) -> AlphaMasks {
             Some(MaskedTriangle {
                 uvs: [corner(0.0, 0.0), corner(1.0, 0.0), corner(0.0, 1.0)],
                 texture,
-                alpha_factor: material.base_color.w,
-                cutoff,
+                alpha_factor: mask.alpha,
+                cutoff: mask.cutoff,
             })
         })
         .collect();
