@@ -36,7 +36,7 @@ pub use vcm_traversal_wgpu as traversal_wgpu;
 
 pub use backend::{Backend, BackendError, BuiltTraversal};
 
-use vcm_scene::texture::WrapMode;
+use vcm_scene::texture::{UvTransform, WrapMode};
 use vcm_scene::{Scene, Texture};
 use vcm_traversal::{AlphaTest, BuildError, CpuBvh, CpuBvhOptions};
 use vcm_traversal_wgpu::{
@@ -97,7 +97,9 @@ pub fn alpha_masks(scene: &Scene) -> AlphaMasks {
                     textures.len() as u32 - 1
                 })
             });
-            let corner = |u, v| scene.mesh.uv_at(t as usize, u, v);
+            // The transform is affine, so transforming the corners transforms every point.
+            let transform = mask.texture.map_or(UvTransform::IDENTITY, |r| r.transform);
+            let corner = |u, v| transform.apply(scene.mesh.uv_at(t as usize, u, v));
             Some(MaskedTriangle {
                 uvs: [corner(0.0, 0.0), corner(1.0, 0.0), corner(0.0, 1.0)],
                 texture,

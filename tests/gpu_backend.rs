@@ -3,8 +3,10 @@
 //! missing adapter a failure instead of a skip.
 
 use std::process::{Command, Output};
+use std::sync::Arc;
 
 use vcm::image_io::RgbImage;
+use vcm_rs::scene::UvTransform;
 use vcm_rs::traversal::{HitBatch, RayBatch, Traversal};
 use vcm_rs::traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
 
@@ -146,8 +148,27 @@ fn alpha_masks_match_the_cpu_backend() {
         env!("CARGO_MANIFEST_DIR"),
         "/../shared/scenes/khronos-samples/AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf"
     );
-    let scene = std::sync::Arc::new(vcm_rs::scene::Scene::load(path).unwrap());
+    let scene = vcm_rs::scene::Scene::load(path).unwrap();
     assert!(scene.features.alpha_masks);
+    assert_masks_agree(&Arc::new(scene));
+    // The same masks with their textures moved, turned and stretched (KHR_texture_transform).
+    let mut transformed = vcm_rs::scene::Scene::load(path).unwrap();
+    let transform = UvTransform::from_offset_rotation_scale(
+        glam::Vec2::new(0.3, -0.2),
+        0.7,
+        glam::Vec2::new(1.6, 0.7),
+    );
+    for material in &mut transformed.materials {
+        if let Some(texture) = &mut material.base_color_texture {
+            texture.transform = transform;
+        }
+    }
+    assert_masks_agree(&Arc::new(transformed));
+}
+
+/// The CPU and GPU backends agree on `scene`'s camera rays (closest hits and occlusion),
+/// and its masks cut holes: many rays go through where unmasked triangles would stop them.
+fn assert_masks_agree(scene: &Arc<vcm_rs::scene::Scene>) {
     let size = 256;
     let mut rays = RayBatch::default();
     for y in 0..size {
@@ -164,8 +185,8 @@ fn alpha_masks_match_the_cpu_backend() {
         traversal.occluded(&rays, &mut occluded);
         (hits.prim, occluded)
     };
-    let (cpu_prims, cpu_occluded) = trace(&vcm_rs::cpu_traversal(&scene).unwrap());
-    let (gpu_prims, gpu_occluded) = trace(&vcm_rs::gpu_traversal(&scene).unwrap());
+    let (cpu_prims, cpu_occluded) = trace(&vcm_rs::cpu_traversal(scene).unwrap());
+    let (gpu_prims, gpu_occluded) = trace(&vcm_rs::gpu_traversal(scene).unwrap());
     let differ = |a: &[u32], b: &[u32]| a.iter().zip(b).filter(|(x, y)| x != y).count();
     let differences = differ(&cpu_prims, &gpu_prims);
     let occlusion_differences = cpu_occluded

@@ -85,7 +85,7 @@ impl Default for Material {
 
 /// Looks a texture up, or returns white where the material has none.
 fn lookup(textures: &[Texture], texture: Option<TextureRef>, uv: Vec2) -> Vec4 {
-    texture.map_or(Vec4::ONE, |t| textures[t.index].sample(uv))
+    texture.map_or(Vec4::ONE, |t| t.sample(textures, uv))
 }
 
 /// Coverage alpha at `uv`: `alpha` times the alpha of `texture`.
@@ -185,7 +185,7 @@ impl Material {
     /// The tangent-space normal from the normal map at `uv` (z up), or `None` without a map.
     pub fn tangent_space_normal(&self, textures: &[Texture], uv: Vec2) -> Option<Vec3> {
         let t = self.normal_texture?;
-        let c = textures[t.index].sample(uv).xyz() * 2.0 - Vec3::ONE;
+        let c = t.sample(textures, uv).xyz() * 2.0 - Vec3::ONE;
         let n = Vec3::new(c.x * self.normal_scale, c.y * self.normal_scale, c.z);
         n.try_normalize()
     }
@@ -201,10 +201,7 @@ mod tests {
         let texels = vec![[255, 255, 255, 51], [255, 255, 255, 204]];
         let texture = Texture::new("mask".into(), 2, 1, texels, ColorEncoding::Srgb).unwrap();
         let material = Material {
-            base_color_texture: Some(TextureRef {
-                index: 0,
-                tex_coord: 0,
-            }),
+            base_color_texture: Some(TextureRef::new(0)),
             alpha_mode: AlphaMode::Mask { cutoff },
             ..Material::default()
         };

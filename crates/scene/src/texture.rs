@@ -188,13 +188,74 @@ impl Texture {
     }
 }
 
-/// A material's reference to a texture: which texture and which UV set.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// A material's reference to a texture: which texture, which UV set, and how the UVs are
+/// transformed before the lookup.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureRef {
     /// Index into [`crate::Scene::textures`].
     pub index: usize,
     /// Texture coordinate set (only set 0 is loaded; others are reported as unsupported).
     pub tex_coord: u32,
+    /// Applied to the surface's texture coordinates before the lookup
+    /// (`KHR_texture_transform`; the identity without it).
+    pub transform: UvTransform,
+}
+
+impl TextureRef {
+    /// A reference to texture `index` through UV set 0, untransformed.
+    pub fn new(index: usize) -> TextureRef {
+        TextureRef {
+            index,
+            tex_coord: 0,
+            transform: UvTransform::IDENTITY,
+        }
+    }
+
+    /// The referenced texture of `textures` at the surface's texture coordinates `uv`.
+    #[inline]
+    pub fn sample(&self, textures: &[Texture], uv: Vec2) -> Vec4 {
+        textures[self.index].sample(self.transform.apply(uv))
+    }
+}
+
+/// An affine map of texture coordinates: `uv' = linear · uv + offset`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    /// The linear part, as columns (the images of the u and v axes).
+    pub linear: [Vec2; 2],
+    /// Added after the linear part.
+    pub offset: Vec2,
+}
+
+impl UvTransform {
+    /// Leaves coordinates as they are.
+    pub const IDENTITY: UvTransform = UvTransform {
+        linear: [Vec2::X, Vec2::Y],
+        offset: Vec2::ZERO,
+    };
+
+    /// `KHR_texture_transform`'s map: scale the coordinates by `scale`, rotate them by
+    /// `rotation` radians (counter-clockwise in UV space, whose v axis points down the
+    /// image), then add `offset`: uv' = T·R·S·uv with R = [[cos, sin], [−sin, cos]].
+    pub fn from_offset_rotation_scale(offset: Vec2, rotation: f32, scale: Vec2) -> UvTransform {
+        let (sin, cos) = rotation.sin_cos();
+        UvTransform {
+            linear: [
+                Vec2::new(cos, -sin) * scale.x,
+                Vec2::new(sin, cos) * scale.y,
+            ],
+            offset,
+        }
+    }
+
+    /// The transformed coordinates of `uv`.
+    #[inline]
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        if *self == UvTransform::IDENTITY {
+            return uv;
+        }
+        self.linear[0] * uv.x + self.linear[1] * uv.y + self.offset
+    }
 }
 
 #[cfg(test)]
@@ -209,6 +270,35 @@ mod tests {
             [0, 0, 0, 0],
         ];
         Texture::new("checker".into(), 2, 2, texels, ColorEncoding::Linear).unwrap()
+    }
+
+    /// The two examples of the `KHR_texture_transform` specification.
+    #[test]
+    fn uv_transforms_follow_the_specification_examples() {
+        let close = |a: Vec2, b: Vec2| a.abs_diff_eq(b, 1e-6);
+        // "Only the lower left quadrant of the source image, rotated clockwise 90°."
+        let quadrant = UvTransform::from_offset_rotation_scale(
+            Vec2::new(0.0, 1.0),
+            std::f32::consts::FRAC_PI_2,
+            Vec2::splat(0.5),
+        );
+        for (uv, expected) in [
+            ((0.0, 0.0), (0.0, 1.0)),
+            ((1.0, 0.0), (0.0, 0.5)),
+            ((0.0, 1.0), (0.5, 1.0)),
+            ((1.0, 1.0), (0.5, 0.5)),
+        ] {
+            let (uv, expected) = (Vec2::from(uv), Vec2::from(expected));
+            assert!(close(quadrant.apply(uv), expected), "{uv}");
+        }
+        // "Inverts the T axis, effectively defining a bottom-left origin."
+        let flipped =
+            UvTransform::from_offset_rotation_scale(Vec2::new(0.0, 1.0), 0.0, Vec2::new(1.0, -1.0));
+        assert_eq!(flipped.apply(Vec2::new(0.25, 0.25)), Vec2::new(0.25, 0.75));
+        // The identity leaves even non-finite coordinates as they are.
+        let odd = Vec2::new(f32::NAN, -0.0);
+        let kept = UvTransform::IDENTITY.apply(odd);
+        assert!(kept.x.is_nan() && kept.y.to_bits() == (-0.0f32).to_bits());
     }
 
     #[test]

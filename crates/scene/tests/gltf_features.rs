@@ -216,3 +216,56 @@ fn nearest_texture_filtering_is_warned() {
     let linear = load_with(r#""magFilter": 9729"#);
     assert!(linear.warnings.is_empty(), "{:?}", linear.warnings);
 }
+
+/// `KHR_texture_transform` moves, rotates and scales where a texture is looked up, for every
+/// texture of a material; a malformed one is an error naming the file.
+#[test]
+fn texture_transforms_move_the_lookup() {
+    let dir = tempfile::tempdir().unwrap();
+    // Top row red, green; bottom row blue, white (glTF's v runs down the image).
+    let mut quad = image::RgbaImage::new(2, 2);
+    quad.put_pixel(0, 0, image::Rgba([255, 0, 0, 255]));
+    quad.put_pixel(1, 0, image::Rgba([0, 255, 0, 255]));
+    quad.put_pixel(0, 1, image::Rgba([0, 0, 255, 255]));
+    quad.put_pixel(1, 1, image::Rgba([255, 255, 255, 255]));
+    quad.save(dir.path().join("quad.png")).unwrap();
+    let load_with = |transform: &str| {
+        let material = format!(
+            r#"[{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0,
+                "extensions": {{"KHR_texture_transform": {transform}}}}}}},
+                "normalTexture": {{"index": 0,
+                "extensions": {{"KHR_texture_transform": {transform}}}}}}}]"#
+        );
+        let extra = r#", "images": [{"uri": "quad.png"}], "textures": [{"source": 0}],
+            "extensionsUsed": ["KHR_texture_transform"]"#;
+        let json = document(r#"[{"mesh": 0}]"#, &material, extra);
+        load_gltf_from_bytes(&dir.path().join("scene.gltf"), json.as_bytes())
+    };
+    let base_color = |scene: &Scene, uv: Vec2| {
+        let material = &scene.materials[0];
+        material.bsdf_params(&scene.textures, uv).base_color
+    };
+    let red_corner = Vec2::new(0.25, 0.25);
+
+    let shifted = load_with(r#"{"offset": [0.5, 0]}"#).unwrap();
+    assert!(shifted.warnings.is_empty(), "{:?}", shifted.warnings);
+    assert_eq!(base_color(&shifted, red_corner), Vec3::new(0.0, 1.0, 0.0));
+    // The normal map reads the same texel: green is +y in tangent space.
+    let normal = shifted.materials[0].tangent_space_normal(&shifted.textures, red_corner);
+    let green = Vec3::new(-1.0, 1.0, -1.0).normalize();
+    assert!(normal.unwrap().abs_diff_eq(green, 1e-6), "{normal:?}");
+
+    // A quarter turn: uv' = (v, −u) + offset, so the top-left quadrant's center (0.25,
+    // 0.25) reads the bottom-left texel.
+    let turned = load_with(r#"{"rotation": 1.5707964, "offset": [0, 1]}"#).unwrap();
+    assert!(base_color(&turned, red_corner).abs_diff_eq(Vec3::Z, 1e-5));
+
+    let untransformed = load_with("{}").unwrap();
+    assert_eq!(base_color(&untransformed, red_corner), Vec3::X);
+
+    let error = load_with(r#"{"scale": [2]}"#).unwrap_err().to_string();
+    assert!(
+        error.contains("scene.gltf") && error.contains("`scale`"),
+        "{error}"
+    );
+}

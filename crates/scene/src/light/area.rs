@@ -42,7 +42,7 @@ impl AreaLight {
     fn radiance_at(&self, textures: &[Texture], b: Vec3) -> Vec3 {
         match self.texture {
             None => self.emission,
-            Some(t) => self.emission * textures[t.index].sample(self.uv_at(b)).truncate(),
+            Some(t) => self.emission * t.sample(textures, self.uv_at(b)).truncate(),
         }
     }
 

@@ -134,10 +134,7 @@ fn cut_out_emitters_emit_only_where_present() {
     ];
     light.cut_out = Some(AlphaMask {
         alpha: 1.0,
-        texture: Some(TextureRef {
-            index: 0,
-            tex_coord: 0,
-        }),
+        texture: Some(TextureRef::new(0)),
         cutoff: 0.5,
     });
     let [c0, c1, c2] = light.corners;

@@ -226,8 +226,5 @@ fn load_texture(
         image,
         ColorEncoding::Srgb,
     ));
-    Ok(TextureRef {
-        index,
-        tex_coord: 0,
-    })
+    Ok(TextureRef::new(index))
 }

@@ -4,9 +4,11 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use glam::{Vec3, Vec4};
+use gltf::json::Value;
 use gltf::texture::WrappingMode;
 
 use super::accessors::check_view;
+use super::texture_transform::{EXTENSION, TextureTransform};
 use crate::error::SceneError;
 use crate::loader::builder::SceneBuilder;
 use crate::loader::uri::read_uri;
@@ -59,14 +61,20 @@ impl<'a> TextureLoader<'a> {
         }
     }
 
-    /// Loads (once) the texture `info` refers to; warns about unsupported UV sets.
+    /// A reference to `texture` (loaded once per encoding) through UV set `tex_coord` with
+    /// the `KHR_texture_transform` object `transform`, if any; warns about unsupported UV
+    /// sets, whose textures are left out.
     fn load(
         &mut self,
         builder: &mut SceneBuilder,
         texture: gltf::Texture,
         tex_coord: u32,
+        transform: Option<&Value>,
         encoding: ColorEncoding,
     ) -> Result<Option<TextureRef>, SceneError> {
+        let transform =
+            TextureTransform::read(transform).map_err(|e| SceneError::gltf(builder.path(), e))?;
+        let tex_coord = transform.tex_coord.unwrap_or(tex_coord);
         if tex_coord != 0 {
             builder.warn(format!(
                 "{}: texture coordinate set {tex_coord} is not supported; the texture is ignored",
@@ -74,9 +82,24 @@ impl<'a> TextureLoader<'a> {
             ));
             return Ok(None);
         }
+        Ok(Some(TextureRef {
+            index: self.texture_index(builder, texture, encoding)?,
+            tex_coord,
+            transform: transform.uv,
+        }))
+    }
+
+    /// The index of `texture` in the scene's textures, decoding it the first time it is
+    /// asked for with `encoding`.
+    fn texture_index(
+        &mut self,
+        builder: &mut SceneBuilder,
+        texture: gltf::Texture,
+        encoding: ColorEncoding,
+    ) -> Result<usize, SceneError> {
         let key = (texture.index(), encoding == ColorEncoding::Srgb);
         if let Some(&index) = self.loaded.get(&key) {
-            return Ok(Some(TextureRef { index, tex_coord }));
+            return Ok(index);
         }
         let (name, bytes) = self.image_bytes(&texture.source());
         let texture_error = |reason: String| SceneError::Texture {
@@ -99,7 +122,7 @@ impl<'a> TextureLoader<'a> {
         let index = builder.textures.len();
         builder.textures.push(tex);
         self.loaded.insert(key, index);
-        Ok(Some(TextureRef { index, tex_coord }))
+        Ok(index)
     }
 
     fn load_info(
@@ -109,7 +132,16 @@ impl<'a> TextureLoader<'a> {
         encoding: ColorEncoding,
     ) -> Result<Option<TextureRef>, SceneError> {
         match info {
-            Some(info) => self.load(builder, info.texture(), info.tex_coord(), encoding),
+            Some(info) => {
+                let transform = info.extension_value(EXTENSION);
+                self.load(
+                    builder,
+                    info.texture(),
+                    info.tex_coord(),
+                    transform,
+                    encoding,
+                )
+            }
             None => Ok(None),
         }
     }
@@ -130,7 +162,13 @@ pub(super) fn read_material(
     let emissive_texture = textures.load_info(builder, m.emissive_texture(), srgb)?;
     let (normal_texture, normal_scale) = match m.normal_texture() {
         Some(n) => (
-            textures.load(builder, n.texture(), n.tex_coord(), linear)?,
+            textures.load(
+                builder,
+                n.texture(),
+                n.tex_coord(),
+                n.extension_value(EXTENSION),
+                linear,
+            )?,
             n.scale(),
         ),
         None => (None, 1.0),

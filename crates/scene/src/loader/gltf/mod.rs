@@ -3,6 +3,7 @@
 mod accessors;
 mod geometry;
 mod materials;
+mod texture_transform;
 
 use std::path::Path;
 
@@ -26,6 +27,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_volume",
+    "KHR_texture_transform",
 ];
 
 /// Parses a glTF document from `bytes`; `path` names it in messages and locates external files.
