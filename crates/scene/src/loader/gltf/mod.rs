@@ -27,7 +27,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_volume",
-    "KHR_texture_transform",
+    texture_transform::EXTENSION,
 ];
 
 /// Parses a glTF document from `bytes`; `path` names it in messages and locates external files.
