@@ -2,6 +2,8 @@
 
 use std::fmt;
 
+use glam::Vec3;
+
 use crate::bsdf::SMOOTH_ALPHA;
 use crate::light::Light;
 use crate::material::{AlphaMode, Material};
@@ -77,6 +79,8 @@ pub struct SceneFeatures {
     pub alpha_masks: bool,
     /// Some used material has a normal map.
     pub normal_maps: bool,
+    /// Some vertex has a color other than white (glTF `COLOR_0`).
+    pub vertex_colors: bool,
 }
 
 /// The range of a texture channel's values (0..=1), or the full range without a texture.
@@ -132,6 +136,7 @@ impl SceneFeatures {
             textures: false,
             alpha_masks: false,
             normal_maps: false,
+            vertex_colors: mesh.colors.iter().any(|&c| c != Vec3::ONE),
         };
         for material in materials
             .iter()
@@ -178,8 +183,8 @@ impl fmt::Display for SceneFeatures {
         )?;
         write!(
             f,
-            "textures {}, alpha masks {}, normal maps {}",
-            self.textures, self.alpha_masks, self.normal_maps
+            "textures {}, alpha masks {}, normal maps {}, vertex colors {}",
+            self.textures, self.alpha_masks, self.normal_maps, self.vertex_colors
         )
     }
 }
@@ -187,7 +192,6 @@ impl fmt::Display for SceneFeatures {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
 
     fn classes(material: Material) -> MaterialClasses {
         let mut classes = MaterialClasses::default();

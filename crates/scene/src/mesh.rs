@@ -54,6 +54,9 @@ pub struct Mesh {
     pub uvs: Vec<Vec2>,
     /// Tangents (world space xyz, bitangent sign in w) or zero.
     pub tangents: Vec<Vec4>,
+    /// Vertex colors (glTF `COLOR_0`: linear RGB in [0, 1], multiplying the base color), one
+    /// per vertex, or empty when no vertex has a color other than white.
+    pub colors: Vec<Vec3>,
     /// Vertex indices of each triangle, counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
     /// Material index of each triangle.
@@ -71,6 +74,9 @@ pub struct SurfacePoint {
     pub shading_normal: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// The interpolated vertex color, which multiplies the material's base color (white
+    /// where the mesh has no vertex colors).
+    pub vertex_color: Vec3,
     /// Material index.
     pub material: u32,
     /// Triangle index.
@@ -113,6 +119,31 @@ impl Mesh {
     pub fn uv_at(&self, t: usize, u: f32, v: f32) -> Vec2 {
         let [i0, i1, i2] = self.triangles[t].map(|i| i as usize);
         self.uvs[i0] * (1.0 - u - v) + self.uvs[i1] * u + self.uvs[i2] * v
+    }
+
+    /// The vertex color at (u, v) on triangle `t` (white without vertex colors). Interpolated
+    /// from the first corner, so a triangle with three equal corners has exactly their color.
+    #[inline]
+    pub fn color_at(&self, t: usize, u: f32, v: f32) -> Vec3 {
+        if self.colors.is_empty() {
+            return Vec3::ONE;
+        }
+        let [c0, c1, c2] = self.triangles[t].map(|i| self.colors[i as usize]);
+        c0 + (c1 - c0) * u + (c2 - c0) * v
+    }
+
+    /// Per material (`material_count` of them), whether a triangle using it has a vertex
+    /// color other than white: its base color then varies over the surface.
+    pub fn tinted_materials(&self, material_count: usize) -> Vec<bool> {
+        let mut tinted = vec![false; material_count];
+        if !self.colors.is_empty() {
+            for (tri, &material) in self.triangles.iter().zip(&self.material_ids) {
+                if tri.iter().any(|&i| self.colors[i as usize] != Vec3::ONE) {
+                    tinted[material as usize] = true;
+                }
+            }
+        }
+        tinted
     }
 
     /// The unit-length interpolated vertex normal at (u, v), or `fallback` where the
@@ -165,6 +196,7 @@ impl Mesh {
             geometric_normal,
             shading_normal: shading,
             uv,
+            vertex_color: self.color_at(t, u, v),
             material: self.material_ids[t],
             triangle: t as u32,
         }
@@ -237,9 +269,37 @@ mod tests {
             normals: vec![Vec3::Z; 4],
             uvs: vec![Vec2::Y, Vec2::ONE, Vec2::X, Vec2::ZERO],
             tangents: vec![Vec4::ZERO; 4],
+            colors: Vec::new(),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             material_ids: vec![0, 0],
         }
+    }
+
+    #[test]
+    fn vertex_colors_interpolate_and_mark_their_materials() {
+        let mut m = quad();
+        m.material_ids = vec![0, 1];
+        assert_eq!(m.color_at(0, 0.3, 0.3), Vec3::ONE);
+        assert_eq!(m.tinted_materials(2), [false, false]);
+        let red = Vec3::new(0.8, 0.1, 0.1);
+        // Vertex 1 belongs to the first triangle only.
+        m.colors = vec![red, Vec3::ZERO, red, red];
+        assert_eq!(m.tinted_materials(2), [true, true]);
+        assert_eq!(
+            m.color_at(1, 0.3, 0.6),
+            red,
+            "equal corners give exactly their color"
+        );
+        let p = m.surface_point(0, 0.25, 0.5, Vec2::ZERO, None);
+        assert!(
+            (p.vertex_color - red * 0.75).length() < 1e-6,
+            "{}",
+            p.vertex_color
+        );
+        m.colors[0] = Vec3::ONE;
+        m.colors[2] = Vec3::ONE;
+        m.colors[3] = Vec3::ONE;
+        assert_eq!(m.tinted_materials(2), [true, false]);
     }
 
     #[test]

@@ -23,8 +23,9 @@ pub struct Scene {
     pub mesh: Mesh,
     /// Materials, indexed by [`Mesh::material_ids`].
     pub materials: Vec<Material>,
-    /// Per material, its BSDF lobes when no texture changes them (built once from
-    /// `materials` by [`Scene::new`]; `None` for textured materials, built at every hit).
+    /// Per material, its BSDF lobes when neither a texture nor a vertex color changes them
+    /// (built once from `materials` by [`Scene::new`]; `None` for the others, whose lobes
+    /// are built at every hit).
     pub material_lobes: Vec<Option<Lobes>>,
     /// Textures, indexed by [`crate::TextureRef::index`].
     pub textures: Vec<Texture>,
@@ -84,7 +85,11 @@ impl Scene {
         let features = SceneFeatures::of(&mesh, &materials, &textures, &lights);
         let material_lobes = materials
             .iter()
-            .map(|m| m.uniform_bsdf_params().map(|params| Lobes::new(&params)))
+            .zip(mesh.tinted_materials(materials.len()))
+            .map(|(m, tinted)| {
+                let uniform = m.uniform_bsdf_params().filter(|_| !tinted);
+                uniform.map(|params| Lobes::new(&params))
+            })
             .collect();
         Scene {
             path,
@@ -139,7 +144,8 @@ impl Scene {
         match &self.material_lobes[index] {
             Some(lobes) => Bsdf::from_lobes(lobes, n_g, n_s, material.double_sided),
             None => {
-                let params = material.bsdf_params(&self.textures, point.uv);
+                let mut params = material.bsdf_params(&self.textures, point.uv);
+                params.base_color *= point.vertex_color;
                 Bsdf::new(&params, n_g, n_s, material.double_sided)
             }
         }

@@ -1,10 +1,12 @@
 //! Small hand-written glTF documents exercising the conventions: transforms and winding,
 //! cameras, punctual lights, material extensions and bad input.
 
+use std::f32::consts::PI;
 use std::path::Path;
 
 use base64::Engine;
 use glam::{Vec2, Vec3};
+use vcm_scene::bsdf::TransportMode;
 use vcm_scene::light::Light;
 use vcm_scene::loader::load_gltf_from_bytes;
 use vcm_scene::{Scene, SceneError};
@@ -173,17 +175,17 @@ fn a_scene_without_camera_is_framed_from_plus_z() {
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
 }
 
-/// Vertex colors, morph targets and skins would change the image; they are not supported, so
-/// each is reported once, naming the file.
+/// Morph targets and skins would change the image; they are not supported, so each is
+/// reported once, naming the file.
 #[test]
 fn unsupported_geometry_features_are_warned_once() {
     let triangle = r#""attributes": {"POSITION": 0}"#;
-    let extended = r#""attributes": {"POSITION": 0, "COLOR_0": 0}, "targets": [{"POSITION": 0}]"#;
+    let extended = r#""attributes": {"POSITION": 0}, "targets": [{"POSITION": 0}]"#;
     let nodes = r#"[{"children": [1, 2]}, {"mesh": 0, "skin": 0}, {"mesh": 0}]"#;
     let json =
         document(nodes, MATTE, r#", "skins": [{"joints": [0]}]"#).replace(triangle, extended);
     let scene = load(&json).unwrap();
-    for feature in ["COLOR_0", "morph targets", "skinning"] {
+    for feature in ["morph targets", "skinning"] {
         let warnings = scene.warnings.iter().filter(|w| w.contains(feature));
         let named: Vec<_> = warnings
             .filter(|w| w.starts_with("memory.gltf: "))
@@ -267,5 +269,95 @@ fn texture_transforms_move_the_lookup() {
     assert!(
         error.contains("scene.gltf") && error.contains("`scale`"),
         "{error}"
+    );
+}
+
+/// The triangle of [`document`] with `COLOR_0` from `colors` (12 bytes: three RGBA corners,
+/// normalized unsigned bytes) on a second mesh, drawn by node 1 beside the plain mesh 0.
+fn colored_document(colors: [u8; 12], materials: &str) -> String {
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let mut bytes: Vec<u8> = positions.iter().flat_map(|f| f.to_le_bytes()).collect();
+    bytes.extend(colors);
+    let data = base64::engine::general_purpose::STANDARD.encode(bytes);
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0, 1]}}],
+        "nodes": [{{"mesh": 0}}, {{"mesh": 1, "translation": [0, 0, 1]}}],
+        "materials": {materials},
+        "buffers": [{{"byteLength": 48, "uri": "data:application/octet-stream;base64,{data}"}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": 36}},
+                        {{"buffer": 0, "byteOffset": 36, "byteLength": 12}}],
+        "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                        "min": [0,0,0], "max": [1,1,0]}},
+                      {{"bufferView": 1, "componentType": 5121, "normalized": true,
+                        "count": 3, "type": "VEC4"}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 0}}]}},
+                   {{"primitives": [{{"attributes": {{"POSITION": 0, "COLOR_0": 1}},
+                                      "material": 0}}]}}]}}"#
+    )
+}
+
+/// Pure Lambertian, albedo 0.5.
+const GREY: &str = r#"[{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1],
+    "metallicFactor": 0}, "extensions": {"KHR_materials_specular": {"specularFactor": 0}}}]"#;
+
+/// `COLOR_0` multiplies the base color (glTF 2.0 §3.9.2): linear (bytes are not sRGB
+/// decoded), interpolated across the triangle, white on primitives without it.
+#[test]
+fn vertex_colors_multiply_the_base_color() {
+    // Corners: red, green at 51/255 = 0.2, blue.
+    let colors = [255, 0, 0, 255, 0, 51, 0, 255, 0, 0, 255, 255];
+    let scene = load(&colored_document(colors, GREY)).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert!(scene.features.vertex_colors);
+    assert!(
+        scene.material_lobes[0].is_none(),
+        "tinted: lobes at every hit"
+    );
+    let expected = Vec3::new(0.25, 0.2 * 0.25, 0.5);
+    let point = scene.surface_point(1, 0.25, 0.5);
+    assert!(
+        (point.vertex_color - expected).length() < 1e-6,
+        "{}",
+        point.vertex_color
+    );
+    // A Lambertian BSDF at normal incidence: f·cos = albedo / π, albedo = 0.5 × color.
+    let bsdf = scene.bsdf(&point);
+    let f = bsdf.eval(Vec3::Z, Vec3::Z, TransportMode::Radiance).f_cos;
+    let albedo = 0.5 * expected;
+    assert!((f * PI - albedo).length() < 1e-5, "{f} vs {albedo}");
+    let plain = scene.surface_point(0, 0.25, 0.5);
+    assert_eq!(plain.vertex_color, Vec3::ONE);
+    let f = scene
+        .bsdf(&plain)
+        .eval(Vec3::Z, Vec3::Z, TransportMode::Radiance);
+    assert!((f.f_cos * PI - Vec3::splat(0.5)).length() < 1e-5);
+
+    // All-white colors change nothing: none are kept, the lobes stay built once.
+    let white = load(&colored_document([255; 12], GREY)).unwrap();
+    assert!(white.mesh.colors.is_empty() && !white.features.vertex_colors);
+    assert!(white.material_lobes[0].is_some());
+}
+
+/// Vertex alpha would cut out masked surfaces, which the traversal does not do: reported.
+/// Integer colors must be normalized.
+#[test]
+fn vertex_color_alpha_on_masks_is_warned_and_bad_colors_are_errors() {
+    let masked = r#"[{"alphaMode": "MASK", "pbrMetallicRoughness": {"metallicFactor": 0}}]"#;
+    let half_alpha = [255, 255, 255, 128, 255, 255, 255, 255, 255, 255, 255, 255];
+    let scene = load(&colored_document(half_alpha, masked)).unwrap();
+    let warned: Vec<_> = scene
+        .warnings
+        .iter()
+        .filter(|w| w.starts_with("memory.gltf: mesh 1 primitive 0: COLOR_0 alpha"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", scene.warnings);
+    let opaque = load(&colored_document(half_alpha, GREY)).unwrap();
+    assert!(opaque.warnings.is_empty(), "{:?}", opaque.warnings);
+
+    let json = colored_document([255; 12], GREY).replace(r#""normalized": true,"#, "");
+    let message = load(&json).unwrap_err().to_string();
+    assert!(
+        message.contains("memory.gltf") && message.contains("not normalized"),
+        "{message}"
     );
 }

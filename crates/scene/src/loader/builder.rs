@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3, Vec4};
 use crate::camera::Camera;
 use crate::error::SceneError;
 use crate::light::{DirectionalLight, Light};
-use crate::material::Material;
+use crate::material::{AlphaMode, Material};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::texture::Texture;
@@ -20,6 +20,8 @@ pub(crate) struct Primitive {
     pub normals: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
     pub tangents: Option<Vec<Vec4>>,
+    /// Linear RGBA vertex colors (glTF `COLOR_0`).
+    pub colors: Option<Vec<Vec4>>,
     /// Indices into `positions`, counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
     pub material: u32,
@@ -110,6 +112,7 @@ impl SceneBuilder {
             ("normals", p.normals.as_ref().map(Vec::len)),
             ("texture coordinates", p.uvs.as_ref().map(Vec::len)),
             ("tangents", p.tangents.as_ref().map(Vec::len)),
+            ("vertex colors", p.colors.as_ref().map(Vec::len)),
         ];
         for (what, len) in lengths {
             if let Some(len) = len.filter(|&len| len != n) {
@@ -119,9 +122,11 @@ impl SceneBuilder {
         }
         let finite_attributes = p.normals.iter().flatten().all(|v| v.is_finite())
             && p.uvs.iter().flatten().all(|v| v.is_finite())
-            && p.tangents.iter().flatten().all(|v| v.is_finite());
+            && p.tangents.iter().flatten().all(|v| v.is_finite())
+            && p.colors.iter().flatten().all(|v| v.is_finite());
         if !finite_attributes {
-            let reason = "non-finite normal, texture coordinate or tangent".to_string();
+            let reason =
+                "non-finite normal, texture coordinate, tangent or vertex color".to_string();
             return Err(self.geometry_error(&p.name, reason));
         }
         if let Some(tri) = p
@@ -138,6 +143,11 @@ impl SceneBuilder {
             return Err(self.geometry_error(&p.name, reason));
         }
 
+        if let Some(colors) = &p.colors {
+            self.add_colors(&p.name, material, colors);
+        } else if !self.mesh.colors.is_empty() {
+            self.mesh.colors.extend(std::iter::repeat_n(Vec3::ONE, n));
+        }
         let base = self.mesh.positions.len() as u32;
         let first_triangle = self.mesh.triangles.len();
         self.mesh.normals.extend(match p.normals {
@@ -168,6 +178,34 @@ impl SceneBuilder {
                 .generate_tangents(first_triangle..self.mesh.triangles.len());
         }
         Ok(())
+    }
+
+    /// Appends a primitive's vertex colors (clamped to [0, 1]) before its vertices are
+    /// added. The mesh keeps none until some vertex is not white; from then on, one per
+    /// vertex (white for the vertices before).
+    fn add_colors(&mut self, name: &str, material: u32, colors: &[Vec4]) {
+        let masked = matches!(
+            self.materials[material as usize].alpha_mode,
+            AlphaMode::Mask { .. }
+        );
+        if masked && colors.iter().any(|c| c.w < 1.0) {
+            let message = format!(
+                "{}: {name}: COLOR_0 alpha does not cut out alpha-masked surfaces (the \
+                 material's alpha alone does)",
+                self.path.display()
+            );
+            self.warn(message);
+        }
+        let rgb = colors
+            .iter()
+            .map(|c| c.truncate().clamp(Vec3::ZERO, Vec3::ONE));
+        if self.mesh.colors.is_empty() {
+            if rgb.clone().all(|c| c == Vec3::ONE) {
+                return;
+            }
+            self.mesh.colors = vec![Vec3::ONE; self.mesh.positions.len()];
+        }
+        self.mesh.colors.extend(rgb);
     }
 
     /// Finishes the scene: builds area lights, directional lights, the default camera.

@@ -119,6 +119,7 @@ pub fn load_obj_from_reader(path: &Path, reader: &mut impl BufRead) -> Result<Sc
             normals,
             uvs,
             tangents: None,
+            colors: None,
             triangles,
             material,
         })?;

@@ -42,6 +42,7 @@ pub fn mesh(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>, material_ids: Vec<u3
         normals: vec![Vec3::ZERO; n],
         uvs: vec![Vec2::ZERO; n],
         tangents: vec![Vec4::ZERO; n],
+        colors: Vec::new(),
         triangles,
         material_ids,
     }

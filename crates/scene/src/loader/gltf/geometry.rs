@@ -60,6 +60,20 @@ pub(super) fn read_primitive(
             check_accessor(&accessor, buffers, dimensions, types)?;
         }
     }
+    if let Some(colors) = primitive.get(&Semantic::Colors(0)) {
+        let dimensions = match colors.dimensions() {
+            Dimensions::Vec4 => Dimensions::Vec4,
+            _ => Dimensions::Vec3,
+        };
+        let types = [DataType::F32, DataType::U8, DataType::U16];
+        check_accessor(&colors, buffers, dimensions, &types)?;
+        if colors.data_type() != DataType::F32 && !colors.normalized() {
+            let index = colors.index();
+            return Err(format!(
+                "COLOR_0 accessor {index} is an integer type but not normalized"
+            ));
+        }
+    }
     if let Some(indices) = primitive.indices() {
         let types = [DataType::U8, DataType::U16, DataType::U32];
         check_accessor(&indices, buffers, Dimensions::Scalar, &types)?;
@@ -89,6 +103,9 @@ pub(super) fn read_primitive(
     let uvs = reader
         .read_tex_coords(0)
         .map(|it| it.into_f32().map(Vec2::from).collect());
+    let colors = reader
+        .read_colors(0)
+        .map(|it| it.into_rgba_f32().map(Vec4::from).collect());
     let indices: Vec<u32> = match reader.read_indices() {
         Some(it) => it.into_u32().collect(),
         None => (0..positions.len() as u32).collect(),
@@ -104,6 +121,7 @@ pub(super) fn read_primitive(
         normals,
         uvs,
         tangents,
+        colors,
         triangles,
         material,
     }))

@@ -194,10 +194,6 @@ impl NodeReader<'_> {
             .map_or(format!("mesh {}", mesh.index()), |n| format!("mesh '{n}'"));
         for primitive in mesh.primitives() {
             let name = format!("{mesh_name} primitive {}", primitive.index());
-            if primitive.get(&gltf::Semantic::Colors(0)).is_some() {
-                let feature = "COLOR_0 (base colors come from the materials alone)";
-                self.builder.warn_unsupported(feature);
-            }
             if primitive.morph_targets().len() > 0 {
                 self.builder
                     .warn_unsupported("morph targets (meshes keep their base shape)");
