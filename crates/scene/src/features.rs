@@ -53,12 +53,14 @@ pub struct LightCounts {
     pub spot: usize,
     /// Directional lights.
     pub directional: usize,
+    /// Environment lights (0 or 1).
+    pub environment: usize,
 }
 
 impl LightCounts {
     /// True when every light is a delta light (no path can hit a light).
     pub fn only_delta(&self) -> bool {
-        self.area == 0 && (self.point + self.spot + self.directional) > 0
+        self.area == 0 && self.environment == 0 && (self.point + self.spot + self.directional) > 0
     }
 }
 
@@ -159,6 +161,7 @@ impl SceneFeatures {
                 Light::Point(_) => counts.point += 1,
                 Light::Spot(_) => counts.spot += 1,
                 Light::Directional(_) => counts.directional += 1,
+                Light::Environment(_) => counts.environment += 1,
             }
         }
         features
@@ -178,8 +181,8 @@ impl fmt::Display for SceneFeatures {
         )?;
         writeln!(
             f,
-            "lights: {} area, {} point, {} spot, {} directional",
-            l.area, l.point, l.spot, l.directional
+            "lights: {} area, {} point, {} spot, {} directional, {} environment",
+            l.area, l.point, l.spot, l.directional, l.environment
         )?;
         write!(
             f,

@@ -29,7 +29,8 @@ pub struct Scene {
     pub material_lobes: Vec<Option<Lobes>>,
     /// Textures, indexed by [`crate::TextureRef::index`].
     pub textures: Vec<Texture>,
-    /// Lights: one area light per emissive triangle, then punctual lights.
+    /// Lights: one area light per emissive triangle, then punctual, directional and
+    /// environment lights.
     pub lights: Vec<Light>,
     /// Power-proportional light selection.
     pub light_sampler: LightSampler,
@@ -167,6 +168,19 @@ impl Scene {
         let light = self.light_sampler.light_of_triangle(triangle)?;
         match &self.lights[light] {
             Light::Area(area) => area.radiance_on_hit(&self.textures, ray_dir, u, v),
+            _ => None,
+        }
+    }
+
+    /// Radiance from the environment seen by a path that leaves the scene along the unit
+    /// `direction`, with the environment light's index; `None` without an environment.
+    #[inline]
+    pub fn emission_on_escape(&self, direction: Vec3) -> Option<(usize, HitEmission)> {
+        let index = self.light_sampler.environment()?;
+        match &self.lights[index] {
+            Light::Environment(environment) => {
+                Some((index, environment.radiance_on_escape(direction)))
+            }
             _ => None,
         }
     }

@@ -361,3 +361,35 @@ fn vertex_color_alpha_on_masks_is_warned_and_bad_colors_are_errors() {
         "{message}"
     );
 }
+
+/// `VCM_environment` (the renderer's own extension) adds a constant sky around the scene;
+/// a malformed one is an error naming the file and the property.
+#[test]
+fn the_environment_extension_adds_a_sky() {
+    let extra = r#", "extensionsUsed": ["VCM_environment"],
+        "extensions": {"VCM_environment": {"color": [0.5, 1, 2], "strength": 2}}"#;
+    let scene = load(&document(r#"[{"mesh": 0}]"#, MATTE, extra)).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.features.lights.environment, 1);
+    let Some(Light::Environment(sky)) = scene.lights.last() else {
+        panic!("no environment: {:?}", scene.lights)
+    };
+    assert_eq!(sky.radiance, Vec3::new(1.0, 2.0, 4.0));
+    assert_eq!(sky.scene_radius, scene.features.bounds.radius());
+    let (index, seen) = scene.emission_on_escape(Vec3::Z).unwrap();
+    assert_eq!(
+        (index, seen.radiance),
+        (scene.lights.len() - 1, sky.radiance)
+    );
+
+    let bad = extra.replace("\"strength\": 2", "\"strength\": -2");
+    let message = load(&document(r#"[{"mesh": 0}]"#, MATTE, &bad))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("memory.gltf") && message.contains("`strength`"),
+        "{message}"
+    );
+    let plain = load(&document(r#"[{"mesh": 0}]"#, MATTE, "")).unwrap();
+    assert!(plain.emission_on_escape(Vec3::Z).is_none());
+}

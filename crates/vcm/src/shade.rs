@@ -1,9 +1,10 @@
 //! Shading one path vertex: emission found by the path, one light sample (next event
 //! estimation) and the continuation by BSDF sampling.
 //!
-//! MIS combines the two ways a path can reach an area light, BSDF sampling (pdf p_bsdf in
-//! solid angle) and light sampling (p_light = pick pmf × area pdf × d² / cos θ_light, the
-//! area-to-solid-angle conversion of Veach 1997 eq. 8.10), with the power heuristic
+//! MIS combines the two ways a path can reach an area light or the environment, BSDF
+//! sampling (pdf p_bsdf in solid angle) and light sampling (p_light = pick pmf × area pdf ×
+//! d² / cos θ_light, the area-to-solid-angle conversion of Veach 1997 eq. 8.10; for the
+//! environment pick pmf × its direction pdf), with the power heuristic
 //! w_i = p_i² / (p_bsdf² + p_light²) (Veach 1997 eq. 9.13), one sample of each technique.
 
 use glam::Vec3;
@@ -32,7 +33,12 @@ pub(crate) struct ShadeContext<'a> {
 pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) {
     path.shadow = None;
     // `max_depth` 0 allows not even the camera segment.
-    let Some(hit) = hit.filter(|_| path.segments <= ctx.max_segments) else {
+    if path.segments > ctx.max_segments {
+        path.alive = false;
+        return;
+    }
+    let Some(hit) = hit else {
+        path.radiance += path.throughput * escaped(ctx.scene, path);
         path.alive = false;
         return;
     };
@@ -74,6 +80,19 @@ fn emission(scene: &Scene, path: &PathState, point: &SurfacePoint, hit: Hit) -> 
     // Light sampling's pdf of the same point in solid angle at the receiver (Veach eq. 8.10).
     let light_pdf_w =
         scene.light_sampler.pmf(light) * emitted.direct_pdf_a * hit.t * hit.t / cos_at_light;
+    emitted.radiance * power_heuristic(1.0, pdf_w, 1.0, light_pdf_w)
+}
+
+/// Radiance from the environment toward a path that left the scene, MIS-weighted against
+/// light sampling like [`emission`] (light sampling picks directions: no area conversion).
+fn escaped(scene: &Scene, path: &PathState) -> Vec3 {
+    let Some((light, emitted)) = scene.emission_on_escape(path.direction) else {
+        return Vec3::ZERO;
+    };
+    let SegmentOrigin::Bsdf { pdf_w } = path.segment_origin else {
+        return emitted.radiance;
+    };
+    let light_pdf_w = scene.light_sampler.pmf(light) * emitted.direct_pdf_a;
     emitted.radiance * power_heuristic(1.0, pdf_w, 1.0, light_pdf_w)
 }
 

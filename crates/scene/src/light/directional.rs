@@ -2,9 +2,8 @@
 
 use glam::{Vec2, Vec3};
 
+use super::entry_disk::{entry_disk_pdf_a, entry_point};
 use super::{Emission, Illumination, channel_mean};
-use crate::frame::Frame;
-use crate::sampling::sample_concentric_disk;
 
 /// An infinitely distant light. Emission sampling starts rays on a disk covering the scene.
 #[derive(Clone, Debug)]
@@ -21,7 +20,7 @@ pub struct DirectionalLight {
 
 impl DirectionalLight {
     fn disk_pdf_a(&self) -> f32 {
-        1.0 / (std::f32::consts::PI * self.scene_radius * self.scene_radius)
+        entry_disk_pdf_a(self.scene_radius)
     }
 
     pub(super) fn illuminate(&self) -> Illumination {
@@ -36,12 +35,9 @@ impl DirectionalLight {
     }
 
     pub(super) fn emit(&self, u_pos: Vec2) -> Emission {
-        let disk = sample_concentric_disk(u_pos) * self.scene_radius;
-        let frame = Frame::from_z(self.direction);
-        let offset = frame.to_world(Vec3::new(disk.x, disk.y, 0.0));
         Emission {
             value: self.irradiance,
-            position: self.scene_center + offset - self.direction * self.scene_radius,
+            position: entry_point(self.scene_center, self.scene_radius, self.direction, u_pos),
             direction: self.direction,
             emission_pdf_w: self.disk_pdf_a(),
             // Light sampling picks the one direction with probability 1.

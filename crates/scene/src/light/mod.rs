@@ -8,11 +8,14 @@
 
 mod area;
 mod directional;
+mod entry_disk;
+mod environment;
 mod punctual;
 mod sampler;
 
 pub use area::AreaLight;
 pub use directional::DirectionalLight;
+pub use environment::EnvironmentLight;
 pub use punctual::{PointLight, SpotLight};
 pub use sampler::LightSampler;
 
@@ -31,6 +34,8 @@ pub enum Light {
     Spot(SpotLight),
     /// `KHR_lights_punctual` directional light (infinitely distant).
     Directional(DirectionalLight),
+    /// Constant radiance from every direction at infinity (the world background).
+    Environment(EnvironmentLight),
 }
 
 /// A light sample seen from a receiving point (next event estimation).
@@ -70,12 +75,13 @@ pub struct Emission {
     pub cos_at_light: f32,
 }
 
-/// Radiance found by a path that hits an area light.
+/// Radiance found by a path that hits an area light or leaves the scene into the environment.
 #[derive(Clone, Copy, Debug)]
 pub struct HitEmission {
     /// Emitted radiance toward the path.
     pub radiance: Vec3,
-    /// Area pdf of choosing the hit point by light sampling.
+    /// Area pdf of choosing the hit point by light sampling (for the environment: the
+    /// solid-angle pdf of choosing the direction).
     pub direct_pdf_a: f32,
     /// Pdf of emitting from the hit point toward the path (area × solid angle).
     pub emission_pdf_w: f32,
@@ -98,6 +104,7 @@ impl Light {
             Light::Point(l) => l.illuminate(receiver),
             Light::Spot(l) => l.illuminate(receiver),
             Light::Directional(l) => Some(l.illuminate()),
+            Light::Environment(l) => Some(l.illuminate(u)),
         }
     }
 
@@ -110,6 +117,7 @@ impl Light {
             Light::Point(l) => Some(l.emit(u_dir)),
             Light::Spot(l) => Some(l.emit(u_dir)),
             Light::Directional(l) => Some(l.emit(u_pos)),
+            Light::Environment(l) => Some(l.emit(u_pos, u_dir)),
         }
     }
 
@@ -121,6 +129,7 @@ impl Light {
             Light::Point(l) => l.power(),
             Light::Spot(l) => l.power(),
             Light::Directional(l) => l.power(),
+            Light::Environment(l) => l.power(),
         }
     }
 
@@ -128,13 +137,13 @@ impl Light {
     /// cannot hit them, only light sampling reaches them.
     #[inline]
     pub fn is_delta(&self) -> bool {
-        !matches!(self, Light::Area(_))
+        !matches!(self, Light::Area(_) | Light::Environment(_))
     }
 
-    /// True for lights at a finite position (all but directional).
+    /// True for lights at a finite position (all but directional and the environment).
     #[inline]
     pub fn is_finite(&self) -> bool {
-        !matches!(self, Light::Directional(_))
+        !matches!(self, Light::Directional(_) | Light::Environment(_))
     }
 }
 

@@ -4,11 +4,13 @@ use super::Light;
 use crate::sampling::Distribution1D;
 use crate::texture::Texture;
 
-/// Chooses lights in proportion to their power and finds the light behind an emissive triangle.
+/// Chooses lights in proportion to their power and finds the light behind an emissive
+/// triangle, and the environment.
 #[derive(Clone, Debug)]
 pub struct LightSampler {
     distribution: Option<Distribution1D>,
     light_of_triangle: Vec<u32>,
+    environment: Option<usize>,
 }
 
 /// Marks a triangle that is not an area light.
@@ -27,6 +29,9 @@ impl LightSampler {
         LightSampler {
             distribution: Distribution1D::new(&powers),
             light_of_triangle,
+            environment: lights
+                .iter()
+                .position(|l| matches!(l, Light::Environment(_))),
         }
     }
 
@@ -41,6 +46,12 @@ impl LightSampler {
     #[inline]
     pub fn pmf(&self, index: usize) -> f32 {
         self.distribution.as_ref().map_or(0.0, |d| d.pmf(index))
+    }
+
+    /// The environment light (the first, if there are several), if any.
+    #[inline]
+    pub fn environment(&self) -> Option<usize> {
+        self.environment
     }
 
     /// The area light behind triangle `triangle`, if it emits.

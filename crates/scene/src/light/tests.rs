@@ -82,6 +82,24 @@ fn area_light_sampling_reproduces_the_analytic_irradiance() {
     assert_close("irradiance", estimate, polygon_irradiance(&area.corners));
 }
 
+/// A constant environment of radiance L gives irradiance π L on any surface it sees whole.
+#[test]
+fn environment_sampling_reproduces_the_irradiance_of_a_uniform_sky() {
+    let light = Light::Environment(EnvironmentLight {
+        radiance: Vec3::splat(0.75),
+        scene_center: Vec3::ZERO,
+        scene_radius: 3.0,
+    });
+    let normal = Vec3::new(0.6, 0.0, 0.8);
+    let estimate = estimate(200_000, 7, |rng| {
+        let s = light.illuminate(&[], Vec3::ONE, rng.uniform2()).unwrap();
+        assert_eq!(s.distance, f32::INFINITY);
+        f64::from(s.value.x * s.direction.dot(normal).max(0.0) / s.direct_pdf_w)
+    });
+    assert_close("irradiance", estimate, 0.75 * std::f64::consts::PI);
+    assert!(!light.is_delta() && !light.is_finite());
+}
+
 #[test]
 fn emission_sampling_integrates_to_the_light_power() {
     let r = 2.0;
@@ -102,6 +120,11 @@ fn emission_sampling_integrates_to_the_light_power() {
             direction: -Vec3::Y,
             irradiance: Vec3::splat(1.5),
             scene_center: Vec3::ZERO,
+            scene_radius: r,
+        }),
+        Light::Environment(EnvironmentLight {
+            radiance: Vec3::new(0.5, 1.0, 2.0),
+            scene_center: Vec3::ONE,
             scene_radius: r,
         }),
     ];

@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 use crate::camera::Camera;
 use crate::error::SceneError;
-use crate::light::{DirectionalLight, Light};
+use crate::light::{DirectionalLight, EnvironmentLight, Light};
 use crate::material::{AlphaMode, Material};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
@@ -41,6 +41,8 @@ pub(crate) struct SceneBuilder {
     pub textures: Vec<Texture>,
     lights: Vec<Light>,
     directional: Vec<PendingDirectional>,
+    /// Radiance of the environment, placed around the scene once its bounds are known.
+    environment: Option<Vec3>,
     pub camera: Option<Camera>,
     warnings: Vec<String>,
     degenerate_triangles: usize,
@@ -55,6 +57,7 @@ impl SceneBuilder {
             textures: Vec::new(),
             lights: Vec::new(),
             directional: Vec::new(),
+            environment: None,
             camera: None,
             warnings: Vec::new(),
             degenerate_triangles: 0,
@@ -93,6 +96,11 @@ impl SceneBuilder {
             direction,
             irradiance,
         });
+    }
+
+    /// Sets the environment's radiance (constant from every direction).
+    pub fn set_environment(&mut self, radiance: Vec3) {
+        self.environment = Some(radiance);
     }
 
     fn geometry_error(&self, name: &str, reason: String) -> SceneError {
@@ -215,15 +223,22 @@ impl SceneBuilder {
             self.warn(format!("dropped {count} degenerate (zero-area) triangles"));
         }
         let bounds = self.mesh.bounds();
+        let (scene_center, scene_radius) = if bounds.is_empty() {
+            (Vec3::ZERO, 1.0)
+        } else {
+            (bounds.center(), bounds.radius().max(f32::MIN_POSITIVE))
+        };
         for pending in std::mem::take(&mut self.directional) {
-            let (scene_center, scene_radius) = if bounds.is_empty() {
-                (Vec3::ZERO, 1.0)
-            } else {
-                (bounds.center(), bounds.radius().max(f32::MIN_POSITIVE))
-            };
             self.lights.push(Light::Directional(DirectionalLight {
                 direction: pending.direction,
                 irradiance: pending.irradiance,
+                scene_center,
+                scene_radius,
+            }));
+        }
+        if let Some(radiance) = self.environment {
+            self.lights.push(Light::Environment(EnvironmentLight {
+                radiance,
                 scene_center,
                 scene_radius,
             }));

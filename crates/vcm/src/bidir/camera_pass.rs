@@ -7,6 +7,7 @@ use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use smallvec::SmallVec;
 use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
+use vcm_scene::light::HitEmission;
 use vcm_scene::sampling::Rng;
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
@@ -203,7 +204,12 @@ fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
 /// Shades the vertex where a camera path hit the scene (`None`: it escaped and ends).
 fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     let max_segments = ctx.max_segments();
-    let Some(hit) = hit.filter(|_| path.walk.segments <= max_segments) else {
+    if path.walk.segments > max_segments {
+        path.alive = false;
+        return;
+    }
+    let Some(hit) = hit else {
+        path.radiance += path.walk.throughput * escaped(ctx, path);
         path.alive = false;
         return;
     };
@@ -259,27 +265,46 @@ fn emission(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> Vec3 {
     else {
         return Vec3::ZERO;
     };
-    let weight = if path.walk.segments == 1 {
+    let light = scene
+        .light_sampler
+        .light_of_triangle(hit.triangle)
+        .expect("an emitting triangle is an area light");
+    emitted.radiance * found_emission_weight(ctx, path, light, &emitted)
+}
+
+/// Radiance from the environment toward a path that left the scene, MIS-weighted. The path's
+/// MIS quantities take no distance or cosine for this segment: the environment's pdfs are
+/// per solid angle.
+fn escaped(ctx: &CameraContext, path: &CameraPathState) -> Vec3 {
+    let Some((light, emitted)) = ctx.scene.emission_on_escape(path.walk.direction) else {
+        return Vec3::ZERO;
+    };
+    emitted.radiance * found_emission_weight(ctx, path, light, &emitted)
+}
+
+/// Weight of emission from light `light` that the camera path found by itself.
+fn found_emission_weight(
+    ctx: &CameraContext,
+    path: &CameraPathState,
+    light: usize,
+    emitted: &HitEmission,
+) -> f32 {
+    if path.walk.segments == 1 {
         // No other technique samples a light seen directly through a pinhole.
         1.0
     } else if ctx.settings.algorithm == Algorithm::Ppm {
         // Photon mapping proper merges at the first non-specular vertex and stops there: a
-        // light is hit only through specular vertices, which nothing else samples.
+        // light is found only through specular vertices, which nothing else samples.
         1.0
     } else {
-        let light = scene
-            .light_sampler
-            .light_of_triangle(hit.triangle)
-            .expect("an emitting triangle is an area light");
-        let pick_pmf = scene.light_sampler.pmf(light);
+        let pick_pmf = ctx.scene.light_sampler.pmf(light);
         emission_hit_weight(
             &path.walk.mis,
             pick_pmf * emitted.direct_pdf_a,
             pick_pmf * emitted.emission_pdf_w,
             &ctx.factors,
         )
-    };
-    emitted.radiance * weight
+    }
 }
 
 /// One light sample (next event estimation) from a camera vertex.

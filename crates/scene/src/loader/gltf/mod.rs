@@ -1,7 +1,9 @@
 //! The glTF 2.0 loader (`.gltf` with external or embedded buffers, and `.glb`).
 
 mod accessors;
+mod environment;
 mod geometry;
+mod json_number;
 mod materials;
 mod texture_transform;
 
@@ -28,6 +30,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_volume",
     texture_transform::EXTENSION,
+    environment::EXTENSION,
 ];
 
 /// Parses a glTF document from `bytes`; `path` names it in messages and locates external files.
@@ -76,6 +79,11 @@ pub(super) fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene, SceneE
     };
     for node in roots {
         reader.visit(&node, Mat4::IDENTITY, 0)?;
+    }
+    let environment = environment::read(document.extension_value(environment::EXTENSION))
+        .map_err(|e| SceneError::gltf(path, e))?;
+    if let Some(radiance) = environment {
+        builder.set_environment(radiance);
     }
     Ok(builder.finish())
 }

@@ -4,6 +4,7 @@
 use glam::Vec2;
 use gltf::json::Value;
 
+use super::json_number::finite;
 use crate::texture::UvTransform;
 
 /// The extension's name in a texture reference's `extensions`.
@@ -65,11 +66,6 @@ fn pair(object: &Value, name: &str, default: Vec2) -> Result<Vec2, String> {
             .ok_or_else(|| malformed(name, "two finite numbers")),
         _ => Err(malformed(name, "two finite numbers")),
     }
-}
-
-/// `value` as an `f32` if it is a number that stays finite in single precision.
-fn finite(value: &Value) -> Option<f32> {
-    value.as_f64().map(|x| x as f32).filter(|x| x.is_finite())
 }
 
 fn malformed(property: &str, expected: &str) -> String {
