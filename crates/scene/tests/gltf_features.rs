@@ -393,3 +393,44 @@ fn the_environment_extension_adds_a_sky() {
     let plain = load(&document(r#"[{"mesh": 0}]"#, MATTE, "")).unwrap();
     assert!(plain.emission_on_escape(Vec3::Z).is_none());
 }
+
+/// `VCM_environment` with an `image`: an equirectangular OpenEXR file beside the scene,
+/// scaled by color · strength; a missing image is an error naming it.
+#[test]
+fn the_environment_extension_reads_an_equirectangular_image() {
+    let dir = tempfile::tempdir().unwrap();
+    // 4 × 2: the top row (the upper hemisphere) red, green, blue, white from left to right.
+    let texel = |x: usize, y: usize| match (x, y) {
+        (0, 0) => (1.0, 0.0, 0.0),
+        (1, 0) => (0.0, 1.0, 0.0),
+        (2, 0) => (0.0, 0.0, 1.0),
+        (3, 0) => (1.0, 1.0, 1.0),
+        _ => (0.0, 0.0, 0.0),
+    };
+    exr::prelude::write_rgb_file(dir.path().join("sky.exr"), 4, 2, |x, y| {
+        let (r, g, b) = texel(x, y);
+        (r as f32, g as f32, b as f32)
+    })
+    .unwrap();
+    let extra = r#", "extensionsUsed": ["VCM_environment"],
+        "extensions": {"VCM_environment": {"strength": 2, "image": "sky.exr"}}"#;
+    let gltf = dir.path().join("scene.gltf");
+    std::fs::write(&gltf, document(r#"[{"mesh": 0}]"#, MATTE, extra)).unwrap();
+    let scene = Scene::load(&gltf).unwrap();
+    // Up and toward -Z is the second quarter of the top row; up and toward +X the third.
+    let up = |d: Vec3| (d + Vec3::Y).normalize();
+    let seen = |d: Vec3| scene.emission_on_escape(up(d)).unwrap().1.radiance;
+    assert_eq!(seen(-Vec3::Z), Vec3::new(0.0, 2.0, 0.0));
+    assert_eq!(seen(Vec3::X), Vec3::new(0.0, 0.0, 2.0));
+    assert_eq!(
+        scene.emission_on_escape(-Vec3::Y).unwrap().1.radiance,
+        Vec3::ZERO
+    );
+
+    std::fs::remove_file(dir.path().join("sky.exr")).unwrap();
+    let message = Scene::load(&gltf).unwrap_err().to_string();
+    assert!(
+        message.contains("scene.gltf") && message.contains("'sky.exr'"),
+        "{message}"
+    );
+}

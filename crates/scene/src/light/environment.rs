@@ -1,19 +1,25 @@
-//! The environment: constant radiance arriving from every direction at infinity (the world
-//! background), seen by paths that leave the scene.
+//! The environment: radiance arriving from every direction at infinity (the world
+//! background), constant or from an equirectangular image, seen by paths that leave the
+//! scene.
+
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
 use super::entry_disk::{entry_disk_pdf_a, entry_point};
-use super::{Emission, HitEmission, Illumination, channel_mean};
+use super::{Emission, EnvironmentMap, HitEmission, Illumination, channel_mean};
 use crate::sampling::{sample_uniform_sphere, uniform_sphere_pdf};
 
-/// Radiance `radiance` from every direction. Light sampling picks directions uniformly on the
-/// sphere; emission sampling picks a direction so, then a point on the disk where light of
-/// that direction enters the scene (as for directional lights).
+/// Radiance `radiance` (times `map`'s, if any) from every direction. Light sampling picks
+/// directions uniformly on the sphere, or by the map's brightness; emission sampling picks a
+/// direction so, then a point on the disk where light of that direction enters the scene (as
+/// for directional lights).
 #[derive(Clone, Debug)]
 pub struct EnvironmentLight {
-    /// Radiance arriving from every direction (linear RGB).
+    /// Radiance arriving from every direction (linear RGB), a scale of `map`'s if there is one.
     pub radiance: Vec3,
+    /// The sky's image, if it is not constant.
+    pub map: Option<Arc<EnvironmentMap>>,
     /// Center of the scene's bounding sphere.
     pub scene_center: Vec3,
     /// Radius of the scene's bounding sphere.
@@ -21,48 +27,68 @@ pub struct EnvironmentLight {
 }
 
 impl EnvironmentLight {
-    /// Pdf of emitting a given ray: a direction on the sphere, a point on its entry disk.
-    fn emission_pdf_w(&self) -> f32 {
-        uniform_sphere_pdf() * entry_disk_pdf_a(self.scene_radius)
-    }
-
-    pub(super) fn illuminate(&self, u: Vec2) -> Illumination {
-        Illumination {
-            direction: sample_uniform_sphere(u),
-            distance: f32::INFINITY,
-            value: self.radiance,
-            direct_pdf_w: uniform_sphere_pdf(),
-            emission_pdf_w: self.emission_pdf_w(),
-            cos_at_light: 1.0,
+    /// A direction toward the sky with its solid-angle pdf (`None`: a black map).
+    fn sample_direction(&self, u: Vec2) -> Option<(Vec3, f32)> {
+        match &self.map {
+            None => Some((sample_uniform_sphere(u), uniform_sphere_pdf())),
+            Some(map) => map.sample(u),
         }
     }
 
-    pub(super) fn emit(&self, u_pos: Vec2, u_dir: Vec2) -> Emission {
-        let direction = -sample_uniform_sphere(u_dir);
-        Emission {
-            value: self.radiance,
+    /// The radiance from the unit `direction` and the solid-angle pdf of sampling it.
+    fn radiance_and_pdf(&self, direction: Vec3) -> (Vec3, f32) {
+        match &self.map {
+            None => (self.radiance, uniform_sphere_pdf()),
+            Some(map) => (self.radiance * map.radiance(direction), map.pdf(direction)),
+        }
+    }
+
+    pub(super) fn illuminate(&self, u: Vec2) -> Option<Illumination> {
+        let (direction, direct_pdf_w) = self.sample_direction(u)?;
+        let (value, _) = self.radiance_and_pdf(direction);
+        Some(Illumination {
+            direction,
+            distance: f32::INFINITY,
+            value,
+            direct_pdf_w,
+            emission_pdf_w: direct_pdf_w * entry_disk_pdf_a(self.scene_radius),
+            cos_at_light: 1.0,
+        })
+    }
+
+    pub(super) fn emit(&self, u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
+        let (toward_sky, direct_pdf_w) = self.sample_direction(u_dir)?;
+        let (value, _) = self.radiance_and_pdf(toward_sky);
+        let direction = -toward_sky;
+        Some(Emission {
+            value,
             position: entry_point(self.scene_center, self.scene_radius, direction, u_pos),
             direction,
-            emission_pdf_w: self.emission_pdf_w(),
-            direct_pdf_a: uniform_sphere_pdf(),
+            emission_pdf_w: direct_pdf_w * entry_disk_pdf_a(self.scene_radius),
+            direct_pdf_a: direct_pdf_w,
             cos_at_light: 1.0,
-        }
+        })
     }
 
-    /// The radiance a path that leaves the scene along `_direction` receives, with the pdfs
-    /// of the other techniques: `direct_pdf_a` is light sampling's solid-angle pdf of the
-    /// direction.
-    pub fn radiance_on_escape(&self, _direction: Vec3) -> HitEmission {
+    /// The radiance a path that leaves the scene along the unit `direction` receives, with
+    /// the pdfs of the other techniques: `direct_pdf_a` is light sampling's solid-angle pdf
+    /// of the direction.
+    pub fn radiance_on_escape(&self, direction: Vec3) -> HitEmission {
+        let (radiance, direct_pdf_w) = self.radiance_and_pdf(direction);
         HitEmission {
-            radiance: self.radiance,
-            direct_pdf_a: uniform_sphere_pdf(),
-            emission_pdf_w: self.emission_pdf_w(),
+            radiance,
+            direct_pdf_a: direct_pdf_w,
+            emission_pdf_w: direct_pdf_w * entry_disk_pdf_a(self.scene_radius),
         }
     }
 
-    /// L · π · 4π r²: the power entering the scene's bounding sphere.
+    /// L̄ · π · 4π r²: the power entering the scene's bounding sphere (L̄ the mean radiance).
     pub(super) fn power(&self) -> f32 {
+        let mean = match &self.map {
+            None => self.radiance,
+            Some(map) => self.radiance * map.mean(),
+        };
         let r = self.scene_radius;
-        channel_mean(self.radiance) * 4.0 * std::f32::consts::PI.powi(2) * r * r
+        channel_mean(mean) * 4.0 * std::f32::consts::PI.powi(2) * r * r
     }
 }

@@ -10,12 +10,14 @@ mod area;
 mod directional;
 mod entry_disk;
 mod environment;
+mod environment_map;
 mod punctual;
 mod sampler;
 
 pub use area::AreaLight;
 pub use directional::DirectionalLight;
 pub use environment::EnvironmentLight;
+pub use environment_map::EnvironmentMap;
 pub use punctual::{PointLight, SpotLight};
 pub use sampler::LightSampler;
 
@@ -91,7 +93,8 @@ impl Light {
     /// Samples a point on the light as seen from `receiver`, with two uniform numbers `u`.
     ///
     /// Returns `None` when the sample cannot contribute (back of a one-sided emitter, outside a
-    /// spot cone, receiver on the light, a cut-out part of an alpha-masked emitter).
+    /// spot cone, receiver on the light, a cut-out part of an alpha-masked emitter, a black
+    /// environment map).
     #[inline]
     pub fn illuminate(
         &self,
@@ -104,12 +107,13 @@ impl Light {
             Light::Point(l) => l.illuminate(receiver),
             Light::Spot(l) => l.illuminate(receiver),
             Light::Directional(l) => Some(l.illuminate()),
-            Light::Environment(l) => Some(l.illuminate(u)),
+            Light::Environment(l) => l.illuminate(u),
         }
     }
 
     /// Samples an emitted ray with two pairs of uniform numbers (position, direction);
-    /// `None` where no light leaves (a cut-out part of an alpha-masked emitter).
+    /// `None` where no light leaves (a cut-out part of an alpha-masked emitter, a black
+    /// environment map).
     #[inline]
     pub fn emit(&self, textures: &[Texture], u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
         match self {
@@ -117,7 +121,7 @@ impl Light {
             Light::Point(l) => Some(l.emit(u_dir)),
             Light::Spot(l) => Some(l.emit(u_dir)),
             Light::Directional(l) => Some(l.emit(u_pos)),
-            Light::Environment(l) => Some(l.emit(u_pos, u_dir)),
+            Light::Environment(l) => l.emit(u_pos, u_dir),
         }
     }
 

@@ -87,6 +87,7 @@ fn area_light_sampling_reproduces_the_analytic_irradiance() {
 fn environment_sampling_reproduces_the_irradiance_of_a_uniform_sky() {
     let light = Light::Environment(EnvironmentLight {
         radiance: Vec3::splat(0.75),
+        map: None,
         scene_center: Vec3::ZERO,
         scene_radius: 3.0,
     });
@@ -124,6 +125,20 @@ fn emission_sampling_integrates_to_the_light_power() {
         }),
         Light::Environment(EnvironmentLight {
             radiance: Vec3::new(0.5, 1.0, 2.0),
+            map: None,
+            scene_center: Vec3::ONE,
+            scene_radius: r,
+        }),
+        Light::Environment(EnvironmentLight {
+            radiance: Vec3::new(0.5, 1.0, 2.0),
+            map: Some(std::sync::Arc::new(
+                EnvironmentMap::new(
+                    4,
+                    2,
+                    (0..8).map(|i| Vec3::new(i as f32, 1.0, 0.5)).collect(),
+                )
+                .unwrap(),
+            )),
             scene_center: Vec3::ONE,
             scene_radius: r,
         }),

@@ -1,12 +1,13 @@
 //! Collects what a loader reads, validates geometry, and assembles the [`Scene`].
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::camera::Camera;
 use crate::error::SceneError;
-use crate::light::{DirectionalLight, EnvironmentLight, Light};
+use crate::light::{DirectionalLight, EnvironmentLight, EnvironmentMap, Light};
 use crate::material::{AlphaMode, Material};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
@@ -41,8 +42,9 @@ pub(crate) struct SceneBuilder {
     pub textures: Vec<Texture>,
     lights: Vec<Light>,
     directional: Vec<PendingDirectional>,
-    /// Radiance of the environment, placed around the scene once its bounds are known.
-    environment: Option<Vec3>,
+    /// The environment's radiance (and image), placed around the scene once its bounds are
+    /// known.
+    environment: Option<(Vec3, Option<Arc<EnvironmentMap>>)>,
     pub camera: Option<Camera>,
     warnings: Vec<String>,
     degenerate_triangles: usize,
@@ -98,9 +100,9 @@ impl SceneBuilder {
         });
     }
 
-    /// Sets the environment's radiance (constant from every direction).
-    pub fn set_environment(&mut self, radiance: Vec3) {
-        self.environment = Some(radiance);
+    /// Sets the environment's radiance: constant from every direction, or a scale of `map`.
+    pub fn set_environment(&mut self, radiance: Vec3, map: Option<Arc<EnvironmentMap>>) {
+        self.environment = Some((radiance, map));
     }
 
     fn geometry_error(&self, name: &str, reason: String) -> SceneError {
@@ -236,9 +238,10 @@ impl SceneBuilder {
                 scene_radius,
             }));
         }
-        if let Some(radiance) = self.environment {
+        if let Some((radiance, map)) = self.environment.take() {
             self.lights.push(Light::Environment(EnvironmentLight {
                 radiance,
+                map,
                 scene_center,
                 scene_radius,
             }));

@@ -56,6 +56,14 @@ impl Distribution1D {
     /// entry whose cumulative sum exceeds `u · total`.
     #[inline]
     pub fn sample(&self, u: f32) -> (usize, f32) {
+        let (i, pmf, _) = self.sample_remapped(u);
+        (i, pmf)
+    }
+
+    /// [`sample`](Self::sample), also returning where `u` fell within the entry's share, a
+    /// fresh uniform number in [0, 1) (for choosing a point inside the entry).
+    #[inline]
+    pub fn sample_remapped(&self, u: f32) -> (usize, f32, f32) {
         let target = (u as f64).clamp(0.0, 1.0) * self.total();
         // First i with cdf[i + 1] > target; partition_point over cdf[1..].
         let i = self.cdf[1..].partition_point(|&c| c <= target);
@@ -69,7 +77,13 @@ impl Distribution1D {
                 .find(|&j| self.cdf[j + 1] > self.cdf[j])
                 .unwrap_or(0)
         };
-        (i, self.pmf(i))
+        let (start, end) = (self.cdf[i], self.cdf[i + 1]);
+        let remapped = if end > start {
+            ((target - start) / (end - start)).clamp(0.0, 1.0 - f64::EPSILON) as f32
+        } else {
+            0.0
+        };
+        (i, self.pmf(i), remapped.min(1.0 - f32::EPSILON / 2.0))
     }
 }
 

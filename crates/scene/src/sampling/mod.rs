@@ -4,13 +4,16 @@
 //! * Warps from the unit square to directions, disks and triangles, each with its pdf
 //!   (solid-angle pdfs are per steradian, area pdfs per unit area).
 //! * [`Distribution1D`]: discrete distribution for power-proportional selection.
+//! * [`ImageDistribution`]: piecewise-constant density over an image (environment maps).
 //! * [`power_heuristic`]: multiple importance sampling weight.
 
 mod distribution;
+mod image_distribution;
 mod rng;
 mod warps;
 
 pub use distribution::Distribution1D;
+pub use image_distribution::ImageDistribution;
 pub use rng::Rng;
 pub use warps::{
     cosine_hemisphere_pdf, power_heuristic, sample_concentric_disk, sample_cosine_hemisphere,

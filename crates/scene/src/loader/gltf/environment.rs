@@ -1,22 +1,38 @@
-//! `VCM_environment`, this renderer's own document-level extension: a constant world
-//! background of radiance `color · strength` from every direction.
+//! `VCM_environment`, this renderer's own document-level extension: a world background of
+//! radiance `color · strength` from every direction, times an equirectangular OpenEXR image's
+//! if `image` names one (a URI relative to the glTF file, as images are).
 //!
 //! ```json
 //! "extensionsUsed": ["VCM_environment"],
-//! "extensions": {"VCM_environment": {"color": [0.8, 0.9, 1.0], "strength": 0.5}}
+//! "extensions": {"VCM_environment": {"color": [0.8, 0.9, 1.0], "strength": 0.5,
+//!                                    "image": "sky.exr"}}
 //! ```
+
+use std::io::Cursor;
+use std::path::Path;
 
 use glam::Vec3;
 use gltf::json::Value;
 
 use super::json_number::finite;
+use crate::light::EnvironmentMap;
+use crate::loader::uri::read_uri;
 
 /// The extension's name in the document's `extensions`.
 pub(super) const EXTENSION: &str = "VCM_environment";
 
-/// The environment radiance of the extension object `value` (`None`, no extension: no
-/// environment); `Err` says which property is malformed.
-pub(super) fn read(value: Option<&Value>) -> Result<Option<Vec3>, String> {
+/// What the extension object asks for.
+#[derive(Debug, PartialEq)]
+pub(super) struct Environment {
+    /// `color · strength`.
+    pub radiance: Vec3,
+    /// The URI of the equirectangular image, if any.
+    pub image: Option<String>,
+}
+
+/// The environment of the extension object `value` (`None`, no extension: no environment);
+/// `Err` says which property is malformed.
+pub(super) fn read(value: Option<&Value>) -> Result<Option<Environment>, String> {
     let Some(value) = value else {
         return Ok(None);
     };
@@ -41,7 +57,47 @@ pub(super) fn read(value: Option<&Value>) -> Result<Option<Vec3>, String> {
         None => 1.0,
         Some(s) => non_negative(s).ok_or_else(|| malformed("strength", "a finite number ≥ 0"))?,
     };
-    Ok(Some(color * strength))
+    let image = match value.get("image") {
+        None => None,
+        Some(uri) => Some(
+            uri.as_str()
+                .ok_or_else(|| malformed("image", "a URI string"))?
+                .to_string(),
+        ),
+    };
+    Ok(Some(Environment {
+        radiance: color * strength,
+        image,
+    }))
+}
+
+/// Reads the OpenEXR image at `uri` (relative to `base`) as an environment map; errors name
+/// the image and the problem.
+pub(super) fn load_map(base: &Path, uri: &str) -> Result<EnvironmentMap, String> {
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let fail = |reason: String| format!("{EXTENSION} image '{uri}': {reason}");
+    let bytes = read_uri(base, uri).map_err(fail)?;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |resolution: exr::math::Vec2<usize>, _: &exr::image::RgbaChannels| {
+                let (width, height) = (resolution.width(), resolution.height());
+                (width, height, vec![Vec3::ZERO; width * height])
+            },
+            |(width, _, texels): &mut (usize, usize, Vec<Vec3>),
+             position: exr::math::Vec2<usize>,
+             (r, g, b, _): (f32, f32, f32, f32)| {
+                texels[position.y() * *width + position.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| fail(e.to_string()))?;
+    let (width, height, texels) = image.layer_data.channel_data.pixels;
+    let size = |n: usize| u32::try_from(n).map_err(|_| fail("too large".into()));
+    EnvironmentMap::new(size(width)?, size(height)?, texels).map_err(fail)
 }
 
 fn non_negative(value: &Value) -> Option<f32> {
@@ -56,7 +112,7 @@ fn malformed(property: &str, expected: &str) -> String {
 mod tests {
     use super::*;
 
-    fn parse(json: &str) -> Result<Option<Vec3>, String> {
+    fn parse(json: &str) -> Result<Option<Environment>, String> {
         let value: Value = gltf::json::deserialize::from_str(json).unwrap();
         read(Some(&value))
     }
@@ -64,9 +120,12 @@ mod tests {
     #[test]
     fn color_times_strength_with_white_and_one_by_default() {
         assert_eq!(read(None).unwrap(), None);
-        assert_eq!(parse("{}").unwrap(), Some(Vec3::ONE));
-        let sky = parse(r#"{"color": [0.5, 1, 2], "strength": 3}"#).unwrap();
-        assert_eq!(sky, Some(Vec3::new(1.5, 3.0, 6.0)));
+        let plain = parse("{}").unwrap().unwrap();
+        assert_eq!((plain.radiance, plain.image), (Vec3::ONE, None));
+        let sky = parse(r#"{"color": [0.5, 1, 2], "strength": 3, "image": "sky.exr"}"#);
+        let sky = sky.unwrap().unwrap();
+        assert_eq!(sky.radiance, Vec3::new(1.5, 3.0, 6.0));
+        assert_eq!(sky.image.as_deref(), Some("sky.exr"));
     }
 
     #[test]
@@ -77,6 +136,7 @@ mod tests {
             (r#"{"color": "blue"}"#, "color"),
             (r#"{"strength": 1e39}"#, "strength"),
             (r#"{"strength": -2}"#, "strength"),
+            (r#"{"image": 3}"#, "image"),
         ] {
             let error = parse(json).unwrap_err();
             assert!(error.contains(&format!("`{property}`")), "{json}: {error}");

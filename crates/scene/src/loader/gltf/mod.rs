@@ -8,6 +8,7 @@ mod materials;
 mod texture_transform;
 
 use std::path::Path;
+use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 use gltf::khr_lights_punctual::Kind as LightKind;
@@ -82,8 +83,14 @@ pub(super) fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene, SceneE
     }
     let environment = environment::read(document.extension_value(environment::EXTENSION))
         .map_err(|e| SceneError::gltf(path, e))?;
-    if let Some(radiance) = environment {
-        builder.set_environment(radiance);
+    if let Some(sky) = environment {
+        let map = match &sky.image {
+            None => None,
+            Some(uri) => Some(Arc::new(
+                environment::load_map(base, uri).map_err(|e| SceneError::gltf(path, e))?,
+            )),
+        };
+        builder.set_environment(sky.radiance, map);
     }
     Ok(builder.finish())
 }
