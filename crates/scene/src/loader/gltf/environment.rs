@@ -14,7 +14,7 @@ use std::path::Path;
 use glam::Vec3;
 use gltf::json::Value;
 
-use super::json_number::finite;
+use super::extension_json::{finite, malformed};
 use crate::light::EnvironmentMap;
 use crate::loader::uri::read_uri;
 
@@ -51,17 +51,18 @@ pub(super) fn read(value: Option<&Value>) -> Result<Option<Environment>, String>
                     .collect::<Option<Vec<_>>>()
             })
             .map(|rgb| Vec3::from_slice(&rgb))
-            .ok_or_else(|| malformed("color", "three finite numbers ≥ 0"))?,
+            .ok_or_else(|| malformed(EXTENSION, "color", "three finite numbers ≥ 0"))?,
     };
     let strength = match value.get("strength") {
         None => 1.0,
-        Some(s) => non_negative(s).ok_or_else(|| malformed("strength", "a finite number ≥ 0"))?,
+        Some(s) => non_negative(s)
+            .ok_or_else(|| malformed(EXTENSION, "strength", "a finite number ≥ 0"))?,
     };
     let image = match value.get("image") {
         None => None,
         Some(uri) => Some(
             uri.as_str()
-                .ok_or_else(|| malformed("image", "a URI string"))?
+                .ok_or_else(|| malformed(EXTENSION, "image", "a URI string"))?
                 .to_string(),
         ),
     };
@@ -102,10 +103,6 @@ pub(super) fn load_map(base: &Path, uri: &str) -> Result<EnvironmentMap, String>
 
 fn non_negative(value: &Value) -> Option<f32> {
     finite(value).filter(|x| *x >= 0.0)
-}
-
-fn malformed(property: &str, expected: &str) -> String {
-    format!("{EXTENSION}: `{property}` must be {expected}")
 }
 
 #[cfg(test)]

@@ -2,8 +2,8 @@
 
 mod accessors;
 mod environment;
+mod extension_json;
 mod geometry;
-mod json_number;
 mod materials;
 mod texture_transform;
 

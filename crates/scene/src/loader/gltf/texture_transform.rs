@@ -4,7 +4,7 @@
 use glam::Vec2;
 use gltf::json::Value;
 
-use super::json_number::finite;
+use super::extension_json::{finite, malformed};
 use crate::texture::UvTransform;
 
 /// The extension's name in a texture reference's `extensions`.
@@ -36,14 +36,16 @@ impl TextureTransform {
         let scale = pair(value, "scale", Vec2::ONE)?;
         let rotation = match value.get("rotation") {
             None => 0.0,
-            Some(v) => finite(v).ok_or_else(|| malformed("rotation", "a finite number"))?,
+            Some(v) => {
+                finite(v).ok_or_else(|| malformed(EXTENSION, "rotation", "a finite number"))?
+            }
         };
         let tex_coord = match value.get("texCoord") {
             None => None,
             Some(v) => Some(
                 v.as_u64()
                     .and_then(|n| u32::try_from(n).ok())
-                    .ok_or_else(|| malformed("texCoord", "a non-negative integer"))?,
+                    .ok_or_else(|| malformed(EXTENSION, "texCoord", "a non-negative integer"))?,
             ),
         };
         Ok(TextureTransform {
@@ -63,13 +65,9 @@ fn pair(object: &Value, name: &str, default: Vec2) -> Result<Vec2, String> {
         Some([x, y]) => finite(x)
             .zip(finite(y))
             .map(|(x, y)| Vec2::new(x, y))
-            .ok_or_else(|| malformed(name, "two finite numbers")),
-        _ => Err(malformed(name, "two finite numbers")),
+            .ok_or_else(|| malformed(EXTENSION, name, "two finite numbers")),
+        _ => Err(malformed(EXTENSION, name, "two finite numbers")),
     }
-}
-
-fn malformed(property: &str, expected: &str) -> String {
-    format!("{EXTENSION}: `{property}` must be {expected}")
 }
 
 #[cfg(test)]
