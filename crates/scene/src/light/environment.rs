@@ -35,21 +35,20 @@ impl EnvironmentLight {
         }
     }
 
-    /// The radiance from the unit `direction` and the solid-angle pdf of sampling it.
-    fn radiance_and_pdf(&self, direction: Vec3) -> (Vec3, f32) {
+    /// The radiance arriving from the unit `direction`.
+    fn radiance_from(&self, direction: Vec3) -> Vec3 {
         match &self.map {
-            None => (self.radiance, uniform_sphere_pdf()),
-            Some(map) => (self.radiance * map.radiance(direction), map.pdf(direction)),
+            None => self.radiance,
+            Some(map) => self.radiance * map.radiance(direction),
         }
     }
 
     pub(super) fn illuminate(&self, u: Vec2) -> Option<Illumination> {
         let (direction, direct_pdf_w) = self.sample_direction(u)?;
-        let (value, _) = self.radiance_and_pdf(direction);
         Some(Illumination {
             direction,
             distance: f32::INFINITY,
-            value,
+            value: self.radiance_from(direction),
             direct_pdf_w,
             emission_pdf_w: direct_pdf_w * entry_disk_pdf_a(self.scene_radius),
             cos_at_light: 1.0,
@@ -58,10 +57,9 @@ impl EnvironmentLight {
 
     pub(super) fn emit(&self, u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
         let (toward_sky, direct_pdf_w) = self.sample_direction(u_dir)?;
-        let (value, _) = self.radiance_and_pdf(toward_sky);
         let direction = -toward_sky;
         Some(Emission {
-            value,
+            value: self.radiance_from(toward_sky),
             position: entry_point(self.scene_center, self.scene_radius, direction, u_pos),
             direction,
             emission_pdf_w: direct_pdf_w * entry_disk_pdf_a(self.scene_radius),
@@ -74,9 +72,12 @@ impl EnvironmentLight {
     /// the pdfs of the other techniques: `direct_pdf_a` is light sampling's solid-angle pdf
     /// of the direction.
     pub fn radiance_on_escape(&self, direction: Vec3) -> HitEmission {
-        let (radiance, direct_pdf_w) = self.radiance_and_pdf(direction);
+        let direct_pdf_w = match &self.map {
+            None => uniform_sphere_pdf(),
+            Some(map) => map.pdf(direction),
+        };
         HitEmission {
-            radiance,
+            radiance: self.radiance_from(direction),
             direct_pdf_a: direct_pdf_w,
             emission_pdf_w: direct_pdf_w * entry_disk_pdf_a(self.scene_radius),
         }

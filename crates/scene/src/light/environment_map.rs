@@ -10,7 +10,7 @@ use std::f32::consts::PI;
 use glam::{UVec2, Vec2, Vec3};
 
 use super::channel_mean;
-use crate::sampling::ImageDistribution;
+use crate::sampling::{ImageDistribution, image_cell};
 
 /// Radiance from every direction as an equirectangular image (linear RGB), piecewise
 /// constant over its pixels.
@@ -69,8 +69,7 @@ impl EnvironmentMap {
     /// Radiance arriving from the unit `direction` (of the pixel it points at).
     #[inline]
     pub fn radiance(&self, direction: Vec3) -> Vec3 {
-        let cell = (direction_to_uv(direction) * self.size.as_vec2()).as_uvec2();
-        let cell = cell.min(self.size - UVec2::ONE);
+        let cell = image_cell(self.size, direction_to_uv(direction));
         self.texels[(cell.y * self.size.x + cell.x) as usize]
     }
 
@@ -85,7 +84,7 @@ impl EnvironmentMap {
     pub fn sample(&self, u: Vec2) -> Option<(Vec3, f32)> {
         let (uv, pdf_uv) = self.distribution.as_ref()?.sample(u);
         let (direction, sin_theta) = uv_to_direction(uv);
-        (sin_theta > 0.0).then(|| (direction, pdf_uv / (2.0 * PI * PI * sin_theta)))
+        (sin_theta > 0.0).then(|| (direction, solid_angle_pdf(pdf_uv, sin_theta)))
     }
 
     /// Solid-angle pdf with which [`sample`](Self::sample) picks the unit `direction`.
@@ -98,8 +97,14 @@ impl EnvironmentMap {
         if sin_theta <= 0.0 {
             return 0.0;
         }
-        distribution.pdf(direction_to_uv(direction)) / (2.0 * PI * PI * sin_theta)
+        solid_angle_pdf(distribution.pdf(direction_to_uv(direction)), sin_theta)
     }
+}
+
+/// A density over image coordinates as a density over directions at polar angle θ: the
+/// map's Jacobian is 2π² sin θ.
+fn solid_angle_pdf(pdf_uv: f32, sin_theta: f32) -> f32 {
+    pdf_uv / (2.0 * PI * PI * sin_theta)
 }
 
 /// Image coordinates of the unit `direction` (see the module documentation).

@@ -79,7 +79,7 @@ impl Distribution1D {
         };
         let (start, end) = (self.cdf[i], self.cdf[i + 1]);
         let remapped = if end > start {
-            ((target - start) / (end - start)).clamp(0.0, 1.0 - f64::EPSILON) as f32
+            ((target - start) / (end - start)).max(0.0) as f32
         } else {
             0.0
         };

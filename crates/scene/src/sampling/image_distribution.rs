@@ -64,13 +64,18 @@ impl ImageDistribution {
     /// The cell holding `point` of [0, 1]² (edges clamped in).
     #[inline]
     pub fn cell_of(&self, point: Vec2) -> UVec2 {
-        let cell = (point * self.size.as_vec2()).as_uvec2();
-        cell.min(self.size - UVec2::ONE)
+        image_cell(self.size, point)
     }
 
     fn cells(&self) -> f32 {
         (self.size.x * self.size.y) as f32
     }
+}
+
+/// The pixel of an image of `size` pixels holding `point` of [0, 1]² (edges clamped in).
+#[inline]
+pub fn image_cell(size: UVec2, point: Vec2) -> UVec2 {
+    (point * size.as_vec2()).as_uvec2().min(size - UVec2::ONE)
 }
 
 #[cfg(test)]

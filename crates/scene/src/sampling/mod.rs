@@ -13,7 +13,7 @@ mod rng;
 mod warps;
 
 pub use distribution::Distribution1D;
-pub use image_distribution::ImageDistribution;
+pub use image_distribution::{ImageDistribution, image_cell};
 pub use rng::Rng;
 pub use warps::{
     cosine_hemisphere_pdf, power_heuristic, sample_concentric_disk, sample_cosine_hemisphere,
