@@ -188,6 +188,9 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
         let message = stderr(&output);
         assert!(message.contains(needle), "{args:?}: {message}");
     }
+    // The reason is said once, not repeated by the chain of error sources.
+    let missing = stderr(&vcm(&["render", "no/such/scene.gltf"]));
+    assert_eq!(missing.matches("No such file").count(), 1, "{missing}");
     assert!(!Path::new("/nonexistent-folder").exists());
 }
 

@@ -6,12 +6,14 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The file (or one it references) could not be read.
-    #[error("{path}: cannot read file: {source}")]
+    // The I/O error is part of the message, not an error source: a caller that prints the
+    // chain of sources (`{:#}` of anyhow) would print it twice.
+    #[error("{path}: cannot read file: {reason}")]
     Io {
         /// The file that could not be read.
         path: PathBuf,
         /// The underlying I/O error.
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     /// The extension is neither glTF (`.gltf`, `.glb`) nor OBJ (`.obj`).
     #[error("{path}: unknown scene format (expected .gltf, .glb or .obj)")]

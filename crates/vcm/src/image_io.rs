@@ -26,12 +26,13 @@ pub enum ImageError {
         reason: String,
     },
     /// Renaming the temporary file over the target failed.
-    #[error("{path}: cannot replace the file: {source}")]
+    // The I/O error is part of the message, not an error source (see `SceneError::Io`).
+    #[error("{path}: cannot replace the file: {reason}")]
     Rename {
         /// The target file.
         path: PathBuf,
         /// The I/O error.
-        source: std::io::Error,
+        reason: std::io::Error,
     },
 }
 
@@ -51,9 +52,9 @@ fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), ImageError>,
 ) -> Result<(), ImageError> {
-    crate::atomic_write::write_atomically(path, write, |source| ImageError::Rename {
+    crate::atomic_write::write_atomically(path, write, |reason| ImageError::Rename {
         path: path.to_path_buf(),
-        source,
+        reason,
     })
 }
 

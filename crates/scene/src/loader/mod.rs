@@ -19,9 +19,9 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         .map(str::to_ascii_lowercase);
     match extension.as_deref() {
         Some("gltf") | Some("glb") => {
-            let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+            let bytes = std::fs::read(path).map_err(|reason| SceneError::Io {
                 path: path.to_path_buf(),
-                source,
+                reason,
             })?;
             gltf::load_gltf_bytes(path, &bytes)
         }

@@ -30,9 +30,9 @@ use crate::texture::{ColorEncoding, Texture, TextureRef};
 
 /// Loads an OBJ file and the MTL files it references (relative to its folder).
 pub fn load_obj(path: &Path) -> Result<Scene, SceneError> {
-    let file = std::fs::File::open(path).map_err(|source| SceneError::Io {
+    let file = std::fs::File::open(path).map_err(|reason| SceneError::Io {
         path: path.to_path_buf(),
-        source,
+        reason,
     })?;
     load_obj_from_reader(path, &mut std::io::BufReader::new(file))
 }
