@@ -4,6 +4,8 @@ use glam::Vec3;
 use vcm_scene::sampling::Rng;
 use vcm_traversal::RayBatch;
 
+use crate::roulette::Roulette;
+
 /// How the direction of a path's current segment was chosen, which decides the MIS weight of
 /// emission found at its end.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,6 +55,8 @@ pub(crate) struct PathState {
     pub direction: Vec3,
     /// Product of f·cos / pdf (and Russian roulette factors) so far.
     pub throughput: Vec3,
+    /// How Russian roulette judges the throughput.
+    pub roulette: Roulette,
     /// Radiance gathered so far (RGB), added to the film when the path ends.
     pub radiance: Vec3,
     /// Number of segments including the current one (the camera ray is segment 1).
@@ -75,6 +79,7 @@ impl PathState {
             origin,
             direction,
             throughput: Vec3::ONE,
+            roulette: Roulette::UNIT,
             radiance: Vec3::ZERO,
             segments: 1,
             segment_origin: SegmentOrigin::Deterministic,

@@ -17,8 +17,6 @@ use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
 use crate::shadow::LightSample;
 use crate::surface_hit::{Hit, SurfaceHit};
 
-use crate::roulette::continuation_probability;
-
 /// What shading needs besides the path: the scene and the path length limit.
 pub(crate) struct ShadeContext<'a> {
     /// The scene being rendered.
@@ -132,11 +130,13 @@ fn scatter(path: &mut PathState, seen: &FixedOutgoing, spawn: impl Fn(Vec3) -> V
             pdf_w: sample.pdf_fwd,
         }
     };
-    if let Some(continuation) = continuation_probability(path.segments, path.throughput) {
-        if path.rng.uniform() >= continuation {
-            return false;
-        }
-        path.throughput /= continuation;
+    path.roulette.scattered(&sample, TransportMode::Radiance);
+    let rng = &mut path.rng;
+    if !path
+        .roulette
+        .survives(path.segments, &mut path.throughput, || rng.uniform())
+    {
+        return false;
     }
     path.origin = spawn(sample.wi);
     path.direction = sample.wi;

@@ -23,6 +23,7 @@ use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
 use crate::path_state::ShadowRay;
 use crate::prefetch::prefetch;
+use crate::roulette::Roulette;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::wave::{fill_extension_rays, shade_in_parallel};
@@ -194,6 +195,7 @@ fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
             throughput: Vec3::ONE,
             mis: SubpathMis::camera(camera_pdf_w, &ctx.factors),
             segments: 1,
+            roulette: Roulette::UNIT,
         },
         radiance: Vec3::ZERO,
         alive: true,
@@ -254,7 +256,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     }
     path.alive = path
         .walk
-        .scatter(&surface, &seen, TransportMode::Radiance, &ctx.factors, 1.0)
+        .scatter(&surface, &seen, TransportMode::Radiance, &ctx.factors)
         .is_some();
 }
 

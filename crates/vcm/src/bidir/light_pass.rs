@@ -17,6 +17,7 @@ use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::LightVertex;
 use crate::path_state::ShadowRay;
+use crate::roulette::Roulette;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::wave::{fill_extension_rays, shade_in_parallel};
@@ -44,9 +45,6 @@ struct LightPathState {
     /// The path's sample of the frame: the iteration it belongs to.
     sample: u32,
     walk: Walk,
-    /// 1 / the largest channel of the throughput after emission: makes Russian roulette
-    /// independent of the light's units.
-    roulette_scale: f32,
     /// The path starts at a light at infinity (its first segment has no length).
     from_infinity: bool,
     alive: bool,
@@ -334,8 +332,8 @@ fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathSt
             throughput: Vec3::ZERO,
             mis: SubpathMis::default(),
             segments: 1,
+            roulette: Roulette::UNIT,
         },
-        roulette_scale: 0.0,
         from_infinity: false,
         alive: false,
         vertex: None,
@@ -353,7 +351,7 @@ fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathSt
     };
     let emission_pdf_w = emission.emission_pdf_w * pick_pmf;
     path.walk.throughput = emission.value * (emission.cos_at_light / emission_pdf_w);
-    path.roulette_scale = 1.0 / path.walk.throughput.max_element();
+    path.walk.roulette = Roulette::relative_to(path.walk.throughput);
     path.walk.mis = SubpathMis::light(
         emission.direct_pdf_a * pick_pmf,
         emission_pdf_w,
@@ -406,13 +404,7 @@ fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat:
     path.alive = path.walk.segments.saturating_add(2) <= max_segments
         && seen.is_some_and(|seen| {
             path.walk
-                .scatter(
-                    &surface,
-                    &seen,
-                    TransportMode::Importance,
-                    &ctx.factors,
-                    path.roulette_scale,
-                )
+                .scatter(&surface, &seen, TransportMode::Importance, &ctx.factors)
                 .is_some()
         });
 }

@@ -5,7 +5,7 @@ use vcm_scene::bsdf::{FixedOutgoing, LobeKind, Pdfs, TransportMode};
 use vcm_scene::sampling::Rng;
 
 use super::mis::{MisFactors, SubpathMis};
-use crate::roulette::continuation_probability;
+use crate::roulette::Roulette;
 use crate::surface_hit::SurfaceHit;
 
 /// The state of a subpath's random walk between waves.
@@ -24,20 +24,20 @@ pub(crate) struct Walk {
     pub mis: SubpathMis,
     /// Segments including the current one (the first ray is 1).
     pub segments: u32,
+    /// How Russian roulette judges the throughput.
+    pub roulette: Roulette,
 }
 
 impl Walk {
     /// Samples the BSDF at `surface` (`seen` from the previous vertex) for the next segment,
-    /// updates the MIS quantities and applies Russian roulette on the throughput times
-    /// `roulette_scale` (which makes it dimensionless). Returns the sampled lobe's class, or
-    /// `None` when the walk ends.
+    /// updates the MIS quantities and plays Russian roulette. Returns the sampled lobe's
+    /// class, or `None` when the walk ends.
     pub fn scatter(
         &mut self,
         surface: &SurfaceHit,
         seen: &FixedOutgoing,
         mode: TransportMode,
         factors: &MisFactors,
-        roulette_scale: f32,
     ) -> Option<LobeKind> {
         let (u_lobe, u_dir) = (self.rng.uniform(), self.rng.uniform2());
         let sample = seen.sample(u_lobe, u_dir, mode, Pdfs::Both)?;
@@ -49,12 +49,13 @@ impl Walk {
             sample.lobe == LobeKind::Specular,
             factors,
         );
-        let relative = self.throughput * roulette_scale;
-        if let Some(continuation) = continuation_probability(self.segments, relative) {
-            if self.rng.uniform() >= continuation {
-                return None;
-            }
-            self.throughput /= continuation;
+        self.roulette.scattered(&sample, mode);
+        let rng = &mut self.rng;
+        if !self
+            .roulette
+            .survives(self.segments, &mut self.throughput, || rng.uniform())
+        {
+            return None;
         }
         self.origin = surface.spawn(sample.wi);
         self.direction = sample.wi;

@@ -58,8 +58,8 @@ fn add_sphere(parts: &mut SceneParts, radius: f32, material: Material) {
 
 /// Renders `parts` with each of `algorithms` over the frames `iterations` and asserts the
 /// furnace value in every region (nothing may be dropped). Regions, not pixels: behind
-/// glass and along mirror chains Russian roulette gives rare paths a throughput of 100 and
-/// more, a tail that one pixel's 100 samples cannot measure.
+/// glass and along mirror chains a few long paths carry much of a pixel's value, a tail
+/// that one pixel's 100 samples measure too coarsely for a standard error.
 fn assert_furnace_value(
     parts: &SceneParts,
     algorithms: &[Option<Algorithm>],
@@ -258,13 +258,13 @@ fn add_box(parts: &mut SceneParts, lo: Vec3, hi: Vec3, material: u32) {
 }
 
 #[test]
-fn hundred_bounce_mirror_chains_gain_no_energy() {
+fn hundred_bounce_mirror_chains_keep_the_furnace_value() {
     // Two mirror slabs 0.02 apart; the camera between them looks 14° off their normal, so
     // its rays bounce 70 to 170 times before leaving the gap. With glossy mirrors every one
     // of those vertices is connected and merged, and its MIS quantities carried on.
-    // Only the upper bound is tested: Russian roulette continues at most with probability
-    // 0.95, so 1 path in 2000 leaves a 150-bounce chain, with a throughput of 2000; 100
-    // frames see the mean of that tail only from above.
+    // Russian roulette leaves these lossless chains alone (continuation probability 1 up
+    // to 256 segments): with a cap of 0.95, 1 path in 2000 left a 150-bounce chain with a
+    // weight of 2000, and 100 frames saw the mean of that tail only from above.
     for roughness in [0.0, 0.04] {
         let position = Vec3::ZERO;
         let forward = Vec3::new(0.25, 0.0, 1.0).normalize();
@@ -290,7 +290,13 @@ fn hundred_bounce_mirror_chains_gain_no_energy() {
                 "mirror chain, roughness {roughness}, {}",
                 harness::name(algorithm)
             );
-            harness::assert_regions_at_most(&series, FURNACE_VALUE, &label);
+            // Photon mapping merges at the first glossy vertex, where the light vertices
+            // almost never fall in the lobe (see the glossy mirrors above): bounded only.
+            if roughness > 0.0 && algorithm == Some(Algorithm::Ppm) {
+                harness::assert_regions_at_most(&series, FURNACE_VALUE, &label);
+            } else {
+                harness::assert_regions_equal(&series, FURNACE_VALUE, &label);
+            }
         }
     }
 }
