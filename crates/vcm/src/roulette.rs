@@ -19,7 +19,7 @@ use vcm_scene::bsdf::{BsdfSample, TransportMode};
 const ROULETTE_AFTER_SEGMENTS: u32 = 3;
 
 /// Segments after which the continuation probability is capped, so that every path ends.
-const CAPPED_AFTER_SEGMENTS: u32 = 256;
+const CAPPED_AFTER_SEGMENTS: u32 = 1024;
 
 /// The continuation probability's cap after [`CAPPED_AFTER_SEGMENTS`].
 const CAPPED_CONTINUATION: f32 = 0.95;
@@ -108,7 +108,7 @@ mod tests {
         let roulette = Roulette::UNIT;
         assert_eq!(roulette.continuation_probability(2, Vec3::splat(0.1)), None);
         assert_eq!(roulette.continuation_probability(3, Vec3::ONE), None);
-        assert_eq!(roulette.continuation_probability(255, Vec3::ONE), None);
+        assert_eq!(roulette.continuation_probability(1023, Vec3::ONE), None);
         assert_eq!(
             roulette.continuation_probability(3, Vec3::new(0.2, 0.5, 0.1)),
             Some(0.5)
@@ -119,7 +119,7 @@ mod tests {
     fn every_long_path_meets_the_cap() {
         let roulette = Roulette::UNIT;
         let capped = Some(CAPPED_CONTINUATION);
-        assert_eq!(roulette.continuation_probability(256, Vec3::ONE), capped);
+        assert_eq!(roulette.continuation_probability(1024, Vec3::ONE), capped);
         assert_eq!(
             roulette.continuation_probability(10_000, Vec3::splat(5.0)),
             capped

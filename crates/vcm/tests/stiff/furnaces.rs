@@ -263,8 +263,10 @@ fn hundred_bounce_mirror_chains_keep_the_furnace_value() {
     // its rays bounce 70 to 170 times before leaving the gap. With glossy mirrors every one
     // of those vertices is connected and merged, and its MIS quantities carried on.
     // Russian roulette leaves these lossless chains alone (continuation probability 1 up
-    // to 256 segments): with a cap of 0.95, 1 path in 2000 left a 150-bounce chain with a
-    // weight of 2000, and 100 frames saw the mean of that tail only from above.
+    // to 1024 segments): with a cap of 0.95, 1 path in 2000 left a 150-bounce chain with a
+    // weight of 2000, and 100 frames saw the mean of that tail only from below. With the
+    // cap from 256 segments on, the glossy chains, whose directions wander towards the
+    // normal and bounce longer, still read 1.975–1.985 ± 0.005 after 400 frames.
     for roughness in [0.0, 0.04] {
         let position = Vec3::ZERO;
         let forward = Vec3::new(0.25, 0.0, 1.0).normalize();
