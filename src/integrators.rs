@@ -9,6 +9,7 @@ use vcm::{
     Algorithm as VcmAlgorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer,
     PtSettings, RenderError, Schedule, Scheduler, Vcm, VcmSettings,
 };
+use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Scene, ShadingPlan};
 use vcm_traversal::Traversal;
 
@@ -47,12 +48,35 @@ impl Algorithm {
     }
 }
 
+/// How the samples of a pixel relate.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum SamplerKind {
+    /// Stratified: the points of an Owen-scrambled Sobol sequence per pixel (and per frame's
+    /// light paths), which lowers the error at the same sample count.
+    #[default]
+    Sobol,
+    /// Independent random numbers for every sample.
+    Independent,
+}
+
+impl SamplerKind {
+    fn sequence(self) -> SampleSequence {
+        match self {
+            SamplerKind::Sobol => SampleSequence::Sobol,
+            SamplerKind::Independent => SampleSequence::Independent,
+        }
+    }
+}
+
 /// Options of every integrator.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct IntegratorOptions {
     /// Seed of all random numbers: a render is a pure function of scene, settings and seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// How the samples of a pixel relate: stratified (sobol) or independent.
+    #[arg(long, value_enum, default_value_t = SamplerKind::Sobol)]
+    pub sampler: SamplerKind,
     /// Maximum path length in segments (a directly seen light is 1); default unlimited with
     /// Russian roulette.
     #[arg(long)]
@@ -88,6 +112,7 @@ impl Default for IntegratorOptions {
     fn default() -> Self {
         IntegratorOptions {
             seed: 0,
+            sampler: SamplerKind::Sobol,
             max_depth: None,
             connections: 1,
             radius: DEFAULT_RADIUS_FRACTION,
@@ -200,16 +225,17 @@ pub fn build(
     Ok(match algorithm.vcm_algorithm() {
         None => {
             let settings = PtSettings {
-                width,
-                height,
                 seed: options.seed,
+                sequence: options.sampler.sequence(),
                 max_depth: options.max_depth,
+                ..PtSettings::new(width, height)
             };
             Box::new(PathTracer::new(scene, traversal, settings)?)
         }
         Some(vcm_algorithm) => {
             let settings = VcmSettings {
                 seed: options.seed,
+                sequence: options.sampler.sequence(),
                 max_depth: options.max_depth,
                 connections: options.connections,
                 radius_fraction: options.radius,

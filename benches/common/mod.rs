@@ -9,7 +9,7 @@ use vcm_scene::Camera;
 use vcm_scene::frame::Frame;
 use vcm_scene::light::Light;
 use vcm_scene::sampling::{
-    Rng, sample_cosine_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
+    Rng, Sampler, sample_cosine_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
 };
 use vcm_traversal::{HitBatch, RayBatch};
 

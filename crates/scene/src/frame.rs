@@ -58,7 +58,7 @@ impl Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::{Rng, sample_uniform_sphere};
+    use crate::sampling::{Rng, Sampler, sample_uniform_sphere};
 
     fn assert_orthonormal(f: &Frame) {
         for (a, b) in [(f.x, f.y), (f.y, f.z), (f.z, f.x)] {

@@ -6,7 +6,7 @@ mod common;
 use common::{Agreement, compare, gpu, random_rays};
 use glam::{Vec2, Vec3};
 use vcm_scene::Scene;
-use vcm_scene::sampling::{Rng, sample_uniform_sphere};
+use vcm_scene::sampling::{Rng, Sampler, sample_uniform_sphere};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, NodeLayout};
 

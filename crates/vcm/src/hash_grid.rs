@@ -195,7 +195,7 @@ impl HashGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vcm_scene::sampling::Rng;
+    use vcm_scene::sampling::{Rng, Sampler};
 
     fn random_points(n: usize, rng: &mut Rng) -> Vec<Vec3> {
         (0..n)

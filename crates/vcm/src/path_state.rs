@@ -1,7 +1,7 @@
 //! The state one camera path carries from wave to wave.
 
 use glam::Vec3;
-use vcm_scene::sampling::Rng;
+use vcm_scene::sampling::SobolSampler;
 use vcm_traversal::RayBatch;
 
 use crate::roulette::Roulette;
@@ -47,8 +47,8 @@ pub(crate) struct PathState {
     pub pixel: u32,
     /// Which of the frame's samples of that pixel it is (from 0).
     pub sample: u32,
-    /// The path's own random stream.
-    pub rng: Rng,
+    /// The path's numbers: its pixel's stratified sequence at its sample index.
+    pub rng: SobolSampler,
     /// Origin of the current segment.
     pub origin: Vec3,
     /// Unit direction of the current segment.
@@ -71,7 +71,13 @@ pub(crate) struct PathState {
 
 impl PathState {
     /// A path at the camera: unit throughput, no radiance yet.
-    pub fn new(pixel: u32, sample: u32, rng: Rng, origin: Vec3, direction: Vec3) -> PathState {
+    pub fn new(
+        pixel: u32,
+        sample: u32,
+        rng: SobolSampler,
+        origin: Vec3,
+        direction: Vec3,
+    ) -> PathState {
         PathState {
             pixel,
             sample,

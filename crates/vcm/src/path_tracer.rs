@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
-use vcm_scene::sampling::Rng;
+use vcm_scene::sampling::{SampleSequence, Sampler};
 use vcm_scene::{Decision, Scene};
 use vcm_scheduler::{SchedulerStats, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch, Traversal};
@@ -26,9 +26,25 @@ pub struct PtSettings {
     pub height: u32,
     /// Seed of every path's random stream.
     pub seed: u64,
+    /// How the samples of a pixel relate (default: stratified, [`SampleSequence::Sobol`]).
+    pub sequence: SampleSequence,
     /// Longest path in segments (a directly seen light is 1); `None`: unlimited, ended by
     /// Russian roulette only.
     pub max_depth: Option<u32>,
+}
+
+impl PtSettings {
+    /// Default settings for a `width` × `height` image: seed 0, stratified samples, paths
+    /// ended by Russian roulette only.
+    pub fn new(width: u32, height: u32) -> PtSettings {
+        PtSettings {
+            width,
+            height,
+            seed: 0,
+            sequence: SampleSequence::default(),
+            max_depth: None,
+        }
+    }
 }
 
 /// Unidirectional path tracer with next event estimation and MIS, run as waves of ray
@@ -158,12 +174,14 @@ impl Wavefront for PtWavefront<'_> {
     type Output = Vec<(u64, Vec3)>;
 
     /// `samples` paths per pixel of `tile`, each through a uniformly jittered point of its
-    /// pixel, with random numbers keyed by (seed, sample index of the render, pixel).
+    /// pixel: sample i of the render is sample i of the pixel's sequence keyed by
+    /// (seed, pixel).
     fn start(&mut self, tile: Tile) {
         let PtSettings {
             width,
             height,
             seed,
+            sequence,
             ..
         } = *self.settings;
         let (first_sample, samples) = (self.first_sample, self.samples);
@@ -177,8 +195,8 @@ impl Wavefront for PtWavefront<'_> {
             .into_par_iter()
             .with_min_len(256)
             .map(|(pixel, sample)| {
-                let key = [seed, u64::from(first_sample + sample), u64::from(pixel)];
-                let mut rng = Rng::from_key(&key);
+                let index = u64::from(first_sample + sample);
+                let mut rng = sequence.sampler(&[seed, u64::from(pixel)], index);
                 let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
                 let raster: Vec2 = xy + rng.uniform2();
                 let direction = projection.direction(raster);

@@ -72,7 +72,7 @@ fn step_toward(x: f32, o: f32) -> f32 {
 mod tests {
     use super::*;
     use glam::{DVec3, Vec2};
-    use vcm_scene::sampling::{Rng, sample_uniform_triangle};
+    use vcm_scene::sampling::{Rng, Sampler, sample_uniform_triangle};
     use vcm_traversal::{CpuBvh, CpuBvhOptions, RayBatch, Traversal};
 
     /// Triangles of size `scale`: a slanted one translated by 3·`scale` (coordinates larger

@@ -11,11 +11,16 @@ use glam::Vec3;
 use vcm_scene::Scene;
 use vcm_scene::bsdf::{FixedOutgoing, LobeKind, Pdfs, TransportMode};
 use vcm_scene::mesh::SurfacePoint;
-use vcm_scene::sampling::power_heuristic;
+use vcm_scene::sampling::{Sampler, power_heuristic};
 
 use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
 use crate::shadow::LightSample;
 use crate::surface_hit::{Hit, SurfaceHit};
+
+/// Pairs of sample dimensions a vertex draws: a light and a point on it, a lobe, a
+/// direction and Russian roulette. Vertex k starts at pair k · this, so the paths of a pixel
+/// draw the same stratified pairs for the same decisions.
+const PAIRS_PER_VERTEX: u32 = 5;
 
 /// What shading needs besides the path: the scene and the path length limit.
 pub(crate) struct ShadeContext<'a> {
@@ -41,6 +46,7 @@ pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) 
         return;
     };
     let scene = ctx.scene;
+    path.rng.start_step(path.segments, PAIRS_PER_VERTEX);
     let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
     let point = surface.point;
     path.radiance += path.throughput * emission(scene, path, &point, hit);

@@ -5,7 +5,7 @@ use glam::Vec3;
 use vcm_scene::Scene;
 use vcm_scene::bsdf::{BsdfEval, FixedOutgoing, Pdfs, TransportMode};
 use vcm_scene::light::{Illumination, Light};
-use vcm_scene::sampling::Rng;
+use vcm_scene::sampling::Sampler;
 
 use crate::path_state::ShadowRay;
 use crate::ray_offset::{barycentric_error, offset_ray_origin};
@@ -29,7 +29,7 @@ impl LightSample<'_> {
     /// evaluating the BSDF's `pdfs`; `None` when the sample cannot contribute.
     pub fn sample<'a>(
         scene: &'a Scene,
-        rng: &mut Rng,
+        rng: &mut impl Sampler,
         surface: &SurfaceHit,
         seen: &FixedOutgoing,
         pdfs: Pdfs,

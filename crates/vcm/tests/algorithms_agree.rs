@@ -18,10 +18,8 @@ const Z_LIMIT: f64 = 4.9;
 
 fn reference(name: &str) -> RegionSeries {
     let settings = PtSettings {
-        width: SIZE,
-        height: SIZE,
         seed: 100,
-        max_depth: None,
+        ..common::pt_settings(SIZE, SIZE)
     };
     let mut tracer = common::path_tracer(common::scene_file(name), settings);
     common::region_means(&mut tracer, FRAMES, REGIONS)
@@ -31,7 +29,7 @@ fn vcm_family(name: &str, algorithm: Algorithm, radius_fraction: f32) -> Box<dyn
     let settings = VcmSettings {
         seed: 200,
         radius_fraction,
-        ..VcmSettings::new(algorithm, SIZE, SIZE)
+        ..common::vcm_settings(algorithm, SIZE, SIZE)
     };
     Box::new(common::vcm(common::scene_file(name), settings))
 }

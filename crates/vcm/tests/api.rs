@@ -27,10 +27,8 @@ fn lit_plane() -> vcm_scene::Scene {
 
 fn settings(width: u32, height: u32) -> PtSettings {
     PtSettings {
-        width,
-        height,
         seed: 1,
-        max_depth: None,
+        ..PtSettings::new(width, height)
     }
 }
 

@@ -54,10 +54,8 @@ fn lambertian_plane_under_an_area_light_matches_lamberts_formula() {
         f64::from(ALBEDO) / std::f64::consts::PI * polygon_irradiance(&corners, radiance, p)
     });
     let settings = PtSettings {
-        width: SIZE,
-        height: SIZE,
         seed: 21,
-        max_depth: None,
+        ..common::pt_settings(SIZE, SIZE)
     };
     let series = common::render_series(&mut common::path_tracer(scene.clone(), settings), 128);
     common::assert_pixels_match(&series, &expected, "area light, path tracing");
@@ -66,7 +64,7 @@ fn lambertian_plane_under_an_area_light_matches_lamberts_formula() {
     for algorithm in [Algorithm::Bpt, Algorithm::Vcm] {
         let settings = VcmSettings {
             seed: 21,
-            ..VcmSettings::new(algorithm, SIZE, SIZE)
+            ..common::vcm_settings(algorithm, SIZE, SIZE)
         };
         let series = common::render_series(&mut common::vcm(scene.clone(), settings), 128);
         common::assert_pixels_match(&series, &expected, &format!("area light, {algorithm:?}"));

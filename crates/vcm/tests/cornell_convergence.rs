@@ -19,10 +19,8 @@ fn region_means(seed: u64, frames: u32) -> common::RegionSeries {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.gltf");
     let scene = Scene::load(&path).unwrap();
     let settings = PtSettings {
-        width: SIZE,
-        height: SIZE,
         seed,
-        max_depth: None,
+        ..common::pt_settings(SIZE, SIZE)
     };
     common::region_means(&mut common::path_tracer(scene, settings), frames, REGIONS)
 }

@@ -69,11 +69,10 @@ fn render_frames(
         })],
         common::camera(Vec3::new(0.0, -1.0, 6.0), 0.9),
     );
+    // The default, stratified samples.
     let settings = PtSettings {
-        width: 24,
-        height: 16,
         seed: 3,
-        max_depth: None,
+        ..PtSettings::new(24, 16)
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

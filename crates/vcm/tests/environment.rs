@@ -41,10 +41,8 @@ fn assert_every_algorithm_sees(scene: &Scene, expected: f64, view: &str) {
             None => Box::new(common::path_tracer(
                 scene.clone(),
                 PtSettings {
-                    width: SIZE,
-                    height: SIZE,
                     seed: 3,
-                    max_depth: None,
+                    ..common::pt_settings(SIZE, SIZE)
                 },
             )),
             // A radius at which the 256 light paths of a frame meet camera vertices often
@@ -55,7 +53,7 @@ fn assert_every_algorithm_sees(scene: &Scene, expected: f64, view: &str) {
                 VcmSettings {
                     seed: 3,
                     radius_fraction: 0.1,
-                    ..VcmSettings::new(algorithm, SIZE, SIZE)
+                    ..common::vcm_settings(algorithm, SIZE, SIZE)
                 },
             )),
         };
@@ -136,17 +134,15 @@ fn algorithms_agree_where_the_sky_is_partly_occluded() {
         let mut tracer = common::path_tracer(
             scene.clone(),
             PtSettings {
-                width: SIZE,
-                height: SIZE,
                 seed: 11,
-                max_depth: None,
+                ..common::pt_settings(SIZE, SIZE)
             },
         );
         let reference = common::region_means(&mut tracer, frames, 4);
         for algorithm in [Algorithm::LightTracing, Algorithm::Bpt, Algorithm::Vcm] {
             let settings = VcmSettings {
                 seed: 12,
-                ..VcmSettings::new(algorithm, SIZE, SIZE)
+                ..common::vcm_settings(algorithm, SIZE, SIZE)
             };
             let mut integrator = common::vcm(scene.clone(), settings);
             let z = common::region_means(&mut integrator, frames, 4).z_scores(&reference);

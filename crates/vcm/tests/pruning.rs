@@ -22,10 +22,8 @@ fn integrator(scene: Scene, algorithm: Option<Algorithm>, prune: bool) -> Box<dy
     match algorithm {
         None => {
             let settings = PtSettings {
-                width: SIZE,
-                height: SIZE,
                 seed: 5,
-                max_depth: None,
+                ..common::pt_settings(SIZE, SIZE)
             };
             Box::new(common::path_tracer(scene, settings))
         }
@@ -38,7 +36,7 @@ fn vcm_family(scene: Scene, algorithm: Algorithm, prune: bool) -> Vcm {
         seed: 5,
         prune,
         radius_fraction: RADIUS_FRACTION,
-        ..VcmSettings::new(algorithm, SIZE, SIZE)
+        ..common::vcm_settings(algorithm, SIZE, SIZE)
     };
     common::vcm(scene, settings)
 }

@@ -65,17 +65,15 @@ fn floor_under(
     match algorithm {
         None => {
             let settings = PtSettings {
-                width: SIZE,
-                height: SIZE,
                 seed: 9,
-                max_depth: None,
+                ..common::pt_settings(SIZE, SIZE)
             };
             Box::new(common::path_tracer(scene, settings))
         }
         Some(algorithm) => {
             let settings = VcmSettings {
                 seed: 9,
-                ..VcmSettings::new(algorithm, SIZE, SIZE)
+                ..common::vcm_settings(algorithm, SIZE, SIZE)
             };
             Box::new(common::vcm(scene, settings))
         }

@@ -101,7 +101,7 @@ fn vcm_family(algorithm: Algorithm, seed: u64) -> vcm::Vcm {
         seed,
         // 1024 light paths a frame: merge within 2% of the scene radius.
         radius_fraction: 0.02,
-        ..VcmSettings::new(algorithm, SIZE, SIZE)
+        ..common::vcm_settings(algorithm, SIZE, SIZE)
     };
     common::vcm(sds_scene(), settings)
 }
@@ -122,10 +122,8 @@ fn vcm_renders_a_caustic_seen_in_a_mirror_far_better_than_pt_and_bpt() {
     };
     let pt = mean_relmse(2, &|seed| {
         let settings = PtSettings {
-            width: SIZE,
-            height: SIZE,
             seed,
-            max_depth: None,
+            ..common::pt_settings(SIZE, SIZE)
         };
         Box::new(common::path_tracer(sds_scene(), settings))
     });

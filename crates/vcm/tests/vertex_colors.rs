@@ -60,17 +60,15 @@ fn render(scene: Scene, algorithm: Option<Algorithm>) -> Vec<Vec3> {
         None => Box::new(common::path_tracer(
             scene,
             PtSettings {
-                width: SIZE,
-                height: SIZE,
                 seed: 9,
-                max_depth: None,
+                ..common::pt_settings(SIZE, SIZE)
             },
         )),
         Some(algorithm) => Box::new(common::vcm(
             scene,
             VcmSettings {
                 seed: 9,
-                ..VcmSettings::new(algorithm, SIZE, SIZE)
+                ..common::vcm_settings(algorithm, SIZE, SIZE)
             },
         )),
     };

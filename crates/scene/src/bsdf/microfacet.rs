@@ -76,6 +76,7 @@ impl Ggx {
 mod tests {
     use super::*;
     use crate::frame::Frame;
+    use crate::sampling::Sampler;
     use crate::testing::{Chi2Config, chi2_test, integrate_sphere};
 
     fn up() -> Frame {

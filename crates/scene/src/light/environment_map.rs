@@ -128,7 +128,7 @@ fn uv_to_direction(uv: Vec2) -> (Vec3, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::Rng;
+    use crate::sampling::{Rng, Sampler};
 
     /// A 16 × 8 map, dark but for a bright band and one very bright pixel.
     fn sky() -> EnvironmentMap {

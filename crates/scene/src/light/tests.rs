@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3};
 
 use super::*;
 use crate::material::AlphaMask;
-use crate::sampling::Rng;
+use crate::sampling::{Rng, Sampler};
 use crate::texture::{ColorEncoding, TextureRef};
 
 /// Mean and standard error of `n` samples of `f`.

@@ -90,7 +90,7 @@ impl Distribution1D {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::Rng;
+    use crate::sampling::{Rng, Sampler};
 
     #[test]
     fn rejects_empty_and_zero() {

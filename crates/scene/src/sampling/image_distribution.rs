@@ -81,7 +81,7 @@ pub fn image_cell(size: UVec2, point: Vec2) -> UVec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::Rng;
+    use crate::sampling::{Rng, Sampler};
 
     #[test]
     fn samples_follow_the_weights_and_report_their_density() {

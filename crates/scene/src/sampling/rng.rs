@@ -2,7 +2,7 @@
 //! Space-Efficient Statistically Good Algorithms for Random Number Generation"),
 //! variant XSH-RR with 64-bit state and a selectable odd increment (the stream).
 
-use glam::Vec2;
+use super::Sampler;
 
 /// LCG multiplier of PCG32.
 const PCG_MULT: u64 = 6_364_136_223_846_793_005;
@@ -19,7 +19,7 @@ pub struct Rng {
 
 /// splitmix64 finalizer (Steele et al. 2014): a bijective 64-bit mixer with good avalanche,
 /// so keys differing in a single bit give unrelated outputs.
-fn splitmix64(x: u64) -> u64 {
+pub(super) fn splitmix64(x: u64) -> u64 {
     let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -47,10 +47,7 @@ impl Rng {
     /// nearby keys give statistically independent sequences.
     #[inline]
     pub fn from_key(key: &[u64]) -> Rng {
-        let mut h = 0x243F_6A88_85A3_08D3_u64; // digits of pi: an arbitrary non-zero start
-        for &k in key {
-            h = splitmix64(h ^ splitmix64(k));
-        }
+        let h = hash_key(key);
         Rng::new(splitmix64(h), splitmix64(h ^ 0x1357_9BDF_2468_ACE0))
     }
 
@@ -62,20 +59,22 @@ impl Rng {
         let rot = (old >> 59) as u32;
         xorshifted.rotate_right(rot)
     }
+}
 
-    /// Uniform `f32` in [0, 1): multiples of 2^-24, so the largest value is 1 − 2^-24 and
-    /// 1.0 is never returned.
+impl Sampler for Rng {
+    /// Multiples of 2^-24, so the largest value is 1 − 2^-24 and 1.0 is never returned.
     #[inline]
-    pub fn uniform(&mut self) -> f32 {
+    fn uniform(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * F32_FROM_24_BITS
     }
+}
 
-    /// Two independent uniforms in [0, 1)².
-    #[inline]
-    pub fn uniform2(&mut self) -> Vec2 {
-        let x = self.uniform();
-        Vec2::new(x, self.uniform())
-    }
+/// Hash of a tuple key such as `(seed, iteration, pixel, sample)`: each element mixed with
+/// splitmix64, then folded into the running hash, so the order matters.
+pub(super) fn hash_key(key: &[u64]) -> u64 {
+    // Digits of pi: an arbitrary non-zero start.
+    key.iter()
+        .fold(0x243F_6A88_85A3_08D3, |h, &k| splitmix64(h ^ splitmix64(k)))
 }
 
 #[cfg(test)]

@@ -98,7 +98,7 @@ pub fn power_heuristic(nf: f32, f_pdf: f32, ng: f32, g_pdf: f32) -> f32 {
 mod tests {
     use super::*;
     use crate::frame::Frame;
-    use crate::sampling::Rng;
+    use crate::sampling::{Rng, Sampler};
     use crate::testing::{Chi2Config, chi2_test, integrate_sphere};
 
     fn chi2_direction_warp(sample: impl Fn(Vec2) -> Vec3, pdf: impl Fn(Vec3) -> f64) {

@@ -2,6 +2,7 @@
 
 use super::{Chi2Config, Chi2Result, Estimate, chi2_test, estimate_mean};
 use crate::bsdf::{Bsdf, LobeKind, TransportMode};
+use crate::sampling::Sampler;
 use glam::Vec3;
 
 /// Chi-square test of [`Bsdf::sample`] against [`Bsdf::pdf`] for the outgoing direction

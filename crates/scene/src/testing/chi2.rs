@@ -2,7 +2,7 @@
 
 use super::integrate::integrate_cell;
 use crate::frame::Frame;
-use crate::sampling::Rng;
+use crate::sampling::{Rng, Sampler};
 use glam::Vec3;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::f64::consts::PI;

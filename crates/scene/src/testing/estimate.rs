@@ -1,6 +1,6 @@
 //! Fixed-seed Monte Carlo estimates with standard errors.
 
-use crate::sampling::Rng;
+use crate::sampling::{Rng, Sampler};
 use glam::{DVec3, Vec3};
 
 /// Monte Carlo estimate of a mean, per RGB channel.

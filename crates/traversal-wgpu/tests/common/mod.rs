@@ -3,7 +3,7 @@
 #![allow(dead_code)] // Each test binary uses a different subset.
 
 use glam::Vec3;
-use vcm_scene::sampling::{Rng, sample_uniform_sphere};
+use vcm_scene::sampling::{Rng, Sampler, sample_uniform_sphere};
 use vcm_traversal::{HitBatch, RayBatch};
 use vcm_traversal_wgpu::GpuDevice;
 

@@ -3,8 +3,8 @@
 #![allow(dead_code)] // Each test binary uses a different subset.
 
 use glam::{DVec3, Vec3};
-pub use vcm_scene::sampling::Rng;
 use vcm_scene::sampling::sample_uniform_sphere;
+pub use vcm_scene::sampling::{Rng, Sampler};
 use vcm_traversal::{HitBatch, NO_HIT, RayBatch};
 
 /// The draws the tests need, on top of [`Rng`]'s uniforms.

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use smallvec::SmallVec;
 use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
 use vcm_scene::light::HitEmission;
-use vcm_scene::sampling::Rng;
+use vcm_scene::sampling::{Rng, Sampler, SobolSampler};
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
@@ -31,6 +31,10 @@ use crate::wave::{fill_extension_rays, shade_in_parallel};
 /// Shadow rays a camera path state holds without a heap allocation: the light sample and
 /// one connection, the default (`--connections 1`).
 const INLINE_SHADOW_RAYS: usize = 2;
+
+/// Pairs of sample dimensions a camera vertex draws: the light vertices it connects to, a
+/// light and a point on it, a lobe, a direction and Russian roulette.
+const PAIRS_PER_VERTEX: u32 = 6;
 
 /// What the camera paths of one iteration read: the iteration, and its light pass's results.
 pub(crate) struct CameraContext<'a> {
@@ -177,9 +181,15 @@ impl Wavefront for CameraWavefront<'_> {
 /// Starts the camera path of `pixel` in iteration `ctx` (the frame's `sample`), its position
 /// jittered uniformly over the pixel.
 fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
-    let VcmSettings { width, seed, .. } = *ctx.settings;
+    let VcmSettings {
+        width,
+        seed,
+        sequence,
+        ..
+    } = *ctx.settings;
     let camera = &ctx.scene.camera;
-    let mut rng = Rng::from_key(&[seed, ctx.iteration, u64::from(pixel), 0]);
+    // The iterations' camera paths through a pixel are the samples of its stratified sequence.
+    let mut rng = sequence.sampler(&[seed, u64::from(pixel), 0], ctx.iteration);
     let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
     let raster: Vec2 = xy + rng.uniform2();
     let direction = ctx.projection.direction(raster);
@@ -217,6 +227,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     };
     let scene = ctx.scene;
     let algorithm = ctx.settings.algorithm;
+    path.walk.start_vertex(PAIRS_PER_VERTEX);
     let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
     let wo = -path.walk.direction;
     path.walk
@@ -339,7 +350,7 @@ fn light_sample(
 
 /// The N_c light vertices a camera vertex connects to, picked uniformly from the cache.
 struct CachePicks {
-    /// The stream the picks are drawn from (a copy of the path's at the draw).
+    /// The stream the picks are drawn from.
     rng: Rng,
     /// N_c, or 0 for an empty cache.
     count: u32,
@@ -348,21 +359,20 @@ struct CachePicks {
 }
 
 impl CachePicks {
-    /// Draws the picks of one camera vertex from `rng` (N_c numbers of it).
-    fn draw(rng: &mut Rng, ctx: &CameraContext) -> CachePicks {
+    /// Draws the picks of one camera vertex from a stream of their own that `rng` gives (its
+    /// next pair of dimensions).
+    fn draw(rng: &mut SobolSampler, ctx: &CameraContext) -> CachePicks {
         let vertices = ctx.cache.len();
         let count = if vertices == 0 {
             0
         } else {
             ctx.settings.connections
         };
-        let picks = CachePicks {
-            rng: rng.clone(),
+        CachePicks {
+            rng: rng.stream(),
             count,
             vertices,
-        };
-        (0..count).for_each(|_| _ = rng.next_u32());
-        picks
+        }
     }
 
     /// The picked cache indices, in order (the same every call).

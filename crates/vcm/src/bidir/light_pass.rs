@@ -6,7 +6,7 @@ use std::sync::{Mutex, PoisonError};
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
-use vcm_scene::sampling::Rng;
+use vcm_scene::sampling::Sampler;
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
@@ -21,6 +21,10 @@ use crate::roulette::Roulette;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::wave::{fill_extension_rays, shade_in_parallel};
+
+/// Pairs of sample dimensions a light vertex draws (a lobe, a direction and Russian
+/// roulette), as many as the emission draws (a light, a point and a direction).
+const PAIRS_PER_VERTEX: u32 = 3;
 
 /// Random stream tag of light paths (camera paths use 0).
 const LIGHT_STREAM: u64 = 1;
@@ -320,7 +324,9 @@ impl Wavefront for LightWavefront<'_> {
 /// Starts light path `index` of iteration `ctx` (the frame's `sample`): picks a light by
 /// power and samples an emitted ray.
 fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathState {
-    let mut rng = Rng::from_key(&[ctx.settings.seed, ctx.iteration, u64::from(index), stream]);
+    // The light paths of one iteration are the samples of one stratified sequence.
+    let key = [ctx.settings.seed, ctx.iteration, stream];
+    let mut rng = ctx.settings.sequence.sampler(&key, u64::from(index));
     let (u_pick, u_pos, u_dir) = (rng.uniform(), rng.uniform2(), rng.uniform2());
     let mut path = LightPathState {
         index,
@@ -374,6 +380,7 @@ fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat:
         path.alive = false;
         return;
     };
+    path.walk.start_vertex(PAIRS_PER_VERTEX);
     let scene = ctx.scene;
     let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
     let wo = -path.walk.direction;

@@ -6,7 +6,7 @@
 use glam::{Vec2, Vec3};
 use vcm_scene::Material;
 use vcm_scene::bsdf::{Bsdf, TransportMode};
-use vcm_scene::sampling::Rng;
+use vcm_scene::sampling::{Rng, Sampler};
 
 use super::*;
 use crate::bidir::Algorithm;

@@ -36,6 +36,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Decision, Projection, Scene};
 use vcm_scheduler::SchedulerStats;
 use vcm_traversal::Traversal;
@@ -121,6 +122,9 @@ pub struct VcmSettings {
     pub height: u32,
     /// Seed of every path's random stream.
     pub seed: u64,
+    /// How the iterations' camera paths through a pixel, and an iteration's light paths,
+    /// relate (default: stratified, [`SampleSequence::Sobol`]).
+    pub sequence: SampleSequence,
     /// Longest path in segments (a directly seen light is 1); `None`: unlimited.
     pub max_depth: Option<u32>,
     /// Which techniques are used.
@@ -143,6 +147,7 @@ impl VcmSettings {
             width,
             height,
             seed: 0,
+            sequence: SampleSequence::default(),
             max_depth: None,
             algorithm,
             connections: 1,

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 use vcm_scene::bsdf::{FixedOutgoing, LobeKind, Pdfs, TransportMode};
-use vcm_scene::sampling::Rng;
+use vcm_scene::sampling::{Sampler, SobolSampler};
 
 use super::mis::{MisFactors, SubpathMis};
 use crate::roulette::Roulette;
@@ -11,8 +11,8 @@ use crate::surface_hit::SurfaceHit;
 /// The state of a subpath's random walk between waves.
 #[derive(Clone, Debug)]
 pub(crate) struct Walk {
-    /// The subpath's own random stream.
-    pub rng: Rng,
+    /// The subpath's numbers: its stratified sequence at its sample index.
+    pub rng: SobolSampler,
     /// Origin of the current segment.
     pub origin: Vec3,
     /// Unit direction of the current segment.
@@ -29,6 +29,12 @@ pub(crate) struct Walk {
 }
 
 impl Walk {
+    /// Moves the subpath's numbers to those of the vertex it has just reached, `pairs` pairs
+    /// of dimensions per vertex ([`SobolSampler::start_step`]).
+    pub fn start_vertex(&mut self, pairs: u32) {
+        self.rng.start_step(self.segments, pairs);
+    }
+
     /// Samples the BSDF at `surface` (`seen` from the previous vertex) for the next segment,
     /// updates the MIS quantities and plays Russian roulette. Returns the sampled lobe's
     /// class, or `None` when the walk ends.

@@ -9,6 +9,7 @@ use std::sync::Arc;
 use glam::{DVec3, Vec2, Vec3, Vec4};
 use vcm::{Algorithm, Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
 use vcm_scene::light::Light;
+use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Camera, Material, Mesh, Scene};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};
 
@@ -89,6 +90,25 @@ pub fn scene_file(name: &str) -> Scene {
 /// The CPU traversal backend over `scene`.
 pub fn cpu_traversal(scene: &Scene) -> Arc<dyn Traversal> {
     Arc::new(CpuBvh::new(&scene.triangle_corners(), CpuBvhOptions::default()).unwrap())
+}
+
+/// Path tracer settings for a `width` × `height` image whose frames are independent
+/// ([`SampleSequence::Independent`]): the statistical tests estimate errors from the spread
+/// between frames, which stratification across frames would overstate.
+pub fn pt_settings(width: u32, height: u32) -> PtSettings {
+    PtSettings {
+        sequence: SampleSequence::Independent,
+        ..PtSettings::new(width, height)
+    }
+}
+
+/// Settings of `algorithm` for a `width` × `height` image whose frames are independent, as
+/// in [`pt_settings`].
+pub fn vcm_settings(algorithm: Algorithm, width: u32, height: u32) -> VcmSettings {
+    VcmSettings {
+        sequence: SampleSequence::Independent,
+        ..VcmSettings::new(algorithm, width, height)
+    }
 }
 
 /// A path tracer over `scene` with the CPU backend.

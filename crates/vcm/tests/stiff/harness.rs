@@ -49,10 +49,8 @@ pub fn integrator(scene: Scene, algorithm: Option<Algorithm>, setup: Setup) -> B
     match algorithm {
         None => {
             let settings = PtSettings {
-                width: SIZE,
-                height: SIZE,
                 seed: setup.seed,
-                max_depth: None,
+                ..common::pt_settings(SIZE, SIZE)
             };
             Box::new(common::path_tracer(scene, settings))
         }
@@ -61,7 +59,7 @@ pub fn integrator(scene: Scene, algorithm: Option<Algorithm>, setup: Setup) -> B
                 seed: setup.seed,
                 radius_fraction: setup.radius_fraction,
                 alpha: setup.alpha,
-                ..VcmSettings::new(algorithm, SIZE, SIZE)
+                ..common::vcm_settings(algorithm, SIZE, SIZE)
             };
             Box::new(common::vcm(scene, settings))
         }

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::bsdf::LobeKind;
-use crate::sampling::Rng;
+use crate::sampling::{Rng, Sampler};
 use std::f32::consts::TAU;
 
 #[test]

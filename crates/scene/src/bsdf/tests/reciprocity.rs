@@ -2,7 +2,7 @@
 //! between the transport modes; n_s = n_g unless stated.
 
 use super::*;
-use crate::sampling::{Rng, sample_uniform_sphere};
+use crate::sampling::{Rng, Sampler, sample_uniform_sphere};
 
 /// Random direction pairs (a, b) with a on the front and b on the side `same_side` says.
 fn pairs(seed: u64, same_side: bool) -> impl Iterator<Item = (Vec3, Vec3)> {

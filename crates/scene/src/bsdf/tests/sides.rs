@@ -1,7 +1,7 @@
 //! One-sided and double-sided behaviour, transmission from both sides, and degenerate inputs.
 
 use super::*;
-use crate::sampling::{Rng, sample_uniform_sphere};
+use crate::sampling::{Rng, Sampler, sample_uniform_sphere};
 use glam::Vec2;
 use std::f32::consts::TAU;
 

@@ -1,0 +1,284 @@
+//! Owen-scrambled, shuffled Sobol points (Burley 2020, "Practical Hash-based Owen
+//! Scrambling", JCGT 9(4)), padded in pairs of dimensions.
+//!
+//! Sample `i` of a pixel is point `i` of that pixel's own randomized sequence: the first two
+//! Sobol dimensions (van der Corput and the binary Pascal matrix, a (0, 2)-sequence),
+//! index-shuffled and Owen-scrambled by a seed hashed from the pixel's key and the pair's
+//! number. Within one pair of dimensions the samples of a pixel are stratified (every
+//! aligned power-of-two run of them is a (0, m, 2)-net); different pairs, pixels and keys are
+//! independent randomizations. Each number is uniform on [0, 1) for every sample, so
+//! estimators stay unbiased; only their error shrinks.
+//!
+//! The values are those of the `sobol_burley` crate's `sample(i, d, seed)` for d = 0, 1 (the
+//! tests check it bit for bit), computed without its table walk: dimension 1 is the
+//! superset-XOR transform of the index bits, five shift-and-mask steps. Like that crate, a
+//! sequence holds 2^16 points; later samples start independently randomized blocks.
+
+use super::rng::{hash_key, splitmix64};
+use super::{Rng, Sampler};
+use glam::Vec2;
+
+/// Samples of one sequence before the next block starts.
+const BLOCK_BITS: u32 = 16;
+
+/// The numbers of one sample of a pixel (or of any other keyed sequence): 12 bytes of state.
+#[derive(Clone, Debug)]
+pub struct SobolSampler {
+    /// Hash of the key and of the sample's block of 2^16 samples.
+    seed: u32,
+    /// Index of the sample within its block, bit-reversed.
+    index_rev: u32,
+    /// Next unused pair of dimensions.
+    pair: u32,
+}
+
+impl SobolSampler {
+    /// Sample `index` of the sequence keyed by `key` (e.g. `(seed, pixel)`); samples of one
+    /// key with consecutive indices are stratified against each other.
+    #[inline]
+    pub fn new(key: &[u64], index: u64) -> SobolSampler {
+        let block = index >> BLOCK_BITS;
+        let seed = splitmix64(hash_key(key) ^ splitmix64(block));
+        SobolSampler {
+            seed: (seed ^ (seed >> 32)) as u32,
+            index_rev: ((index & ((1 << BLOCK_BITS) - 1)) as u32).reverse_bits(),
+            pair: 0,
+        }
+    }
+
+    /// Moves on to the first pair of dimensions reserved for step `step` of a path (`pairs`
+    /// each), unless earlier steps used more: paths of one pixel that take the same number of
+    /// numbers at each step then draw step k's numbers from the same stratified pairs.
+    #[inline]
+    pub fn start_step(&mut self, step: u32, pairs: u32) {
+        self.pair = self.pair.max(step.saturating_mul(pairs));
+    }
+
+    /// A random stream of its own in place of the next pair of dimensions, for numbers that
+    /// gain nothing from stratification or need more bits (e.g. uniform integer picks).
+    #[inline]
+    pub fn stream(&mut self) -> Rng {
+        let rng = Rng::from_key(&[
+            u64::from(self.seed),
+            u64::from(self.index_rev),
+            u64::from(self.pair),
+        ]);
+        self.pair += 1;
+        rng
+    }
+
+    /// The seed of the next pair of dimensions of this sample.
+    #[inline]
+    fn next_pair_seed(&mut self) -> u32 {
+        let seed = self.seed ^ self.pair.wrapping_mul(0x9E37_79B9);
+        self.pair += 1;
+        seed
+    }
+}
+
+impl Sampler for SobolSampler {
+    /// The first dimension of a fresh pair (stratified in one dimension).
+    #[inline]
+    fn uniform(&mut self) -> f32 {
+        let seed = self.next_pair_seed();
+        let (bits, seed) = shuffle(self.index_rev, seed);
+        owen_to_unit(bits, hash(seed ^ SCRAMBLE_X))
+    }
+
+    #[inline]
+    fn uniform2(&mut self) -> Vec2 {
+        let seed = self.next_pair_seed();
+        let (bits, seed) = shuffle(self.index_rev, seed);
+        // Reversed-bit Sobol values: dimension 0 (van der Corput) is the index itself,
+        // dimension 1 (the Pascal matrix mod 2) XORs into bit j every index bit k ⊇ j.
+        let mut pascal = bits;
+        for (shift, mask) in [(1, 0xAAAA), (2, 0xCCCC), (4, 0xF0F0), (8, 0xFF00)] {
+            pascal ^= (pascal & mask) >> shift;
+        }
+        Vec2::new(
+            owen_to_unit(bits, hash(seed ^ SCRAMBLE_X)),
+            owen_to_unit(pascal, hash(seed ^ SCRAMBLE_Y)),
+        )
+    }
+}
+
+/// How the samples of one key (a pixel's, or an iteration's light paths) relate.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SampleSequence {
+    /// Stratified against each other: the points of one Owen-scrambled Sobol sequence.
+    #[default]
+    Sobol,
+    /// Independent of each other: each sample is the first point of a sequence of its own.
+    /// Frames are then independent too, so the spread between frames estimates the error
+    /// of their mean (the statistical tests rely on it).
+    Independent,
+}
+
+impl SampleSequence {
+    /// The numbers of sample `index` of the samples keyed by `key`.
+    #[inline]
+    pub fn sampler(self, key: &[u64], index: u64) -> SobolSampler {
+        match self {
+            SampleSequence::Sobol => SobolSampler::new(key, index),
+            SampleSequence::Independent => SobolSampler::new(&[hash_key(key), index], 0),
+        }
+    }
+}
+
+/// Scramble constants of dimensions 0 and 1 (those of `sobol_burley`).
+const SCRAMBLE_X: u32 = 0x912F_69BA;
+const SCRAMBLE_Y: u32 = 0x174F_18AB;
+
+/// The nested uniform shuffle by `seed` of the index whose reversed bits are `index_rev` (an
+/// Owen scramble of them), and the seed the dimensions' scrambles derive from.
+#[inline]
+fn shuffle(index_rev: u32, seed: u32) -> (u32, u32) {
+    let shuffled = owen_scramble_rev(index_rev, hash(seed ^ 0x79C6_8E4A));
+    (
+        shuffled.reverse_bits() & 0xFFFF,
+        seed.wrapping_mul(0x9C8F_2D3B),
+    )
+}
+
+/// The reversed-bit Sobol value `sobol` Owen-scrambled by `scramble`, as a float in [0, 1)
+/// (its top 23 bits).
+#[inline]
+fn owen_to_unit(sobol: u32, scramble: u32) -> f32 {
+    let n = owen_scramble_rev(sobol, scramble).reverse_bits();
+    f32::from_bits((n >> 9) | 0x3F80_0000) - 1.0
+}
+
+/// Owen scramble of a bit-reversed value (the hash of Vegdahl's "Building a Better LK Hash",
+/// 2021, which the `sobol_burley` crate uses).
+#[inline]
+fn owen_scramble_rev(mut n: u32, scramble: u32) -> u32 {
+    n ^= n.wrapping_mul(0x3D20_ADEA);
+    n = n.wrapping_add(scramble);
+    n = n.wrapping_mul((scramble >> 16) | 1);
+    n ^= n.wrapping_mul(0x0552_6C56);
+    n ^= n.wrapping_mul(0x53A2_2864);
+    n
+}
+
+/// 32-bit integer hash (Wellons' hash-prospector mixer, with zero not mapped to zero).
+#[inline]
+fn hash(mut n: u32) -> u32 {
+    n ^= 0xE6FE_3BEB;
+    n ^= n >> 16;
+    n = n.wrapping_mul(0x7FEB_352D);
+    n ^= n >> 15;
+    n = n.wrapping_mul(0x846C_A68B);
+    n ^= n >> 16;
+    n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The same values as the `sobol_burley` crate's reference implementation, bit for bit.
+    #[test]
+    fn matches_sobol_burley() {
+        for seed in [0u32, 1, 0xDEAD_BEEF, 12345] {
+            for index in (0..1u32 << 16).step_by(7) {
+                let expected = Vec2::new(
+                    sobol_burley::sample(index, 0, seed),
+                    sobol_burley::sample(index, 1, seed),
+                );
+                let mut sampler = SobolSampler {
+                    seed,
+                    index_rev: index.reverse_bits(),
+                    pair: 0,
+                };
+                assert_eq!(sampler.uniform2(), expected, "index {index} seed {seed}");
+                sampler.pair = 0;
+                assert_eq!(sampler.uniform(), expected.x, "index {index} seed {seed}");
+            }
+        }
+    }
+
+    /// Every power-of-two prefix of a pixel's samples is a (0, m, 2)-net in each pair: each of
+    /// the 2^m elementary intervals of every shape holds exactly one point.
+    #[test]
+    fn pairs_are_stratified() {
+        for m in [4u32, 6, 8] {
+            let n = 1u32 << m;
+            for pair in 0..3 {
+                let points: Vec<Vec2> = (0..n)
+                    .map(|i| {
+                        let mut s = SobolSampler::new(&[3, 77], u64::from(i));
+                        s.start_step(pair, 1);
+                        s.uniform2()
+                    })
+                    .collect();
+                for x_bits in 0..=m {
+                    let (nx, ny) = (1u32 << x_bits, 1u32 << (m - x_bits));
+                    let mut count = vec![0u32; n as usize];
+                    for p in &points {
+                        let cx = ((p.x * nx as f32) as u32).min(nx - 1);
+                        let cy = ((p.y * ny as f32) as u32).min(ny - 1);
+                        count[(cy * nx + cx) as usize] += 1;
+                    }
+                    assert!(
+                        count.iter().all(|&c| c == 1),
+                        "m = {m}, pair {pair}, {nx}×{ny} intervals: {count:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Different keys and different pairs are unrelated randomizations: the mean over many
+    /// pixels of x·y across two pairs is 1/4 within its standard error.
+    #[test]
+    fn pairs_and_keys_are_independent() {
+        let n = 20_000;
+        let (mut sum, mut sum_sq) = (0.0f64, 0.0f64);
+        for pixel in 0..n {
+            let mut s = SobolSampler::new(&[1, pixel], 5);
+            let (a, b) = (s.uniform(), s.uniform());
+            let p = f64::from(a * b);
+            sum += p;
+            sum_sq += p * p;
+        }
+        let mean = sum / n as f64;
+        let std_err = ((sum_sq / n as f64 - mean * mean) / n as f64).sqrt();
+        assert!(
+            (mean - 0.25).abs() < 4.0 * std_err,
+            "mean {mean} ± {std_err}"
+        );
+    }
+
+    /// Independent samples of one key are not stratified: their first pair is uniform, and
+    /// 2^8 of them leave elementary intervals empty where Sobol points fill each once.
+    #[test]
+    fn independent_samples_are_uniform_and_unstratified() {
+        let n = 1u32 << 8;
+        let points: Vec<Vec2> = (0..n)
+            .map(|i| {
+                SampleSequence::Independent
+                    .sampler(&[3, 77], u64::from(i))
+                    .uniform2()
+            })
+            .collect();
+        let mut count = [0u32; 256];
+        for p in &points {
+            count[((p.y * 16.0) as usize) * 16 + (p.x * 16.0) as usize] += 1;
+        }
+        assert!(count.contains(&0), "{count:?}");
+        let mean = points.iter().map(|p| f64::from(p.x + p.y)).sum::<f64>() / f64::from(2 * n);
+        // Each coordinate has variance 1/12: the mean of 512 of them has a standard error of
+        // 0.0128.
+        assert!((mean - 0.5).abs() < 4.0 * 0.0128, "mean {mean}");
+    }
+
+    /// Samples beyond the crate's 2^16 limit start fresh randomized blocks rather than
+    /// repeating the first one.
+    #[test]
+    fn blocks_do_not_repeat() {
+        let first = SobolSampler::new(&[9], 3).uniform2();
+        let next_block = SobolSampler::new(&[9], 3 + (1 << 16)).uniform2();
+        assert_ne!(first, next_block);
+        assert!(next_block.cmpge(Vec2::ZERO).all() && next_block.cmplt(Vec2::ONE).all());
+    }
+}
