@@ -166,6 +166,32 @@ fn bad_documents_are_errors_not_panics() {
     assert!(load(&document(r#"[{"mesh": 0}]"#, bad_ior, "")).is_err());
 }
 
+/// An image needs a `uri` or a `bufferView`, and one in a buffer view needs a `mimeType`
+/// (glTF 2.0 §5.18); files without them (found by fuzzing) are errors naming the image.
+#[test]
+fn images_without_a_source_are_errors() {
+    let textured = r#"[{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]"#;
+    let cases = [
+        (
+            "no source",
+            r#"[{"name": "lost"}]"#,
+            "neither a uri nor a bufferView",
+        ),
+        ("no mime type", r#"[{"bufferView": 0}]"#, "needs a mimeType"),
+    ];
+    for (what, images, reason) in cases {
+        let extra = format!(r#", "textures": [{{"source": 0}}], "images": {images}"#);
+        let error = load(&document(r#"[{"mesh": 0}]"#, textured, &extra))
+            .err()
+            .unwrap_or_else(|| panic!("{what}: loaded"))
+            .to_string();
+        assert!(
+            error.contains("memory.gltf") && error.contains("image 0") && error.contains(reason),
+            "{what}: {error}"
+        );
+    }
+}
+
 #[test]
 fn a_scene_without_camera_is_framed_from_plus_z() {
     let scene = load(&document(r#"[{"mesh": 0}]"#, MATTE, "")).unwrap();

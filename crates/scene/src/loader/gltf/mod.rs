@@ -97,8 +97,9 @@ pub(super) fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene, SceneE
 
 /// Parses and validates a glTF document (JSON or GLB), returning it with the GLB binary chunk.
 ///
-/// `gltf-json` 1.4.1's validation indexes a primitive's POSITION accessor without a bounds check
-/// (found by fuzzing), so that reference is checked here before validation runs.
+/// `gltf-json` 1.4.1's validation indexes a primitive's POSITION accessor without a bounds check,
+/// and `gltf::Image::source` unwraps an image's `uri` (or, for one in a buffer view, its
+/// `mimeType`) that validation does not require (both found by fuzzing): those are checked here.
 fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), String> {
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| e.to_string())?;
     let root = gltf.document.into_json();
@@ -114,6 +115,15 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), Str
                     index.value()
                 ));
             }
+        }
+    }
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.buffer_view, &image.uri, &image.mime_type) {
+            (None, None, _) => return Err(format!("image {i} has neither a uri nor a bufferView")),
+            (Some(_), _, None) => {
+                return Err(format!("image {i} is in a bufferView and needs a mimeType"));
+            }
+            _ => {}
         }
     }
     let document = gltf::Document::from_json(root).map_err(|e| e.to_string())?;
