@@ -1,5 +1,6 @@
-// Alpha masks: a masked triangle is opaque where alpha_factor × the bilinearly filtered alpha
-// of its texture at the hit's texture coordinates reaches its cutoff (glTF MASK mode).
+// Alpha masks: a masked triangle is opaque where alpha_factor × the filtered (bilinear or
+// nearest-texel) alpha of its texture at the hit's texture coordinates reaches its cutoff
+// (glTF MASK mode).
 
 struct Mask {
     uv0: vec2<f32>,
@@ -15,8 +16,9 @@ struct Texture {
     offset: u32,
     width: u32,
     height: u32,
-    // Wrap mode along u in bits 0-7, along v in bits 8-15: 0 repeat, 1 mirrored, 2 clamp.
-    wrap: u32,
+    // Wrap mode along u in bits 0-7, along v in bits 8-15: 0 repeat, 1 mirrored, 2 clamp;
+    // filter in bits 16-23: 0 bilinear, 1 nearest.
+    sampler: u32,
 }
 
 const NO_MASK: u32 = 0xffffffffu;
@@ -47,16 +49,22 @@ fn texel_alpha(texture: Texture, x: i32, y: i32) -> f32 {
 
 fn sample_alpha(texture: Texture, uv: vec2<f32>) -> f32 {
     let size = vec2<f32>(f32(texture.width), f32(texture.height));
+    let w = i32(texture.width);
+    let h = i32(texture.height);
+    let wrap_u = texture.sampler & 0xffu;
+    let wrap_v = (texture.sampler >> 8u) & 0xffu;
+    if (texture.sampler >> 16u) == 1u {
+        let i = vec2<i32>(floor(uv * size));
+        return texel_alpha(texture, wrap(i.x, w, wrap_u), wrap(i.y, h, wrap_v));
+    }
     let p = uv * size - 0.5;
     let p0 = floor(p);
     let f = p - p0;
-    let w = i32(texture.width);
-    let h = i32(texture.height);
     let i = vec2<i32>(p0);
-    let x0 = wrap(i.x, w, texture.wrap & 0xffu);
-    let x1 = wrap(i.x + 1, w, texture.wrap & 0xffu);
-    let y0 = wrap(i.y, h, texture.wrap >> 8u);
-    let y1 = wrap(i.y + 1, h, texture.wrap >> 8u);
+    let x0 = wrap(i.x, w, wrap_u);
+    let x1 = wrap(i.x + 1, w, wrap_u);
+    let y0 = wrap(i.y, h, wrap_v);
+    let y1 = wrap(i.y + 1, h, wrap_v);
     let top = mix(texel_alpha(texture, x0, y0), texel_alpha(texture, x1, y0), f.x);
     let bottom = mix(texel_alpha(texture, x0, y1), texel_alpha(texture, x1, y1), f.x);
     return mix(top, bottom, f.y);

@@ -36,11 +36,12 @@ pub use vcm_traversal_wgpu as traversal_wgpu;
 
 pub use backend::{Backend, BackendError, BuiltTraversal};
 
-use vcm_scene::texture::{UvTransform, WrapMode};
+use vcm_scene::texture::{Filter, UvTransform, WrapMode};
 use vcm_scene::{Scene, Texture};
 use vcm_traversal::{AlphaTest, BuildError, CpuBvh, CpuBvhOptions};
 use vcm_traversal_wgpu::{
-    AlphaMasks, AlphaTexture, GpuBvh, GpuBvhOptions, GpuDevice, GpuError, MaskedTriangle, Wrap,
+    AlphaMasks, AlphaTexture, Filter as GpuFilter, GpuBvh, GpuBvhOptions, GpuDevice, GpuError,
+    MaskedTriangle, Wrap,
 };
 
 /// The scene's alpha masks as seen by a traversal backend.
@@ -114,7 +115,7 @@ pub fn alpha_masks(scene: &Scene) -> AlphaMasks {
     }
 }
 
-/// The alpha channel of `texture` with its wrap modes.
+/// The alpha channel of `texture` with its wrap modes and filter.
 fn alpha_texture(texture: &Texture) -> AlphaTexture {
     let wrap = |mode| match mode {
         WrapMode::Repeat => Wrap::Repeat,
@@ -129,6 +130,10 @@ fn alpha_texture(texture: &Texture) -> AlphaTexture {
         width,
         height,
         wrap: [wrap(texture.wrap_u), wrap(texture.wrap_v)],
+        filter: match texture.filter {
+            Filter::Bilinear => GpuFilter::Bilinear,
+            Filter::Nearest => GpuFilter::Nearest,
+        },
         alpha,
     }
 }

@@ -6,7 +6,8 @@ use std::process::{Command, Output};
 use std::sync::Arc;
 
 use vcm::image_io::RgbImage;
-use vcm_rs::scene::UvTransform;
+use vcm_rs::scene::texture::ColorEncoding;
+use vcm_rs::scene::{Filter, Texture, UvTransform};
 use vcm_rs::traversal::{HitBatch, RayBatch, Traversal};
 use vcm_rs::traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
 
@@ -135,7 +136,7 @@ fn no_adapter_is_a_clear_error() {
     assert!(stderr.contains("mesa-vulkan-drivers"), "{stderr}");
 }
 
-/// Alpha masks evaluated on the GPU (the scene's bilinear lookup, in single precision) cut
+/// Alpha masks evaluated on the GPU (the scene's texture lookup, in single precision) cut
 /// the same holes as the CPU backend's: the same primitive for camera rays through the
 /// Khronos alpha-mode test scene, except a few rays where the filtered alpha lands within
 /// rounding of the cutoff. Without the masks many rays would differ, so the check has teeth.
@@ -164,11 +165,41 @@ fn alpha_masks_match_the_cpu_backend() {
         }
     }
     assert_masks_agree(&Arc::new(transformed));
+    // The masks' texture replaced by 5 × 3 texels of assorted alpha, each several pixels
+    // wide, looked up bilinearly and as nearest texels: both backends cut the nearest-texel
+    // holes, which differ from the bilinear ones.
+    let magnified = |filter| {
+        let mut scene = vcm_rs::scene::Scene::load(path).unwrap();
+        let texels = (0..15u8)
+            .map(|i| [255, 255, 255, (i * 7 % 5) * 60])
+            .collect();
+        let mut coarse = Texture::new("coarse".into(), 5, 3, texels, ColorEncoding::Srgb).unwrap();
+        coarse.filter = filter;
+        for material in &scene.materials {
+            if material.alpha_mask().is_some() {
+                let texture = material.base_color_texture.unwrap();
+                scene.textures[texture.index] = coarse.clone();
+            }
+        }
+        Arc::new(scene)
+    };
+    let bilinear = assert_masks_agree(&magnified(Filter::Bilinear));
+    let nearest = assert_masks_agree(&magnified(Filter::Nearest));
+    let changed = bilinear
+        .iter()
+        .zip(&nearest)
+        .filter(|(a, b)| a != b)
+        .count();
+    eprintln!("nearest texels change {changed} of {} rays", nearest.len());
+    // Were the GPU to filter bilinearly anyway, it would miss the CPU's holes in that many
+    // rays: far more than the disagreement `assert_masks_agree` tolerates (0.1%).
+    assert!(changed as f64 > 5e-3 * nearest.len() as f64);
 }
 
 /// The CPU and GPU backends agree on `scene`'s camera rays (closest hits and occlusion),
 /// and its masks cut holes: many rays go through where unmasked triangles would stop them.
-fn assert_masks_agree(scene: &Arc<vcm_rs::scene::Scene>) {
+/// Returns the CPU backend's hit primitives.
+fn assert_masks_agree(scene: &Arc<vcm_rs::scene::Scene>) -> Vec<u32> {
     let size = 256;
     let mut rays = RayBatch::default();
     for y in 0..size {
@@ -208,4 +239,5 @@ fn assert_masks_agree(scene: &Arc<vcm_rs::scene::Scene>) {
         holes > 100 * differences.max(1),
         "masks cut only {holes} holes"
     );
+    cpu_prims
 }

@@ -46,4 +46,4 @@ pub use material::{AlphaMode, Material};
 pub use mesh::{Bounds, Mesh, SurfacePoint};
 pub use scene::Scene;
 pub use shading_plan::ShadingPlan;
-pub use texture::{Texture, TextureRef, UvTransform};
+pub use texture::{Filter, Texture, TextureRef, UvTransform};

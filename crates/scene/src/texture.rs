@@ -1,4 +1,5 @@
-//! Textures: 8-bit RGBA texels, decoded to linear on lookup, bilinear filtering and glTF wrap modes.
+//! Textures: 8-bit RGBA texels, decoded to linear on lookup, bilinear or nearest-texel
+//! filtering and glTF wrap modes.
 
 use glam::{Vec2, Vec4};
 
@@ -34,6 +35,17 @@ impl WrapMode {
     }
 }
 
+/// How a lookup between texel centers is filtered (glTF sampler filters, mipmapping aside:
+/// a path tracer looks up one point per sample).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Filter {
+    /// Interpolates the four nearest texels.
+    #[default]
+    Bilinear,
+    /// The texel the point falls in.
+    Nearest,
+}
+
 /// How the stored 8-bit values are interpreted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ColorEncoding {
@@ -58,6 +70,8 @@ pub struct Texture {
     pub wrap_u: WrapMode,
     /// Wrap mode along v.
     pub wrap_v: WrapMode,
+    /// Filtering between texel centers.
+    pub filter: Filter,
 }
 
 /// Lookup table from an sRGB-encoded byte to linear intensity (IEC 61966-2-1).
@@ -96,6 +110,7 @@ impl Texture {
             average: std::sync::OnceLock::new(),
             wrap_u: WrapMode::Repeat,
             wrap_v: WrapMode::Repeat,
+            filter: Filter::Bilinear,
         })
     }
 
@@ -143,28 +158,41 @@ impl Texture {
         }
     }
 
-    /// Bilinearly filtered lookup at texture coordinates `uv` (glTF convention: (0,0) is the
-    /// top-left corner of the image), interpolating linear values.
+    /// Filtered lookup at texture coordinates `uv` (glTF convention: (0,0) is the top-left
+    /// corner of the image), in linear values, with the texture's [`Filter`] and wrap modes.
     pub fn sample(&self, uv: Vec2) -> Vec4 {
         if !uv.is_finite() {
             return self.texel(0, 0);
         }
-        let x = f64::from(uv.x) * f64::from(self.width) - 0.5;
-        let y = f64::from(uv.y) * f64::from(self.height) - 0.5;
+        let x = f64::from(uv.x) * f64::from(self.width);
+        let y = f64::from(uv.y) * f64::from(self.height);
+        match self.filter {
+            Filter::Bilinear => self.bilinear(x - 0.5, y - 0.5),
+            Filter::Nearest => self.wrapped_texel(x.floor() as i64, y.floor() as i64),
+        }
+    }
+
+    /// The texel at integer coordinates (`x`, `y`), wrapped into the image. Coordinates far
+    /// outside it saturate in the callers' i64 casts; wrapping keeps them in range.
+    fn wrapped_texel(&self, x: i64, y: i64) -> Vec4 {
+        self.texel(
+            self.wrap_u.apply(x, self.width),
+            self.wrap_v.apply(y, self.height),
+        )
+    }
+
+    /// Bilinear interpolation at texel-space (`x`, `y`), texel centers at integers.
+    fn bilinear(&self, x: f64, y: f64) -> Vec4 {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
-        // Coordinates far outside [0,1] saturate in the i64 cast; wrapping keeps them in range.
         let (xi, yi) = (x0 as i64, y0 as i64);
-        let xs = [
-            self.wrap_u.apply(xi, self.width),
-            self.wrap_u.apply(xi.saturating_add(1), self.width),
-        ];
-        let ys = [
-            self.wrap_v.apply(yi, self.height),
-            self.wrap_v.apply(yi.saturating_add(1), self.height),
-        ];
-        let top = self.texel(xs[0], ys[0]).lerp(self.texel(xs[1], ys[0]), fx);
-        let bottom = self.texel(xs[0], ys[1]).lerp(self.texel(xs[1], ys[1]), fx);
+        let (xj, yj) = (xi.saturating_add(1), yi.saturating_add(1));
+        let top = self
+            .wrapped_texel(xi, yi)
+            .lerp(self.wrapped_texel(xj, yi), fx);
+        let bottom = self
+            .wrapped_texel(xi, yj)
+            .lerp(self.wrapped_texel(xj, yj), fx);
         top.lerp(bottom, fy)
     }
 
@@ -316,6 +344,24 @@ mod tests {
         let t = checker();
         let mid = t.sample(Vec2::new(0.5, 0.5));
         assert!((mid - Vec4::new(0.5, 0.5, 0.5, 0.75)).abs().max_element() < 1e-6);
+    }
+
+    /// Nearest-texel lookups return the texel a point falls in, up to its edges, with the
+    /// wrap modes outside the image.
+    #[test]
+    fn nearest_lookup_returns_the_texel_under_the_point() {
+        let mut t = checker();
+        t.filter = Filter::Nearest;
+        let (black, white) = (Vec4::new(0.0, 0.0, 0.0, 1.0), Vec4::ONE);
+        assert_eq!(t.sample(Vec2::new(0.0, 0.0)), black);
+        assert_eq!(t.sample(Vec2::new(0.49, 0.1)), black);
+        assert_eq!(t.sample(Vec2::new(0.5, 0.1)), white);
+        assert_eq!(t.sample(Vec2::new(0.99, 0.99)), Vec4::ZERO);
+        // Repeat: u = 1.2 is u = 0.2; mirrored repeat: v = 1.2 is v = 0.8.
+        assert_eq!(t.sample(Vec2::new(1.2, 0.3)), black);
+        t.wrap_v = WrapMode::MirroredRepeat;
+        assert_eq!(t.sample(Vec2::new(0.2, 1.2)), white);
+        assert!(t.sample(Vec2::new(-1e30, 1e30)).is_finite());
     }
 
     #[test]

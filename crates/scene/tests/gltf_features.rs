@@ -222,27 +222,59 @@ fn unsupported_geometry_features_are_warned_once() {
     assert!(plain.warnings.is_empty(), "{:?}", plain.warnings);
 }
 
-/// Textures are always filtered bilinearly; a sampler asking for nearest texels is reported.
+/// A sampler's filters choose between nearest-texel and bilinear lookups (mipmaps aside); one
+/// that mixes them is filtered bilinearly and reported.
 #[test]
-fn nearest_texture_filtering_is_warned() {
+fn sampler_filters_choose_nearest_or_bilinear_lookups() {
     let dir = tempfile::tempdir().unwrap();
-    let white = image::RgbaImage::from_pixel(2, 2, image::Rgba([255, 255, 255, 255]));
-    white.save(dir.path().join("white.png")).unwrap();
+    // Black left column, white right column.
+    let mut columns = image::RgbaImage::from_pixel(2, 2, image::Rgba([0, 0, 0, 255]));
+    columns.put_pixel(1, 0, image::Rgba([255, 255, 255, 255]));
+    columns.put_pixel(1, 1, image::Rgba([255, 255, 255, 255]));
+    columns.save(dir.path().join("columns.png")).unwrap();
     let material = r#"[{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]"#;
     let load_with = |sampler: &str| {
         let extra = format!(
-            r#", "images": [{{"uri": "white.png"}}], "samplers": [{{{sampler}}}],
+            r#", "images": [{{"uri": "columns.png"}}], "samplers": [{{{sampler}}}],
             "textures": [{{"source": 0, "sampler": 0}}]"#
         );
         let json = document(r#"[{"mesh": 0}]"#, material, &extra);
         let path = dir.path().join("scene.gltf");
         load_gltf_from_bytes(&path, json.as_bytes()).unwrap()
     };
-    let nearest = load_with(r#""magFilter": 9728"#);
-    let warned = nearest.warnings.iter().filter(|w| w.contains("nearest"));
-    assert_eq!(warned.count(), 1, "{:?}", nearest.warnings);
-    let linear = load_with(r#""magFilter": 9729"#);
-    assert!(linear.warnings.is_empty(), "{:?}", linear.warnings);
+    // Between the columns' centers, 0.1 texel into the black one: bilinear filtering
+    // interpolates the decoded (linear) values 0 and 1 there at 0.4.
+    let lookup = |scene: &Scene| {
+        let uv = Vec2::new(0.45, 0.5);
+        scene.materials[0]
+            .bsdf_params(&scene.textures, uv)
+            .base_color
+            .x
+    };
+    let warned = |scene: &Scene| scene.warnings.iter().any(|w| w.contains("nearest"));
+    let (nearest, bilinear) = (0.0, 0.4);
+    for (sampler, expected) in [
+        (r#""magFilter": 9728"#, nearest),
+        (r#""minFilter": 9984"#, nearest),
+        (r#""magFilter": 9728, "minFilter": 9986"#, nearest),
+        (r#""magFilter": 9729, "minFilter": 9987"#, bilinear),
+        (r#""wrapS": 33071"#, bilinear),
+    ] {
+        let scene = load_with(sampler);
+        assert!(!warned(&scene), "{sampler}: {:?}", scene.warnings);
+        let value = lookup(&scene);
+        assert!(
+            (value - expected).abs() < 0.01,
+            "{sampler}: {value} != {expected}"
+        );
+    }
+    let mixed = load_with(r#""magFilter": 9728, "minFilter": 9729"#);
+    let reported = mixed
+        .warnings
+        .iter()
+        .filter(|w| w.contains("nearest and linear"));
+    assert_eq!(reported.count(), 1, "{:?}", mixed.warnings);
+    assert!((lookup(&mixed) - bilinear).abs() < 0.01);
 }
 
 /// `KHR_texture_transform` moves, rotates and scales where a texture is looked up, for every

@@ -1,6 +1,6 @@
 //! Alpha masks the GPU can evaluate itself: per masked triangle its texture coordinates, an
 //! alpha factor and cutoff, and the alpha channel of its texture, looked up bilinearly with
-//! glTF wrap modes (the scene's CPU lookup, in single precision).
+//! glTF wrap modes, or as the nearest texel (the scene's CPU lookup, in single precision).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
@@ -17,6 +17,16 @@ pub enum Wrap {
     ClampToEdge = 2,
 }
 
+/// How a lookup between texel centers is filtered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Filter {
+    /// Interpolates the four nearest texels.
+    #[default]
+    Bilinear = 0,
+    /// The texel the point falls in.
+    Nearest = 1,
+}
+
 /// The alpha channel of a texture.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AlphaTexture {
@@ -26,6 +36,8 @@ pub struct AlphaTexture {
     pub height: u32,
     /// Wrap mode along u and along v.
     pub wrap: [Wrap; 2],
+    /// Filtering between texel centers.
+    pub filter: Filter,
     /// Row-major alpha values, `width × height`, 0 = transparent and 255 = opaque.
     pub alpha: Vec<u8>,
 }
@@ -71,8 +83,8 @@ pub(crate) struct GpuTexture {
     offset: u32,
     width: u32,
     height: u32,
-    /// Wrap along u in bits 0–7, along v in bits 8–15.
-    wrap: u32,
+    /// Wrap along u in bits 0–7, along v in bits 8–15, the filter in bits 16–23.
+    sampler: u32,
 }
 
 /// Marks an opaque leaf triangle in the per-leaf mask index, and "no texture".
@@ -125,7 +137,9 @@ impl AlphaMasks {
                     offset,
                     width: texture.width,
                     height: texture.height,
-                    wrap: texture.wrap[0] as u32 | (texture.wrap[1] as u32) << 8,
+                    sampler: texture.wrap[0] as u32
+                        | (texture.wrap[1] as u32) << 8
+                        | (texture.filter as u32) << 16,
                 }
             })
             .collect();
@@ -157,6 +171,7 @@ mod tests {
                 width: 5,
                 height: 1,
                 wrap: [Wrap::ClampToEdge, Wrap::MirroredRepeat],
+                filter: Filter::Nearest,
                 alpha: vec![1, 2, 3, 4, 5],
             }],
             triangles: vec![
@@ -173,6 +188,6 @@ mod tests {
         assert_eq!(packed.leaf_masks, [0, NONE]);
         assert_eq!(packed.masks.len(), 1);
         assert_eq!(packed.texels, [0x0403_0201, 0x05]);
-        assert_eq!(packed.textures[0].wrap, 2 | 1 << 8);
+        assert_eq!(packed.textures[0].sampler, 2 | 1 << 8 | 1 << 16);
     }
 }

@@ -14,7 +14,7 @@ pub mod layout;
 pub mod shader;
 mod slot;
 
-pub use alpha::{AlphaMasks, AlphaTexture, MaskedTriangle, Wrap};
+pub use alpha::{AlphaMasks, AlphaTexture, Filter, MaskedTriangle, Wrap};
 pub use backend::{GpuBvh, GpuBvhOptions};
 pub use device::GpuDevice;
 pub use error::{GpuError, NO_ADAPTER_HELP};

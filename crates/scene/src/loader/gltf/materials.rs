@@ -5,7 +5,7 @@ use std::path::Path;
 
 use glam::{Vec3, Vec4};
 use gltf::json::Value;
-use gltf::texture::WrappingMode;
+use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 
 use super::accessors::check_view;
 use super::texture_transform::{EXTENSION, TextureTransform};
@@ -13,13 +13,31 @@ use crate::error::SceneError;
 use crate::loader::builder::SceneBuilder;
 use crate::loader::uri::read_uri;
 use crate::material::{AlphaMode, Material};
-use crate::texture::{ColorEncoding, Texture, TextureRef, WrapMode};
+use crate::texture::{ColorEncoding, Filter, Texture, TextureRef, WrapMode};
 
 /// Loads each (texture, encoding) pair once and hands out [`TextureRef`]s.
 pub(super) struct TextureLoader<'a> {
     base: &'a Path,
     buffers: &'a [Vec<u8>],
     loaded: HashMap<(usize, bool), usize>,
+}
+
+/// The filter of a glTF sampler, for lookups without mipmaps: nearest texels where the
+/// filters it gives (magnification, and minification with its mipmap part dropped) are all
+/// nearest, bilinear where they are all linear or none is given, and `None` where they mix.
+fn filter(sampler: &gltf::texture::Sampler) -> Option<Filter> {
+    let mag = sampler.mag_filter().map(|f| f == MagFilter::Nearest);
+    let min = sampler.min_filter().map(|f| {
+        matches!(
+            f,
+            MinFilter::Nearest | MinFilter::NearestMipmapNearest | MinFilter::NearestMipmapLinear
+        )
+    });
+    match (mag, min) {
+        (Some(a), Some(b)) if a != b => None,
+        (Some(true), _) | (_, Some(true)) => Some(Filter::Nearest),
+        _ => Some(Filter::Bilinear),
+    }
 }
 
 fn wrap_mode(mode: WrappingMode) -> WrapMode {
@@ -114,11 +132,12 @@ impl<'a> TextureLoader<'a> {
         let sampler = texture.sampler();
         tex.wrap_u = wrap_mode(sampler.wrap_s());
         tex.wrap_v = wrap_mode(sampler.wrap_t());
-        if sampler.mag_filter() == Some(gltf::texture::MagFilter::Nearest) {
+        tex.filter = filter(&sampler).unwrap_or_else(|| {
             builder.warn_unsupported(
-                "nearest-texel texture filtering (textures are filtered bilinearly)",
+                "a sampler mixing nearest and linear filters (textures are filtered bilinearly)",
             );
-        }
+            Filter::Bilinear
+        });
         let index = builder.textures.len();
         builder.textures.push(tex);
         self.loaded.insert(key, index);
