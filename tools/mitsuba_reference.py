@@ -1,0 +1,317 @@
+#!/usr/bin/env python3
+"""Render a glTF scene with Mitsuba 3, following vcm-rs's scene conventions.
+
+An independent reference for the renderer: the same file, read by this script
+into Mitsuba 3's own plugins, should give the same image as `vcm render` up to
+noise. It covers the part of the conventions that Mitsuba models exactly:
+
+- Lambertian diffuse (`metallicFactor` 0, `roughnessFactor` 1, specular 0),
+- mirrors and rough conductors whose base colour is white (F0 = 1, so Schlick
+  and Mitsuba's conductor agree; other colours are refused),
+- smooth and rough dielectric solids (transmission 1 with `KHR_materials_volume`)
+  and smooth thin-walled sheets (without it), the base colour tinting transmission,
+- one-sided area lights (`emissiveFactor` x `emissiveStrength`),
+- `KHR_lights_punctual` point and directional lights,
+- the `VCM_environment` extension with a constant colour,
+- the first perspective camera (or none: framed from +Z as the conventions say).
+
+Anything else (textures, the glTF dielectric-base layer, spot lights, whose
+falloff Mitsuba draws differently) stops the script with a message, so that a
+reference is never silently a different scene.
+
+Usage:
+    pip install mitsuba numpy
+    python3 tools/mitsuba_reference.py scenes/cornell-box.gltf ref.exr \
+        --width 256 --height 256 --spp 1024 [--seed 0] [--max-depth -1]
+"""
+
+import argparse
+import base64
+import json
+import math
+import os
+import struct
+import sys
+import tempfile
+
+import mitsuba as mi
+import numpy as np
+
+
+class Unsupported(Exception):
+    """A feature of the file that this script cannot give Mitsuba exactly."""
+
+
+COMPONENTS = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16,
+              5125: np.uint32, 5126: np.float32}
+WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
+
+
+def load_buffers(doc, base_dir):
+    buffers = []
+    for buffer in doc["buffers"]:
+        uri = buffer["uri"]
+        if uri.startswith("data:"):
+            buffers.append(base64.b64decode(uri.split(",", 1)[1]))
+        else:
+            with open(os.path.join(base_dir, uri), "rb") as f:
+                buffers.append(f.read())
+    return buffers
+
+
+def read_accessor(doc, buffers, index):
+    accessor = doc["accessors"][index]
+    view = doc["bufferViews"][accessor["bufferView"]]
+    dtype = np.dtype(COMPONENTS[accessor["componentType"]])
+    width = WIDTH[accessor["type"]]
+    count = accessor["count"]
+    start = view.get("byteOffset", 0) + accessor.get("byteOffset", 0)
+    stride = view.get("byteStride", dtype.itemsize * width)
+    data = buffers[view["buffer"]]
+    array = np.ndarray((count, width), dtype, buffer=data, offset=start,
+                       strides=(stride, dtype.itemsize)).copy()
+    return array if width > 1 else array.reshape(count)
+
+
+def quaternion_matrix(q):
+    x, y, z, w = q
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def local_matrix(node):
+    if "matrix" in node:
+        return np.array(node["matrix"], dtype=float).reshape(4, 4).T
+    m = np.eye(4)
+    m[:3, :3] = quaternion_matrix(node.get("rotation", [0, 0, 0, 1])) @ np.diag(
+        node.get("scale", [1, 1, 1]))
+    m[:3, 3] = node.get("translation", [0, 0, 0])
+    return m
+
+
+def world_nodes(doc):
+    """Yields (node, world matrix) for every node of the default scene."""
+    scene = doc["scenes"][doc.get("scene", 0)]
+    stack = [(i, np.eye(4)) for i in scene["nodes"]]
+    while stack:
+        index, parent = stack.pop()
+        node = doc["nodes"][index]
+        world = parent @ local_matrix(node)
+        yield node, world
+        stack.extend((child, world) for child in node.get("children", []))
+
+
+def rgb(value):
+    return {"type": "rgb", "value": [float(v) for v in value]}
+
+
+def material_plugins(material):
+    """The Mitsuba BSDF and, for an emitter, the area light of a glTF material."""
+    ext = material.get("extensions", {})
+    for name in ext:
+        if name not in ("KHR_materials_specular", "KHR_materials_transmission",
+                        "KHR_materials_ior", "KHR_materials_volume",
+                        "KHR_materials_emissive_strength"):
+            raise Unsupported(f"material {material.get('name')!r} uses {name}")
+    pbr = material.get("pbrMetallicRoughness", {})
+    for key in ("baseColorTexture", "metallicRoughnessTexture"):
+        if key in pbr:
+            raise Unsupported(f"material {material.get('name')!r} has a {key}")
+    for key in ("normalTexture", "emissiveTexture"):
+        if key in material:
+            raise Unsupported(f"material {material.get('name')!r} has a {key}")
+    base = pbr.get("baseColorFactor", [1, 1, 1, 1])[:3]
+    metallic = pbr.get("metallicFactor", 1.0)
+    roughness = pbr.get("roughnessFactor", 1.0)
+    transmission = ext.get("KHR_materials_transmission", {}).get("transmissionFactor", 0.0)
+    ior = ext.get("KHR_materials_ior", {}).get("ior", 1.5)
+    specular = ext.get("KHR_materials_specular", {}).get("specularFactor", 1.0)
+    thickness = ext.get("KHR_materials_volume", {}).get("thicknessFactor", 0.0)
+    two_sided = material.get("doubleSided", False)
+
+    if metallic == 1.0:
+        if any(c != 1.0 for c in base):
+            raise Unsupported(f"conductor {material.get('name')!r} with base colour "
+                              f"{base}: Schlick F0 other than 1")
+        if roughness == 0.0:
+            bsdf = {"type": "conductor", "material": "none"}
+        else:
+            bsdf = {"type": "roughconductor", "material": "none",
+                    "distribution": "ggx", "alpha": roughness ** 2}
+    elif metallic == 0.0 and transmission == 1.0:
+        if thickness <= 0.0 and roughness > 0.0:
+            raise Unsupported(f"rough thin-walled dielectric {material.get('name')!r}")
+        if thickness <= 0.0:
+            bsdf = {"type": "thindielectric", "int_ior": ior, "ext_ior": 1.0}
+        elif roughness == 0.0:
+            bsdf = {"type": "dielectric", "int_ior": ior, "ext_ior": 1.0}
+        else:
+            bsdf = {"type": "roughdielectric", "int_ior": ior, "ext_ior": 1.0,
+                    "distribution": "ggx", "alpha": roughness ** 2}
+        bsdf["specular_transmittance"] = rgb(base)  # glTF: the base colour tints transmission
+        two_sided = False
+    elif metallic == 0.0 and transmission == 0.0 and specular == 0.0 and roughness == 1.0:
+        bsdf = {"type": "diffuse", "reflectance": rgb(base)}
+    else:
+        raise Unsupported(f"material {material.get('name')!r} (metallic {metallic}, "
+                          f"roughness {roughness}, specular {specular}, "
+                          f"transmission {transmission}) has the glTF dielectric layer")
+    if two_sided:
+        bsdf = {"type": "twosided", "material": bsdf}
+
+    emissive = np.array(material.get("emissiveFactor", [0, 0, 0]), dtype=float)
+    strength = ext.get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0)
+    emitter = None
+    if np.any(emissive > 0):
+        emitter = {"type": "area", "radiance": rgb(emissive * strength)}
+    return bsdf, emitter
+
+
+def write_ply(path, positions, normals, faces):
+    """A binary little-endian PLY with float positions (and normals) and int faces."""
+    with open(path, "wb") as f:
+        header = ["ply", "format binary_little_endian 1.0",
+                  f"element vertex {len(positions)}",
+                  "property float x", "property float y", "property float z"]
+        if normals is not None:
+            header += ["property float nx", "property float ny", "property float nz"]
+        header += [f"element face {len(faces)}",
+                   "property list uchar int vertex_indices", "end_header"]
+        f.write(("\n".join(header) + "\n").encode())
+        columns = [positions] if normals is None else [positions, normals]
+        f.write(np.hstack(columns).astype("<f4").tobytes())
+        for a, b, c in faces:
+            f.write(struct.pack("<Biii", 3, int(a), int(b), int(c)))
+
+
+def transform_points(m, p):
+    return (np.hstack([p, np.ones((len(p), 1))]) @ m.T)[:, :3]
+
+
+def transform_normals(m, n):
+    out = n @ np.linalg.inv(m[:3, :3])
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
+    base_dir = os.path.dirname(os.path.abspath(path))
+    with open(path) as f:
+        doc = json.load(f)
+    buffers = load_buffers(doc, base_dir)
+    scene = {"type": "scene",
+             "integrator": {"type": "path", "max_depth": max_depth}}
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    camera = None
+    lights = doc.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights", [])
+    for node, world in world_nodes(doc):
+        if "camera" in node and camera is None:
+            camera = (doc["cameras"][node["camera"]], world)
+        light = node.get("extensions", {}).get("KHR_lights_punctual")
+        if light is not None:
+            spec = lights[light["light"]]
+            value = np.array(spec.get("color", [1, 1, 1])) * spec.get("intensity", 1.0)
+            if spec["type"] == "point":
+                scene[f"light{len(scene)}"] = {
+                    "type": "point", "position": world[:3, 3].tolist(),
+                    "intensity": rgb(value)}
+            elif spec["type"] == "directional":
+                direction = -world[:3, 2] / np.linalg.norm(world[:3, 2])
+                scene[f"light{len(scene)}"] = {
+                    "type": "directional", "direction": direction.tolist(),
+                    "irradiance": rgb(value)}
+            else:
+                raise Unsupported(f"a {spec['type']} light")
+        if "mesh" not in node:
+            continue
+        for primitive in doc["meshes"][node["mesh"]]["primitives"]:
+            if primitive.get("mode", 4) != 4:
+                raise Unsupported("a primitive that is not a triangle list")
+            attributes = primitive["attributes"]
+            positions = transform_points(world, read_accessor(doc, buffers, attributes["POSITION"]))
+            normals = None
+            if "NORMAL" in attributes:
+                normals = transform_normals(world, read_accessor(doc, buffers, attributes["NORMAL"]))
+            if "indices" in primitive:
+                faces = read_accessor(doc, buffers, primitive["indices"]).reshape(-1, 3)
+            else:
+                faces = np.arange(len(positions)).reshape(-1, 3)
+            if np.linalg.det(world[:3, :3]) < 0:
+                faces = faces[:, ::-1]
+            material = doc["materials"][primitive["material"]] if "material" in primitive else {}
+            bsdf, emitter = material_plugins(material)
+            if emitter is not None:
+                normals = None  # emitters are flat: the winding order picks their front
+            ply = os.path.join(work_dir, f"mesh{len(scene)}.ply")
+            write_ply(ply, positions, normals, faces)
+            shape = {"type": "ply", "filename": ply, "bsdf": bsdf}
+            if normals is None:
+                shape["face_normals"] = True
+            if emitter is not None:
+                shape["emitter"] = emitter
+            scene[f"shape{len(scene)}"] = shape
+            lo, hi = np.minimum(lo, positions.min(0)), np.maximum(hi, positions.max(0))
+
+    environment = doc.get("extensions", {}).get("VCM_environment")
+    if environment is not None:
+        if "image" in environment:
+            raise Unsupported("an environment image")
+        colour = np.array(environment.get("color", [1, 1, 1])) * environment.get("strength", 1.0)
+        scene["environment"] = {"type": "constant", "radiance": rgb(colour)}
+
+    if camera is not None:
+        perspective = camera[0].get("perspective")
+        if perspective is None:
+            raise Unsupported("an orthographic camera")
+        yfov = perspective["yfov"]
+        world = camera[1]
+        origin, forward, up = world[:3, 3], -world[:3, 2], world[:3, 1]
+    else:
+        yfov = math.radians(45.0)
+        centre, extent = (lo + hi) / 2, (hi - lo) / 2
+        radius = float(np.linalg.norm(extent))
+        origin = centre + np.array([0, 0, radius / math.sin(yfov / 2)])
+        forward, up = np.array([0, 0, -1.0]), np.array([0, 1.0, 0])
+    # Mitsuba clips at 10^4 units by default: scale the clip range with the scene instead.
+    far = 10.0 * (float(np.linalg.norm(hi - lo)) + float(np.linalg.norm(origin - (lo + hi) / 2)))
+    scene["sensor"] = {
+        "type": "perspective", "fov_axis": "y", "fov": math.degrees(yfov),
+        "near_clip": 1e-6 * far, "far_clip": far,
+        "to_world": mi.ScalarTransform4f().look_at(
+            origin=origin.tolist(), target=(origin + forward).tolist(), up=up.tolist()),
+        "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
+        "film": {"type": "hdrfilm", "width": width, "height": height,
+                 "pixel_format": "rgb", "rfilter": {"type": "box"}},
+    }
+    return scene
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("scene")
+    parser.add_argument("output")
+    parser.add_argument("--width", type=int, default=256)
+    parser.add_argument("--height", type=int, default=256)
+    parser.add_argument("--spp", type=int, default=1024)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--max-depth", type=int, default=-1,
+                        help="segments, as `vcm render --max-depth`; -1: unlimited")
+    args = parser.parse_args()
+
+    mi.set_variant("scalar_rgb")
+    with tempfile.TemporaryDirectory() as work_dir:
+        try:
+            scene = scene_dict(args.scene, args.width, args.height, args.max_depth,
+                               args.spp, args.seed, work_dir)
+        except Unsupported as error:
+            sys.exit(f"{args.scene}: not converted to Mitsuba: {error}")
+        except (OSError, ValueError, KeyError, IndexError) as error:
+            sys.exit(f"{args.scene}: cannot read it: {error!r}")
+        image = mi.render(mi.load_dict(scene), spp=args.spp, seed=args.seed)
+        mi.util.write_bitmap(args.output, image)
+
+
+if __name__ == "__main__":
+    main()
