@@ -2,7 +2,7 @@
 //! `tools/mitsuba_reference.py` into its own plugins, and `vcm render` must give the same
 //! images up to noise. This checks the scene conventions (units, one-sided emitters, Fresnel,
 //! GGX roughness, thin sheets, tinted transmission, punctual lights, the environment, the
-//! camera, the box pixel filter) against a renderer that references come from, not against
+//! camera, the box pixel filter, sRGB textures with their UV orientation, filter and wrap) against a renderer that references come from, not against
 //! this renderer's own idea of them.
 //!
 //! Needs `python3` with the packages of `tools/requirements.txt`. Without them the test is
@@ -114,6 +114,112 @@ fn punctual_lights() -> Value {
                       "extensions": {"KHR_lights_punctual": {"light": 1}}}));
     let roots = doc["scenes"][0]["nodes"].as_array_mut().unwrap();
     roots.extend([json!(first), json!(first + 1)]);
+    doc
+}
+
+/// The float values of accessor `index`, from a buffer held as a base64 data URI.
+fn accessor_floats(doc: &Value, index: &Value) -> Vec<f32> {
+    use base64::Engine;
+    let accessor = &doc["accessors"][index.as_u64().unwrap() as usize];
+    let view = &doc["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+    let uri = doc["buffers"][view["buffer"].as_u64().unwrap() as usize]["uri"]
+        .as_str()
+        .unwrap();
+    let bytes = base64::engine::general_purpose::STANDARD
+        .decode(uri.split_once(',').unwrap().1)
+        .unwrap();
+    let start = (view["byteOffset"].as_u64().unwrap_or(0)
+        + accessor["byteOffset"].as_u64().unwrap_or(0)) as usize;
+    let width = match accessor["type"].as_str().unwrap() {
+        "VEC2" => 2,
+        "VEC3" => 3,
+        other => panic!("accessor type {other}"),
+    };
+    let count = accessor["count"].as_u64().unwrap() as usize * width;
+    bytes[start..start + 4 * count]
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+        .collect()
+}
+
+/// The Cornell box with a 5 × 4 texel poster (sRGB PNG `poster.png`, written to `dir`)
+/// covering its back wall, repeated across it (u from −0.3 to 2.2, v from 0.1 to 1.6), read
+/// through a sampler with the glTF filter and wrap codes given.
+fn poster(dir: &Path, filter: u32, wrap: u32) -> Value {
+    let texels: [[u8; 3]; 20] = [
+        [230, 20, 20],
+        [20, 200, 40],
+        [30, 30, 220],
+        [240, 240, 240],
+        [10, 10, 10],
+        [250, 200, 0],
+        [120, 60, 200],
+        [0, 180, 180],
+        [200, 100, 50],
+        [60, 60, 60],
+        [90, 200, 90],
+        [250, 250, 120],
+        [20, 20, 20],
+        [180, 30, 120],
+        [255, 255, 255],
+        [40, 40, 160],
+        [160, 160, 160],
+        [230, 120, 0],
+        [10, 90, 30],
+        [200, 0, 80],
+    ];
+    image::RgbImage::from_raw(5, 4, texels.concat())
+        .unwrap()
+        .save(dir.join("poster.png"))
+        .unwrap();
+
+    use base64::Engine;
+    let mut doc = load_scene("cornell-box");
+    let back = doc["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|m| m["name"] == "back")
+        .unwrap();
+    let positions = accessor_floats(
+        &doc,
+        &doc["meshes"][back]["primitives"][0]["attributes"]["POSITION"],
+    );
+    let uvs: Vec<u8> = positions
+        .chunks_exact(3)
+        .flat_map(|p| [(p[0] + 1.0) * 1.25 - 0.3, (1.0 - p[1]) * 0.75 + 0.1])
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let count = uvs.len() / 8;
+    let buffer = doc["buffers"].as_array().unwrap().len();
+    doc["buffers"].as_array_mut().unwrap().push(json!({
+        "byteLength": uvs.len(),
+        "uri": format!("data:application/octet-stream;base64,{}",
+                       base64::engine::general_purpose::STANDARD.encode(&uvs))
+    }));
+    let view = doc["bufferViews"].as_array().unwrap().len();
+    doc["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"buffer": buffer, "byteLength": uvs.len()}));
+    let accessor = doc["accessors"].as_array().unwrap().len();
+    doc["accessors"].as_array_mut().unwrap().push(json!({
+        "bufferView": view, "componentType": 5126, "count": count, "type": "VEC2"
+    }));
+    let material = doc["materials"].as_array().unwrap().len();
+    doc["materials"].as_array_mut().unwrap().push(json!({
+        "name": "poster",
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0,
+                                 "roughnessFactor": 1.0},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
+    }));
+    let primitive = &mut doc["meshes"][back]["primitives"][0];
+    primitive["attributes"]["TEXCOORD_0"] = json!(accessor);
+    primitive["material"] = json!(material);
+    doc["samplers"] =
+        json!([{"magFilter": filter, "minFilter": filter, "wrapS": wrap, "wrapT": wrap}]);
+    doc["images"] = json!([{"uri": "poster.png"}]);
+    doc["textures"] = json!([{"source": 0, "sampler": 0}]);
     doc
 }
 
@@ -290,6 +396,9 @@ fn vcm_render_agrees_with_mitsuba() {
         Case::pt("punctual-lights", punctual_lights()),
         Case::pt("punctual-lights-bpt", punctual_lights()).with("bpt", None),
         Case::pt("scaled-water", scaled_water()),
+        // glTF's LINEAR and REPEAT; NEAREST and MIRRORED_REPEAT.
+        Case::pt("poster", poster(dir.path(), 9729, 10497)),
+        Case::pt("poster-nearest-mirrored", poster(dir.path(), 9728, 33648)),
     ];
     let mut failures = Vec::new();
     for case in &cases {

@@ -5,7 +5,8 @@ An independent reference for the renderer: the same file, read by this script
 into Mitsuba 3's own plugins, should give the same image as `vcm render` up to
 noise. It covers the part of the conventions that Mitsuba models exactly:
 
-- Lambertian diffuse (`metallicFactor` 0, `roughnessFactor` 1, specular 0),
+- Lambertian diffuse (`metallicFactor` 0, `roughnessFactor` 1, specular 0), its
+  base colour from a factor or from a texture (sRGB, the sampler's wrap and filter),
 - mirrors and rough conductors whose base colour is white (F0 = 1, so Schlick
   and Mitsuba's conductor agree; other colours are refused),
 - smooth and rough dielectric solids (transmission 1 with `KHR_materials_volume`)
@@ -15,12 +16,12 @@ noise. It covers the part of the conventions that Mitsuba models exactly:
 - the `VCM_environment` extension with a constant colour,
 - the first perspective camera (or none: framed from +Z as the conventions say).
 
-Anything else (textures, the glTF dielectric-base layer, spot lights, whose
-falloff Mitsuba draws differently) stops the script with a message, so that a
-reference is never silently a different scene.
+Anything else (other textures, texture transforms, the glTF dielectric-base
+layer, spot lights, whose falloff Mitsuba draws differently) stops the script
+with a message, so that a reference is never silently a different scene.
 
 Usage:
-    pip install mitsuba numpy
+    python3 -m pip install -r tools/requirements.txt
     python3 tools/mitsuba_reference.py scenes/cornell-box.gltf ref.exr \
         --width 256 --height 256 --spp 1024 [--seed 0] [--max-depth -1]
 """
@@ -33,6 +34,7 @@ import os
 import struct
 import sys
 import tempfile
+import urllib.parse
 
 import mitsuba as mi
 import numpy as np
@@ -108,7 +110,39 @@ def rgb(value):
     return {"type": "rgb", "value": [float(v) for v in value]}
 
 
-def material_plugins(material):
+WRAP = {10497: "repeat", 33648: "mirror", 33071: "clamp"}
+NEAREST = (9728, 9984, 9986)  # NEAREST and the NEAREST_MIPMAP_* minification filters
+
+
+def base_color_texture(doc, base_dir, work_dir, info, name):
+    """A Mitsuba bitmap for a glTF base colour texture (sRGB-decoded, as glTF says)."""
+    if info.get("texCoord", 0) != 0 or "extensions" in info:
+        raise Unsupported(f"material {name!r}: a texture on another UV set or transformed")
+    texture = doc["textures"][info["index"]]
+    image = doc["images"][texture["source"]]
+    sampler = doc.get("samplers", [{}])[texture["sampler"]] if "sampler" in texture else {}
+    wrap = {WRAP[sampler.get("wrapS", 10497)], WRAP[sampler.get("wrapT", 10497)]}
+    if len(wrap) != 1:
+        raise Unsupported(f"material {name!r}: different wrap modes in u and v")
+    filters = {sampler.get("magFilter") in NEAREST, sampler.get("minFilter") in NEAREST}
+    if len(filters) != 1:
+        raise Unsupported(f"material {name!r}: a sampler mixing nearest and linear filters")
+    uri = image.get("uri")
+    if uri is None:
+        raise Unsupported(f"material {name!r}: an image in a buffer view")
+    if uri.startswith("data:"):
+        header, payload = uri.split(",", 1)
+        path = os.path.join(work_dir, f"image{info['index']}.{header.split('/')[1].split(';')[0]}")
+        with open(path, "wb") as f:
+            f.write(base64.b64decode(payload))
+    else:
+        path = os.path.join(base_dir, urllib.parse.unquote(uri))
+    return {"type": "bitmap", "filename": path, "raw": False,
+            "filter_type": "nearest" if filters.pop() else "bilinear",
+            "wrap_mode": wrap.pop()}
+
+
+def material_plugins(material, doc, base_dir, work_dir):
     """The Mitsuba BSDF and, for an emitter, the area light of a glTF material."""
     ext = material.get("extensions", {})
     for name in ext:
@@ -117,9 +151,8 @@ def material_plugins(material):
                         "KHR_materials_emissive_strength"):
             raise Unsupported(f"material {material.get('name')!r} uses {name}")
     pbr = material.get("pbrMetallicRoughness", {})
-    for key in ("baseColorTexture", "metallicRoughnessTexture"):
-        if key in pbr:
-            raise Unsupported(f"material {material.get('name')!r} has a {key}")
+    if "metallicRoughnessTexture" in pbr:
+        raise Unsupported(f"material {material.get('name')!r} has a metallicRoughnessTexture")
     for key in ("normalTexture", "emissiveTexture"):
         if key in material:
             raise Unsupported(f"material {material.get('name')!r} has a {key}")
@@ -132,6 +165,8 @@ def material_plugins(material):
     thickness = ext.get("KHR_materials_volume", {}).get("thicknessFactor", 0.0)
     two_sided = material.get("doubleSided", False)
 
+    if "baseColorTexture" in pbr and not (metallic == 0.0 and transmission == 0.0):
+        raise Unsupported(f"material {material.get('name')!r}: a texture on a non-diffuse material")
     if metallic == 1.0:
         if any(c != 1.0 for c in base):
             raise Unsupported(f"conductor {material.get('name')!r} with base colour "
@@ -155,6 +190,12 @@ def material_plugins(material):
         two_sided = False
     elif metallic == 0.0 and transmission == 0.0 and specular == 0.0 and roughness == 1.0:
         bsdf = {"type": "diffuse", "reflectance": rgb(base)}
+        if "baseColorTexture" in pbr:
+            if any(c != 1.0 for c in base):
+                raise Unsupported(f"material {material.get('name')!r}: a base colour texture "
+                                  "times a factor other than 1")
+            bsdf["reflectance"] = base_color_texture(doc, base_dir, work_dir,
+                                                     pbr["baseColorTexture"], material.get("name"))
     else:
         raise Unsupported(f"material {material.get('name')!r} (metallic {metallic}, "
                           f"roughness {roughness}, specular {specular}, "
@@ -170,18 +211,20 @@ def material_plugins(material):
     return bsdf, emitter
 
 
-def write_ply(path, positions, normals, faces):
-    """A binary little-endian PLY with float positions (and normals) and int faces."""
+def write_ply(path, positions, normals, uvs, faces):
+    """A binary little-endian PLY with float positions (normals, UVs) and int faces."""
     with open(path, "wb") as f:
         header = ["ply", "format binary_little_endian 1.0",
                   f"element vertex {len(positions)}",
                   "property float x", "property float y", "property float z"]
         if normals is not None:
             header += ["property float nx", "property float ny", "property float nz"]
+        if uvs is not None:
+            header += ["property float u", "property float v"]
         header += [f"element face {len(faces)}",
                    "property list uchar int vertex_indices", "end_header"]
         f.write(("\n".join(header) + "\n").encode())
-        columns = [positions] if normals is None else [positions, normals]
+        columns = [a for a in (positions, normals, uvs) if a is not None]
         f.write(np.hstack(columns).astype("<f4").tobytes())
         for a, b, c in faces:
             f.write(struct.pack("<Biii", 3, int(a), int(b), int(c)))
@@ -234,6 +277,11 @@ def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
             normals = None
             if "NORMAL" in attributes:
                 normals = transform_normals(world, read_accessor(doc, buffers, attributes["NORMAL"]))
+            uvs = None
+            if "TEXCOORD_0" in attributes:
+                uvs = read_accessor(doc, buffers, attributes["TEXCOORD_0"])
+                if uvs.dtype != np.float32:
+                    raise Unsupported("normalized integer texture coordinates")
             if "indices" in primitive:
                 faces = read_accessor(doc, buffers, primitive["indices"]).reshape(-1, 3)
             else:
@@ -241,11 +289,11 @@ def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
             if np.linalg.det(world[:3, :3]) < 0:
                 faces = faces[:, ::-1]
             material = doc["materials"][primitive["material"]] if "material" in primitive else {}
-            bsdf, emitter = material_plugins(material)
+            bsdf, emitter = material_plugins(material, doc, base_dir, work_dir)
             if emitter is not None:
                 normals = None  # emitters are flat: the winding order picks their front
             ply = os.path.join(work_dir, f"mesh{len(scene)}.ply")
-            write_ply(ply, positions, normals, faces)
+            write_ply(ply, positions, normals, uvs, faces)
             shape = {"type": "ply", "filename": ply, "bsdf": bsdf}
             if normals is None:
                 shape["face_normals"] = True
