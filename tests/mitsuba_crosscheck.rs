@@ -15,8 +15,11 @@ use glam::{Quat, Vec3};
 use serde_json::{Value, json};
 use vcm::image_io::RgbImage;
 
-/// Image size (square), samples per pixel and independent renders per renderer.
-const SIZE: usize = 64;
+/// Image size (wider than high, so that the file's square aspect ratio must give way to the
+/// output's and `yfov` stays the vertical field of view), samples per pixel and independent
+/// renders per renderer.
+const WIDTH: usize = 64;
+const HEIGHT: usize = 48;
 const SPP: u32 = 128;
 const RENDERS: u64 = 6;
 /// Pixels per side of the blocks whose means are compared.
@@ -268,12 +271,12 @@ impl Case {
 /// `RENDERS` images of the case's scene (written to `scene`) by `vcm render` and as many by
 /// Mitsuba.
 fn render_both(dir: &Path, case: &Case, scene: &Path) -> [Vec<RgbImage>; 2] {
-    let size = SIZE.to_string();
+    let (width, height) = (WIDTH.to_string(), HEIGHT.to_string());
     let spp = SPP.to_string();
     // Both take `--max-depth` in segments and default to no limit.
     let depth = case.max_depth.map(|d| d.to_string());
     let depth_args = depth.iter().flat_map(|d| ["--max-depth", d.as_str()]);
-    let common: Vec<&str> = ["--width", &size, "--height", &size, "--spp", &spp]
+    let common: Vec<&str> = ["--width", &width, "--height", &height, "--spp", &spp]
         .into_iter()
         .chain(depth_args)
         .collect();
@@ -325,14 +328,15 @@ fn render_both(dir: &Path, case: &Case, scene: &Path) -> [Vec<RgbImage>; 2] {
 /// Per render, the mean of each colour channel over each `BLOCK`² block, then over the image:
 /// `[block][channel]`, the whole image last.
 fn block_means(image: &RgbImage) -> Vec<[f64; 3]> {
-    assert_eq!((image.width, image.height), (SIZE, SIZE));
-    let per_side = SIZE / BLOCK;
-    let mut blocks = vec![[0.0; 3]; per_side * per_side + 1];
+    assert_eq!((image.width, image.height), (WIDTH, HEIGHT));
+    let per_row = WIDTH / BLOCK;
+    let count = per_row * (HEIGHT / BLOCK);
+    let mut blocks = vec![[0.0; 3]; count + 1];
     for (i, p) in image.pixels.iter().enumerate() {
-        let block = (i / SIZE / BLOCK) * per_side + (i % SIZE) / BLOCK;
+        let block = (i / WIDTH / BLOCK) * per_row + (i % WIDTH) / BLOCK;
         for (c, v) in [p.x, p.y, p.z].into_iter().enumerate() {
             blocks[block][c] += f64::from(v) / (BLOCK * BLOCK) as f64;
-            blocks[per_side * per_side][c] += f64::from(v) / (SIZE * SIZE) as f64;
+            blocks[count][c] += f64::from(v) / (WIDTH * HEIGHT) as f64;
         }
     }
     blocks
@@ -410,14 +414,15 @@ fn vcm_render_agrees_with_mitsuba() {
         let (image, blocks) = t.split_last().unwrap();
         // Welch's t between two sets of 6 renders has about 10 degrees of freedom when the two
         // renderers are equally noisy, 5 when one dominates. The image means: |t| > 8 has a
-        // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 36
+        // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 42
         // channels tested. The blocks: a block is off when any channel has |t| > 4 (at most
-        // 3 × 1% at 5 degrees of freedom, 3 × 0.25% at 10); more than 8 of 64 such blocks has
-        // a binomial probability of 2·10⁻⁴ at 3% per block. Caustics through glass are heavy
-        // tailed, so 6 renders can underestimate their variance: the margins are wide (the
-        // largest image |t| seen is 4.7, the most blocks off 4). A region that differs by a
-        // few percent moves many blocks at once: GGX with α = r instead of r² on the rough
-        // scene puts 27% of the blocks' channels above 4 and the image at t = 15.
+        // 3 × 1% at 5 degrees of freedom, 3 × 0.25% at 10); more than 8 of 48 such blocks has
+        // a binomial probability below 10⁻⁴ at 3% per block. Caustics through glass are heavy
+        // tailed, so 6 renders can underestimate their variance: the margins are wide (runs
+        // with other seeds and sizes reached an image |t| of 4.7 and 4 blocks off). A region
+        // that differs by a few percent moves many blocks at once: GGX with α = r instead of
+        // r² on the rough scene puts 27% of the blocks' channels above 4 and the image at
+        // t = 15.
         let image_ok = image.iter().all(|t| t.abs() < 8.0);
         let off = blocks
             .iter()
@@ -442,7 +447,7 @@ fn welch_t_tells_a_brighter_image_from_noise() {
     // (twice the spread of the means) gives a large one.
     let image = |seed: u64, gain: f32| {
         let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-        let pixels = (0..SIZE * SIZE)
+        let pixels = (0..WIDTH * HEIGHT)
             .map(|_| {
                 state ^= state << 13;
                 state ^= state >> 7;
@@ -452,8 +457,8 @@ fn welch_t_tells_a_brighter_image_from_noise() {
             })
             .collect();
         RgbImage {
-            width: SIZE,
-            height: SIZE,
+            width: WIDTH,
+            height: HEIGHT,
             pixels,
         }
     };
