@@ -2,8 +2,9 @@
 //! `tools/mitsuba_reference.py` into its own plugins, and `vcm render` must give the same
 //! images up to noise. This checks the scene conventions (units, one-sided emitters, Fresnel,
 //! GGX roughness, thin sheets, tinted transmission, punctual lights, the environment, the
-//! camera, the box pixel filter, sRGB textures with their UV orientation, filter and wrap) against a renderer that references come from, not against
-//! this renderer's own idea of them.
+//! camera, the box pixel filter, sRGB textures with their UV orientation, filter and wrap,
+//! mirrored nodes, one- and double-sided surfaces) against a renderer that references come
+//! from, not against this renderer's own idea of them.
 //!
 //! Needs `python3` with the packages of `tools/requirements.txt`. Without them the test is
 //! skipped with a message, unless `VCM_REQUIRE_MITSUBA=1` (set by `.ci/run`): then it fails.
@@ -176,7 +177,6 @@ fn poster(dir: &Path, filter: u32, wrap: u32) -> Value {
         .save(dir.join("poster.png"))
         .unwrap();
 
-    use base64::Engine;
     let mut doc = load_scene("cornell-box");
     let back = doc["meshes"]
         .as_array()
@@ -193,29 +193,23 @@ fn poster(dir: &Path, filter: u32, wrap: u32) -> Value {
         .flat_map(|p| [(p[0] + 1.0) * 1.25 - 0.3, (1.0 - p[1]) * 0.75 + 0.1])
         .flat_map(f32::to_le_bytes)
         .collect();
-    let count = uvs.len() / 8;
-    let buffer = doc["buffers"].as_array().unwrap().len();
-    doc["buffers"].as_array_mut().unwrap().push(json!({
-        "byteLength": uvs.len(),
-        "uri": format!("data:application/octet-stream;base64,{}",
-                       base64::engine::general_purpose::STANDARD.encode(&uvs))
-    }));
-    let view = doc["bufferViews"].as_array().unwrap().len();
-    doc["bufferViews"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({"buffer": buffer, "byteLength": uvs.len()}));
-    let accessor = doc["accessors"].as_array().unwrap().len();
-    doc["accessors"].as_array_mut().unwrap().push(json!({
-        "bufferView": view, "componentType": 5126, "count": count, "type": "VEC2"
-    }));
-    let material = doc["materials"].as_array().unwrap().len();
-    doc["materials"].as_array_mut().unwrap().push(json!({
-        "name": "poster",
-        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0,
-                                 "roughnessFactor": 1.0},
-        "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
-    }));
+    let view = push_buffer_view(&mut doc, &uvs);
+    let accessor = push_accessor(
+        &mut doc,
+        json!({
+            "bufferView": view, "componentType": 5126, "count": uvs.len() / 8, "type": "VEC2"
+        }),
+    );
+    let material = push(
+        &mut doc,
+        "materials",
+        json!({
+            "name": "poster",
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0,
+                                     "roughnessFactor": 1.0},
+            "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
+        }),
+    );
     let primitive = &mut doc["meshes"][back]["primitives"][0];
     primitive["attributes"]["TEXCOORD_0"] = json!(accessor);
     primitive["material"] = json!(material);
@@ -223,6 +217,120 @@ fn poster(dir: &Path, filter: u32, wrap: u32) -> Value {
         json!([{"magFilter": filter, "minFilter": filter, "wrapS": wrap, "wrapT": wrap}]);
     doc["images"] = json!([{"uri": "poster.png"}]);
     doc["textures"] = json!([{"source": 0, "sampler": 0}]);
+    doc
+}
+
+/// Appends `bytes` as a new base64 buffer with one view; returns the view's index.
+fn push_buffer_view(doc: &mut Value, bytes: &[u8]) -> usize {
+    use base64::Engine;
+    let buffer = doc["buffers"].as_array().unwrap().len();
+    doc["buffers"].as_array_mut().unwrap().push(json!({
+        "byteLength": bytes.len(),
+        "uri": format!("data:application/octet-stream;base64,{}",
+                       base64::engine::general_purpose::STANDARD.encode(bytes))
+    }));
+    let view = doc["bufferViews"].as_array().unwrap().len();
+    doc["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"buffer": buffer, "byteLength": bytes.len()}));
+    view
+}
+
+/// Appends an accessor over a whole buffer view; returns its index.
+fn push_accessor(doc: &mut Value, accessor: Value) -> usize {
+    let index = doc["accessors"].as_array().unwrap().len();
+    doc["accessors"].as_array_mut().unwrap().push(accessor);
+    index
+}
+
+/// Appends `value` to the array `doc[key]`; returns its index.
+fn push(doc: &mut Value, key: &str, value: Value) -> usize {
+    let array = doc[key].as_array_mut().unwrap();
+    array.push(value);
+    array.len() - 1
+}
+
+/// The Cornell box with a white panel between the camera and the blocks, tilted so that the
+/// face the camera sees is lit from the ceiling; the panel's front (counter-clockwise) face
+/// looks away from the camera. One-sided, the camera sees its black back; double-sided, the
+/// lit face.
+fn panel(double_sided: bool) -> Value {
+    let mut doc = load_scene("cornell-box");
+    let centre = Vec3::new(0.1, 0.05, 0.35);
+    let normal = Vec3::new(0.0, -0.5, -0.87).normalize();
+    let (u, v) = (Vec3::X * 0.35, normal.cross(Vec3::X) * 0.3);
+    // Counter-clockwise seen from the side `normal` points to: (u × v) ∥ normal.
+    let corners = [
+        centre - u - v,
+        centre + u - v,
+        centre + u + v,
+        centre - u + v,
+    ];
+    let (min, max) = corners
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), c| {
+            (lo.min(*c), hi.max(*c))
+        });
+    let positions: Vec<u8> = corners
+        .iter()
+        .flat_map(|c| c.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let indices: Vec<u8> = [0u32, 1, 2, 0, 2, 3]
+        .into_iter()
+        .flat_map(u32::to_le_bytes)
+        .collect();
+    let view = push_buffer_view(&mut doc, &positions);
+    let position = push_accessor(
+        &mut doc,
+        json!({
+            "bufferView": view, "componentType": 5126, "count": 4, "type": "VEC3",
+            "min": min.to_array(), "max": max.to_array()
+        }),
+    );
+    let view = push_buffer_view(&mut doc, &indices);
+    let index = push_accessor(
+        &mut doc,
+        json!({
+            "bufferView": view, "componentType": 5125, "count": 6, "type": "SCALAR"
+        }),
+    );
+    let material = push(
+        &mut doc,
+        "materials",
+        json!({
+            "name": "panel", "doubleSided": double_sided,
+            "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0],
+                                     "metallicFactor": 0.0, "roughnessFactor": 1.0},
+            "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
+        }),
+    );
+    let mesh = push(
+        &mut doc,
+        "meshes",
+        json!({"name": "panel", "primitives": [
+            {"attributes": {"POSITION": position}, "indices": index, "material": material}
+        ]}),
+    );
+    let node = push(&mut doc, "nodes", json!({"name": "panel", "mesh": mesh}));
+    doc["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(node));
+    doc
+}
+
+/// The Cornell box with every mesh node mirrored (scale −1 along x, the camera untouched):
+/// glTF turns the winding order of a mirrored node around, so the walls and the light still
+/// face the room.
+fn mirrored() -> Value {
+    let mut doc = load_scene("cornell-box");
+    for node in doc["nodes"].as_array_mut().unwrap() {
+        if node.get("mesh").is_some() {
+            node["scale"] = json!([-1.0, 1.0, 1.0]);
+        }
+    }
     doc
 }
 
@@ -400,6 +508,9 @@ fn vcm_render_agrees_with_mitsuba() {
         Case::pt("punctual-lights", punctual_lights()),
         Case::pt("punctual-lights-bpt", punctual_lights()).with("bpt", None),
         Case::pt("scaled-water", scaled_water()),
+        Case::pt("mirrored", mirrored()),
+        Case::pt("one-sided-panel", panel(false)),
+        Case::pt("double-sided-panel", panel(true)),
         // glTF's LINEAR and REPEAT; NEAREST and MIRRORED_REPEAT.
         Case::pt("poster", poster(dir.path(), 9729, 10497)),
         Case::pt("poster-nearest-mirrored", poster(dir.path(), 9728, 33648)),
@@ -414,7 +525,7 @@ fn vcm_render_agrees_with_mitsuba() {
         let (image, blocks) = t.split_last().unwrap();
         // Welch's t between two sets of 6 renders has about 10 degrees of freedom when the two
         // renderers are equally noisy, 5 when one dominates. The image means: |t| > 8 has a
-        // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 42
+        // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 51
         // channels tested. The blocks: a block is off when any channel has |t| > 4 (at most
         // 3 × 1% at 5 degrees of freedom, 3 × 0.25% at 10); more than 8 of 48 such blocks has
         // a binomial probability below 10⁻⁴ at 3% per block. Caustics through glass are heavy
