@@ -220,6 +220,32 @@ fn poster(dir: &Path, filter: u32, wrap: u32) -> Value {
     doc
 }
 
+/// The Cornell box lit only by a hard-edged spot light (cones 0.005 rad apart) near the
+/// ceiling, aimed down at the back right.
+fn spot() -> Value {
+    let mut doc = load_scene("cornell-box");
+    material(&mut doc, "light")["emissiveFactor"] = json!([0.0, 0.0, 0.0]);
+    use_extension(&mut doc, "KHR_lights_punctual");
+    doc["extensions"] = json!({"KHR_lights_punctual": {"lights": [
+        {"type": "spot", "intensity": 6.0, "color": [1.0, 0.8, 0.6],
+         "spot": {"innerConeAngle": 0.35, "outerConeAngle": 0.355}}
+    ]}});
+    let aim = Quat::from_rotation_arc(-Vec3::Z, Vec3::new(0.4, -1.0, -0.3).normalize());
+    let node = push(
+        &mut doc,
+        "nodes",
+        json!({
+            "name": "spot", "translation": [-0.4, 0.9, 0.1], "rotation": aim.to_array(),
+            "extensions": {"KHR_lights_punctual": {"light": 0}}
+        }),
+    );
+    doc["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(node));
+    doc
+}
+
 /// Appends `bytes` as a new base64 buffer with one view; returns the view's index.
 fn push_buffer_view(doc: &mut Value, bytes: &[u8]) -> usize {
     use base64::Engine;
@@ -507,6 +533,7 @@ fn vcm_render_agrees_with_mitsuba() {
         Case::pt("thin-sheet", thin_sheet()),
         Case::pt("punctual-lights", punctual_lights()),
         Case::pt("punctual-lights-bpt", punctual_lights()).with("bpt", None),
+        Case::pt("spot", spot()),
         Case::pt("scaled-water", scaled_water()),
         Case::pt("mirrored", mirrored()),
         Case::pt("one-sided-panel", panel(false)),
@@ -525,7 +552,7 @@ fn vcm_render_agrees_with_mitsuba() {
         let (image, blocks) = t.split_last().unwrap();
         // Welch's t between two sets of 6 renders has about 10 degrees of freedom when the two
         // renderers are equally noisy, 5 when one dominates. The image means: |t| > 8 has a
-        // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 51
+        // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 54
         // channels tested. The blocks: a block is off when any channel has |t| > 4 (at most
         // 3 × 1% at 5 degrees of freedom, 3 × 0.25% at 10); more than 8 of 48 such blocks has
         // a binomial probability below 10⁻⁴ at 3% per block. Caustics through glass are heavy

@@ -12,13 +12,13 @@ noise. It covers the part of the conventions that Mitsuba models exactly:
 - smooth and rough dielectric solids (transmission 1 with `KHR_materials_volume`)
   and smooth thin-walled sheets (without it), the base colour tinting transmission,
 - one-sided area lights (`emissiveFactor` x `emissiveStrength`),
-- `KHR_lights_punctual` point and directional lights,
+- `KHR_lights_punctual` point and directional lights, and spot lights whose cones
+  are less than 0.01 rad apart (Mitsuba draws the edge between them differently),
 - the `VCM_environment` extension with a constant colour,
 - the first perspective camera (or none: framed from +Z as the conventions say).
 
 Anything else (other textures, texture transforms, the glTF dielectric-base
-layer, spot lights, whose falloff Mitsuba draws differently) stops the script
-with a message, so that a reference is never silently a different scene.
+layer, spot lights with a soft edge) stops the script with a message, so that a reference is never silently a different scene.
 
 Usage:
     python3 -m pip install -r tools/requirements.txt
@@ -265,6 +265,22 @@ def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
                 scene[f"light{len(scene)}"] = {
                     "type": "directional", "direction": direction.tolist(),
                     "irradiance": rgb(value)}
+            elif spec["type"] == "spot":
+                # Mitsuba's falloff between the cones is linear in angle, glTF's is quadratic
+                # in cosine: only cones closer than 0.01 rad leave too little between them.
+                cone = spec.get("spot", {})
+                inner, outer = cone.get("innerConeAngle", 0.0), cone.get("outerConeAngle", math.pi / 4)
+                if outer - inner > 0.01:
+                    raise Unsupported("a spot light with a soft edge (cones more than 0.01 rad apart)")
+                position = world[:3, 3]
+                direction = -world[:3, 2] / np.linalg.norm(world[:3, 2])
+                up = np.array([0.0, 1.0, 0.0]) if abs(direction[1]) < 0.9 else np.array([1.0, 0, 0])
+                scene[f"light{len(scene)}"] = {
+                    "type": "spot", "intensity": rgb(value),
+                    "cutoff_angle": math.degrees(outer), "beam_width": math.degrees(inner),
+                    "to_world": mi.ScalarTransform4f().look_at(
+                        origin=position.tolist(), target=(position + direction).tolist(),
+                        up=up.tolist())}
             else:
                 raise Unsupported(f"a {spec['type']} light")
         if "mesh" not in node:
