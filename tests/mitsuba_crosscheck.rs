@@ -2,9 +2,9 @@
 //! `tools/mitsuba_reference.py` into its own plugins, and `vcm render` must give the same
 //! images up to noise. This checks the scene conventions (units, one-sided emitters, Fresnel,
 //! GGX roughness, thin sheets, tinted transmission, punctual lights, the environment, the
-//! camera, the box pixel filter, sRGB textures with their UV orientation, filter and wrap,
-//! mirrored nodes, one- and double-sided surfaces) against a renderer that references come
-//! from, not against this renderer's own idea of them.
+//! camera, the box pixel filter, sRGB base colour and emissive textures with their UV
+//! orientation, filter and wrap, mirrored nodes, one- and double-sided surfaces) against a
+//! renderer that references come from, not against this renderer's own idea of them.
 //!
 //! Needs `python3` with the packages of `tools/requirements.txt`. Without them the test is
 //! skipped with a message, unless `VCM_REQUIRE_MITSUBA=1` (set by `.ci/run`): then it fails.
@@ -148,8 +148,10 @@ fn accessor_floats(doc: &Value, index: &Value) -> Vec<f32> {
 
 /// The Cornell box with a 5 × 4 texel poster (sRGB PNG `poster.png`, written to `dir`)
 /// covering its back wall, repeated across it (u from −0.3 to 2.2, v from 0.1 to 1.6), read
-/// through a sampler with the glTF filter and wrap codes given.
-fn poster(dir: &Path, filter: u32, wrap: u32) -> Value {
+/// through a sampler with the glTF filter and wrap codes given: the wall's base colour, or
+/// with `glowing` its emission (on the white wall), then once across the wall (u and v from
+/// 0 to 1).
+fn poster(dir: &Path, filter: u32, wrap: u32, glowing: bool) -> Value {
     let texels: [[u8; 3]; 20] = [
         [230, 20, 20],
         [20, 200, 40],
@@ -190,7 +192,16 @@ fn poster(dir: &Path, filter: u32, wrap: u32) -> Value {
     );
     let uvs: Vec<u8> = positions
         .chunks_exact(3)
-        .flat_map(|p| [(p[0] + 1.0) * 1.25 - 0.3, (1.0 - p[1]) * 0.75 + 0.1])
+        .flat_map(|p| {
+            let (u, v) = ((p[0] + 1.0) / 2.0, (1.0 - p[1]) / 2.0);
+            // Mitsuba samples a textured emitter through its UV map, which must cover the
+            // unit square once.
+            if glowing {
+                [u, v]
+            } else {
+                [u * 2.5 - 0.3, v * 1.5 + 0.1]
+            }
+        })
         .flat_map(f32::to_le_bytes)
         .collect();
     let view = push_buffer_view(&mut doc, &uvs);
@@ -203,12 +214,22 @@ fn poster(dir: &Path, filter: u32, wrap: u32) -> Value {
     let material = push(
         &mut doc,
         "materials",
-        json!({
-            "name": "poster",
-            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0,
-                                     "roughnessFactor": 1.0},
-            "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
-        }),
+        if glowing {
+            json!({
+                "name": "glowing poster",
+                "pbrMetallicRoughness": {"baseColorFactor": [0.725, 0.71, 0.68, 1.0],
+                                         "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                "emissiveTexture": {"index": 0}, "emissiveFactor": [1.0, 1.0, 1.0],
+                "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
+            })
+        } else {
+            json!({
+                "name": "poster",
+                "pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                         "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
+            })
+        },
     );
     let primitive = &mut doc["meshes"][back]["primitives"][0];
     primitive["attributes"]["TEXCOORD_0"] = json!(accessor);
@@ -539,8 +560,14 @@ fn vcm_render_agrees_with_mitsuba() {
         Case::pt("one-sided-panel", panel(false)),
         Case::pt("double-sided-panel", panel(true)),
         // glTF's LINEAR and REPEAT; NEAREST and MIRRORED_REPEAT.
-        Case::pt("poster", poster(dir.path(), 9729, 10497)),
-        Case::pt("poster-nearest-mirrored", poster(dir.path(), 9728, 33648)),
+        Case::pt("poster", poster(dir.path(), 9729, 10497, false)),
+        Case::pt(
+            "poster-nearest-mirrored",
+            poster(dir.path(), 9728, 33648, false),
+        ),
+        // An emissive texture, lighting the room beside the ceiling light.
+        Case::pt("glowing-poster", poster(dir.path(), 9729, 10497, true)),
+        Case::pt("glowing-poster-bpt", poster(dir.path(), 9729, 10497, true)).with("bpt", None),
     ];
     let mut failures = Vec::new();
     for case in &cases {
@@ -552,7 +579,7 @@ fn vcm_render_agrees_with_mitsuba() {
         let (image, blocks) = t.split_last().unwrap();
         // Welch's t between two sets of 6 renders has about 10 degrees of freedom when the two
         // renderers are equally noisy, 5 when one dominates. The image means: |t| > 8 has a
-        // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 54
+        // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 60
         // channels tested. The blocks: a block is off when any channel has |t| > 4 (at most
         // 3 × 1% at 5 degrees of freedom, 3 × 0.25% at 10); more than 8 of 48 such blocks has
         // a binomial probability below 10⁻⁴ at 3% per block. Caustics through glass are heavy

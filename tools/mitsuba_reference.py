@@ -11,7 +11,9 @@ noise. It covers the part of the conventions that Mitsuba models exactly:
   and Mitsuba's conductor agree; other colours are refused),
 - smooth and rough dielectric solids (transmission 1 with `KHR_materials_volume`)
   and smooth thin-walled sheets (without it), the base colour tinting transmission,
-- one-sided area lights (`emissiveFactor` x `emissiveStrength`),
+- one-sided area lights (`emissiveFactor` x `emissiveStrength`, or an sRGB
+  emissive texture where their product is 1 and the UVs map the unit square
+  once, as Mitsuba samples a textured emitter through its UV map),
 - `KHR_lights_punctual` point and directional lights, and spot lights whose cones
   are less than 0.01 rad apart (Mitsuba draws the edge between them differently),
 - the `VCM_environment` extension with a constant colour,
@@ -114,8 +116,9 @@ WRAP = {10497: "repeat", 33648: "mirror", 33071: "clamp"}
 NEAREST = (9728, 9984, 9986)  # NEAREST and the NEAREST_MIPMAP_* minification filters
 
 
-def base_color_texture(doc, base_dir, work_dir, info, name):
-    """A Mitsuba bitmap for a glTF base colour texture (sRGB-decoded, as glTF says)."""
+def colour_texture(doc, base_dir, work_dir, info, name):
+    """A Mitsuba bitmap for a glTF base colour or emissive texture (sRGB-decoded, as glTF
+    says for both)."""
     if info.get("texCoord", 0) != 0 or "extensions" in info:
         raise Unsupported(f"material {name!r}: a texture on another UV set or transformed")
     texture = doc["textures"][info["index"]]
@@ -153,9 +156,8 @@ def material_plugins(material, doc, base_dir, work_dir):
     pbr = material.get("pbrMetallicRoughness", {})
     if "metallicRoughnessTexture" in pbr:
         raise Unsupported(f"material {material.get('name')!r} has a metallicRoughnessTexture")
-    for key in ("normalTexture", "emissiveTexture"):
-        if key in material:
-            raise Unsupported(f"material {material.get('name')!r} has a {key}")
+    if "normalTexture" in material:
+        raise Unsupported(f"material {material.get('name')!r} has a normalTexture")
     base = pbr.get("baseColorFactor", [1, 1, 1, 1])[:3]
     metallic = pbr.get("metallicFactor", 1.0)
     roughness = pbr.get("roughnessFactor", 1.0)
@@ -194,8 +196,8 @@ def material_plugins(material, doc, base_dir, work_dir):
             if any(c != 1.0 for c in base):
                 raise Unsupported(f"material {material.get('name')!r}: a base colour texture "
                                   "times a factor other than 1")
-            bsdf["reflectance"] = base_color_texture(doc, base_dir, work_dir,
-                                                     pbr["baseColorTexture"], material.get("name"))
+            bsdf["reflectance"] = colour_texture(doc, base_dir, work_dir,
+                                                 pbr["baseColorTexture"], material.get("name"))
     else:
         raise Unsupported(f"material {material.get('name')!r} (metallic {metallic}, "
                           f"roughness {roughness}, specular {specular}, "
@@ -206,7 +208,13 @@ def material_plugins(material, doc, base_dir, work_dir):
     emissive = np.array(material.get("emissiveFactor", [0, 0, 0]), dtype=float)
     strength = ext.get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0)
     emitter = None
-    if np.any(emissive > 0):
+    if "emissiveTexture" in material:
+        if np.any(emissive * strength != 1.0):
+            raise Unsupported(f"material {material.get('name')!r}: an emissive texture times "
+                              "a factor other than 1")
+        emitter = {"type": "area", "radiance": colour_texture(
+            doc, base_dir, work_dir, material["emissiveTexture"], material.get("name"))}
+    elif np.any(emissive > 0):
         emitter = {"type": "area", "radiance": rgb(emissive * strength)}
     return bsdf, emitter
 
@@ -309,6 +317,11 @@ def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
             if emitter is not None:
                 normals = None  # emitters are flat: the winding order picks their front
             ply = os.path.join(work_dir, f"mesh{len(scene)}.ply")
+            if emitter is not None and emitter["radiance"]["type"] == "bitmap":
+                # Mitsuba samples a textured emitter through its UV map, so that map has to
+                # cover the unit square once: at least it must stay within it.
+                if uvs is None or uvs.min() < 0.0 or uvs.max() > 1.0:
+                    raise Unsupported("an emissive texture with UVs outside [0, 1]")
             write_ply(ply, positions, normals, uvs, faces)
             shape = {"type": "ply", "filename": ply, "bsdf": bsdf}
             if normals is None:
