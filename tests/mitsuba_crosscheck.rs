@@ -423,6 +423,17 @@ impl Case {
     }
 }
 
+/// Runs `command`, which writes the image `out`, and reads it.
+fn render_to(command: &mut Command, out: &Path) -> RgbImage {
+    let output = command.output().unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    RgbImage::read_exr(out).unwrap()
+}
+
 /// `RENDERS` images of the case's scene (written to `scene`) by `vcm render` and as many by
 /// Mitsuba.
 fn render_both(dir: &Path, case: &Case, scene: &Path) -> [Vec<RgbImage>; 2] {
@@ -440,42 +451,22 @@ fn render_both(dir: &Path, case: &Case, scene: &Path) -> [Vec<RgbImage>; 2] {
     let mut theirs = Vec::new();
     for seed in 1..=RENDERS {
         let out = dir.join(format!("{name}-vcm-{seed}.exr"));
-        let status = Command::new(env!("CARGO_BIN_EXE_vcm"))
-            .arg("render")
-            .arg(scene)
-            .args(&common)
-            .args([
-                "--algo",
-                case.algo,
-                "--seed",
-                &(seed + 100).to_string(),
-                "-o",
-            ])
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(
-            status.status.success(),
-            "{}",
-            String::from_utf8_lossy(&status.stderr)
-        );
-        ours.push(RgbImage::read_exr(&out).unwrap());
+        let mut vcm = Command::new(env!("CARGO_BIN_EXE_vcm"));
+        vcm.arg("render").arg(scene).args(&common);
+        vcm.args([
+            "--algo",
+            case.algo,
+            "--seed",
+            &(seed + 100).to_string(),
+            "-o",
+        ]);
+        ours.push(render_to(vcm.arg(&out), &out));
 
         let out = dir.join(format!("{name}-mitsuba-{seed}.exr"));
-        let status = Command::new(python())
-            .arg(root().join("tools/mitsuba_reference.py"))
-            .arg(scene)
-            .arg(&out)
-            .args(&common)
-            .args(["--seed", &seed.to_string()])
-            .output()
-            .unwrap();
-        assert!(
-            status.status.success(),
-            "{}",
-            String::from_utf8_lossy(&status.stderr)
-        );
-        theirs.push(RgbImage::read_exr(&out).unwrap());
+        let mut mitsuba = Command::new(python());
+        mitsuba.arg(root().join("tools/mitsuba_reference.py"));
+        mitsuba.arg(scene).arg(&out).args(&common);
+        theirs.push(render_to(mitsuba.args(["--seed", &seed.to_string()]), &out));
     }
     [ours, theirs]
 }
