@@ -205,8 +205,9 @@ fn poster(dir: &Path, filter: u32, wrap: u32, glowing: bool) -> Value {
         .flat_map(f32::to_le_bytes)
         .collect();
     let view = push_buffer_view(&mut doc, &uvs);
-    let accessor = push_accessor(
+    let accessor = push(
         &mut doc,
+        "accessors",
         json!({
             "bufferView": view, "componentType": 5126, "count": uvs.len() / 8, "type": "VEC2"
         }),
@@ -284,13 +285,6 @@ fn push_buffer_view(doc: &mut Value, bytes: &[u8]) -> usize {
     view
 }
 
-/// Appends an accessor over a whole buffer view; returns its index.
-fn push_accessor(doc: &mut Value, accessor: Value) -> usize {
-    let index = doc["accessors"].as_array().unwrap().len();
-    doc["accessors"].as_array_mut().unwrap().push(accessor);
-    index
-}
-
 /// Appends `value` to the array `doc[key]`; returns its index.
 fn push(doc: &mut Value, key: &str, value: Value) -> usize {
     let array = doc[key].as_array_mut().unwrap();
@@ -329,16 +323,18 @@ fn panel(double_sided: bool) -> Value {
         .flat_map(u32::to_le_bytes)
         .collect();
     let view = push_buffer_view(&mut doc, &positions);
-    let position = push_accessor(
+    let position = push(
         &mut doc,
+        "accessors",
         json!({
             "bufferView": view, "componentType": 5126, "count": 4, "type": "VEC3",
             "min": min.to_array(), "max": max.to_array()
         }),
     );
     let view = push_buffer_view(&mut doc, &indices);
-    let index = push_accessor(
+    let index = push(
         &mut doc,
+        "accessors",
         json!({
             "bufferView": view, "componentType": 5125, "count": 6, "type": "SCALAR"
         }),
