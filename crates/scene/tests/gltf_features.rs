@@ -452,12 +452,14 @@ fn the_environment_extension_adds_a_sky() {
     assert!(plain.emission_on_escape(Vec3::Z).is_none());
 }
 
-/// `VCM_environment` with an `image`: an equirectangular OpenEXR file beside the scene,
-/// scaled by color · strength; a missing image is an error naming it.
+/// `VCM_environment` with an `image`: an equirectangular OpenEXR or Radiance HDR file beside
+/// the scene (told apart by content: the HDR files are named `.exr` too), scaled by color ·
+/// strength; a missing image, or one in neither format, is an error naming it.
 #[test]
 fn the_environment_extension_reads_an_equirectangular_image() {
     let dir = tempfile::tempdir().unwrap();
-    // 4 × 2: the top row (the upper hemisphere) red, green, blue, white from left to right.
+    // 4 × 2: the top row (the upper hemisphere) red, green, blue, white from left to right
+    // (values RGBE stores exactly).
     let texel = |x: usize, y: usize| match (x, y) {
         (0, 0) => (1.0, 0.0, 0.0),
         (1, 0) => (0.0, 1.0, 0.0),
@@ -465,26 +467,62 @@ fn the_environment_extension_reads_an_equirectangular_image() {
         (3, 0) => (1.0, 1.0, 1.0),
         _ => (0.0, 0.0, 0.0),
     };
-    exr::prelude::write_rgb_file(dir.path().join("sky.exr"), 4, 2, |x, y| {
-        let (r, g, b) = texel(x, y);
-        (r as f32, g as f32, b as f32)
-    })
-    .unwrap();
+    let write_exr = |path: &std::path::Path| {
+        exr::prelude::write_rgb_file(path, 4, 2, |x, y| {
+            let (r, g, b) = texel(x, y);
+            (r as f32, g as f32, b as f32)
+        })
+        .unwrap()
+    };
+    let write_hdr = |path: &std::path::Path| {
+        let pixels: Vec<_> = (0..8)
+            .map(|i| {
+                let (r, g, b) = texel(i % 4, i / 4);
+                image::Rgb([r as f32, g as f32, b as f32])
+            })
+            .collect();
+        let file = std::fs::File::create(path).unwrap();
+        image::codecs::hdr::HdrEncoder::new(file)
+            .encode(&pixels, 4, 2)
+            .unwrap()
+    };
     let extra = r#", "extensionsUsed": ["VCM_environment"],
         "extensions": {"VCM_environment": {"strength": 2, "image": "sky.exr"}}"#;
     let gltf = dir.path().join("scene.gltf");
     std::fs::write(&gltf, document(r#"[{"mesh": 0}]"#, MATTE, extra)).unwrap();
-    let scene = Scene::load(&gltf).unwrap();
-    // Up and toward -Z is the second quarter of the top row; up and toward +X the third.
-    let up = |d: Vec3| (d + Vec3::Y).normalize();
-    let seen = |d: Vec3| scene.emission_on_escape(up(d)).unwrap().1.radiance;
-    assert_eq!(seen(-Vec3::Z), Vec3::new(0.0, 2.0, 0.0));
-    assert_eq!(seen(Vec3::X), Vec3::new(0.0, 0.0, 2.0));
-    assert_eq!(
-        scene.emission_on_escape(-Vec3::Y).unwrap().1.radiance,
-        Vec3::ZERO
-    );
+    // Radiance files open with `#?RADIANCE` (the image crate's encoder) or `#?RGBE`.
+    let write_rgbe = |path: &std::path::Path| {
+        write_hdr(path);
+        let bytes = std::fs::read(path).unwrap();
+        let body = bytes.strip_prefix(b"#?RADIANCE".as_slice()).unwrap();
+        std::fs::write(path, [b"#?RGBE".as_slice(), body].concat()).unwrap();
+    };
+    for write in [
+        &write_exr as &dyn Fn(&std::path::Path),
+        &write_hdr,
+        &write_rgbe,
+    ] {
+        write(&dir.path().join("sky.exr"));
+        let scene = Scene::load(&gltf).unwrap();
+        // Up and toward -Z is the second quarter of the top row; up and toward +X the third.
+        let up = |d: Vec3| (d + Vec3::Y).normalize();
+        let seen = |d: Vec3| scene.emission_on_escape(up(d)).unwrap().1.radiance;
+        assert_eq!(seen(-Vec3::Z), Vec3::new(0.0, 2.0, 0.0));
+        assert_eq!(seen(Vec3::X), Vec3::new(0.0, 0.0, 2.0));
+        assert_eq!(
+            scene.emission_on_escape(-Vec3::Y).unwrap().1.radiance,
+            Vec3::ZERO
+        );
+    }
 
+    std::fs::write(dir.path().join("sky.exr"), b"P3 4 2 255").unwrap();
+    let message = Scene::load(&gltf).unwrap_err().to_string();
+    assert!(
+        message.contains("scene.gltf")
+            && message.contains("'sky.exr'")
+            && message.contains("neither an OpenEXR nor a Radiance HDR image"),
+        "{message}"
+    );
     std::fs::remove_file(dir.path().join("sky.exr")).unwrap();
     let message = Scene::load(&gltf).unwrap_err().to_string();
     assert!(

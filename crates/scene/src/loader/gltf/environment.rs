@@ -1,6 +1,6 @@
 //! `VCM_environment`, this renderer's own document-level extension: a world background of
-//! radiance `color · strength` from every direction, times an equirectangular OpenEXR image's
-//! if `image` names one (a URI relative to the glTF file, as images are).
+//! radiance `color · strength` from every direction, times an equirectangular image's (OpenEXR
+//! or Radiance HDR) if `image` names one (a URI relative to the glTF file, as images are).
 //!
 //! ```json
 //! "extensionsUsed": ["VCM_environment"],
@@ -72,12 +72,34 @@ pub(super) fn read(value: Option<&Value>) -> Result<Option<Environment>, String>
     }))
 }
 
-/// Reads the OpenEXR image at `uri` (relative to `base`) as an environment map; errors name
-/// the image and the problem.
+/// The first bytes of every OpenEXR file.
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+/// The first bytes of every Radiance HDR (RGBE) file: `#?RADIANCE` or `#?RGBE`.
+const RADIANCE_MAGIC: &[u8] = b"#?";
+
+/// Reads the image at `uri` (relative to `base`) as an environment map: OpenEXR or Radiance
+/// HDR, told apart by their first bytes (not by the name); errors name the image and the
+/// problem.
 pub(super) fn load_map(base: &Path, uri: &str) -> Result<EnvironmentMap, String> {
-    use exr::prelude::{ReadChannels, ReadLayers};
     let fail = |reason: String| format!("{EXTENSION} image '{uri}': {reason}");
     let bytes = read_uri(base, uri).map_err(fail)?;
+    let (width, height, texels) = if bytes.starts_with(&EXR_MAGIC) {
+        read_exr(bytes)
+    } else if bytes.starts_with(RADIANCE_MAGIC) {
+        read_radiance(bytes)
+    } else {
+        Err("neither an OpenEXR nor a Radiance HDR image".to_string())
+    }
+    .map_err(fail)?;
+    let size = |n: usize| u32::try_from(n).map_err(|_| fail("too large".into()));
+    EnvironmentMap::new(size(width)?, size(height)?, texels).map_err(fail)
+}
+
+/// Width, height and linear RGB texels (rows from the top) of an OpenEXR file's first
+/// layer.
+fn read_exr(bytes: Vec<u8>) -> Result<(usize, usize, Vec<Vec3>), String> {
+    use exr::prelude::{ReadChannels, ReadLayers};
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -95,10 +117,22 @@ pub(super) fn load_map(base: &Path, uri: &str) -> Result<EnvironmentMap, String>
         .first_valid_layer()
         .all_attributes()
         .from_buffered(Cursor::new(bytes))
-        .map_err(|e| fail(e.to_string()))?;
-    let (width, height, texels) = image.layer_data.channel_data.pixels;
-    let size = |n: usize| u32::try_from(n).map_err(|_| fail("too large".into()));
-    EnvironmentMap::new(size(width)?, size(height)?, texels).map_err(fail)
+        .map_err(|e| e.to_string())?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+/// Width, height and linear RGB texels (rows from the top) of a Radiance HDR file.
+fn read_radiance(bytes: Vec<u8>) -> Result<(usize, usize, Vec<Vec3>), String> {
+    // Strict decoding accepts only a `#?RADIANCE` first line; Mitsuba and others write
+    // `#?RGBE`, which the lenient decoder skips as a comment.
+    let decoder = image::codecs::hdr::HdrDecoder::new_nonstrict(Cursor::new(bytes))
+        .map_err(|e| format!("Radiance HDR: {e}"))?;
+    let image = image::DynamicImage::from_decoder(decoder)
+        .map_err(|e| format!("Radiance HDR: {e}"))?
+        .into_rgb32f();
+    let (width, height) = (image.width() as usize, image.height() as usize);
+    let texels = image.pixels().map(|p| Vec3::from(p.0)).collect();
+    Ok((width, height, texels))
 }
 
 fn non_negative(value: &Value) -> Option<f32> {
