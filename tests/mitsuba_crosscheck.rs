@@ -552,7 +552,10 @@ fn vcm_render_agrees_with_mitsuba() {
             "poster-nearest-mirrored",
             poster(dir.path(), 9728, 33648, false),
         ),
-        // An emissive texture, lighting the room beside the ceiling light.
+        // An emissive texture, lighting the room beside the ceiling light. Mitsuba's renders of
+        // it are not always the same for one seed (about one process in six gives another
+        // image, with one thread too; ours are bit-identical), so these two cases print
+        // slightly different t values from run to run.
         Case::pt("glowing-poster", poster(dir.path(), 9729, 10497, true)),
         Case::pt("glowing-poster-bpt", poster(dir.path(), 9729, 10497, true)).with("bpt", None),
     ];
