@@ -26,6 +26,7 @@ pub mod decision;
 pub mod error;
 pub mod features;
 pub mod frame;
+pub mod image_limits;
 pub mod light;
 pub mod loader;
 pub mod material;

@@ -515,13 +515,21 @@ fn the_environment_extension_reads_an_equirectangular_image() {
         );
     }
 
-    std::fs::write(dir.path().join("sky.exr"), b"P3 4 2 255").unwrap();
-    let message = Scene::load(&gltf).unwrap_err().to_string();
-    assert!(
-        message.contains("scene.gltf")
-            && message.contains("'sky.exr'")
-            && message.contains("neither an OpenEXR nor a Radiance HDR image"),
-        "{message}"
+    let refused = |bytes: &[u8], reason: &str| {
+        std::fs::write(dir.path().join("sky.exr"), bytes).unwrap();
+        let message = Scene::load(&gltf).unwrap_err().to_string();
+        assert!(
+            message.contains("scene.gltf")
+                && message.contains("'sky.exr'")
+                && message.contains(reason),
+            "{message}"
+        );
+    };
+    refused(b"P3 4 2 255", "neither an OpenEXR nor a Radiance HDR image");
+    // A header claiming 40000² texels (19 GB as linear RGB) is refused before any allocation.
+    refused(
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 40000 +X 40000\n\x02\x02\x01\x00",
+        "40000 × 40000 texels, more than the",
     );
     std::fs::remove_file(dir.path().join("sky.exr")).unwrap();
     let message = Scene::load(&gltf).unwrap_err().to_string();

@@ -74,7 +74,15 @@ impl RgbImage {
     }
 
     /// Reads the first RGB(A) layer of an OpenEXR file.
+    /// Images over [`MAX_TEXELS`](vcm_scene::image_limits::MAX_TEXELS) are refused from
+    /// their headers, before anything is allocated for them.
     pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
+        let fail = |reason: String| ImageError::Exr {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let file = std::fs::File::open(path).map_err(|e| fail(e.to_string()))?;
+        vcm_scene::image_limits::check_exr_layers(file).map_err(fail)?;
         let image = exr::prelude::read_first_rgba_layer_from_file(
             path,
             |resolution, _| RgbImage {
@@ -87,10 +95,7 @@ impl RgbImage {
                 image.pixels[position.y() * width + position.x()] = Vec3::new(r, g, b);
             },
         )
-        .map_err(|e| ImageError::Exr {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
+        .map_err(|e| fail(e.to_string()))?;
         Ok(image.layer_data.channel_data.pixels)
     }
 
@@ -197,6 +202,18 @@ mod tests {
         image.write_png(&dir.path().join("image.png"), 0.0).unwrap();
         let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(files.len(), 2, "temporary files left behind");
+    }
+
+    #[test]
+    fn an_exr_claiming_too_many_pixels_is_refused_before_allocating() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("huge.exr");
+        std::fs::write(&path, vcm_scene::testing::exr_claiming(40000, 40000)).unwrap();
+        let message = RgbImage::read_exr(&path).unwrap_err().to_string();
+        assert!(
+            message.contains("huge.exr") && message.contains("40000 × 40000 texels"),
+            "{message}"
+        );
     }
 
     #[test]

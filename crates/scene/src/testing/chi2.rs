@@ -2,7 +2,7 @@
 
 use super::integrate::integrate_cell;
 use crate::frame::Frame;
-use crate::sampling::{Rng, Sampler};
+use crate::sampling::Rng;
 use glam::Vec3;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::f64::consts::PI;
@@ -258,7 +258,9 @@ fn failure(config: &Chi2Config, num_tests: usize, message: &str) -> Chi2Result {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, uniform_sphere_pdf};
+    use crate::sampling::{
+        Sampler, cosine_hemisphere_pdf, sample_cosine_hemisphere, uniform_sphere_pdf,
+    };
 
     #[test]
     fn detects_a_wrong_pdf() {

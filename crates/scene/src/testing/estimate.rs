@@ -1,6 +1,6 @@
 //! Fixed-seed Monte Carlo estimates with standard errors.
 
-use crate::sampling::{Rng, Sampler};
+use crate::sampling::Rng;
 use glam::{DVec3, Vec3};
 
 /// Monte Carlo estimate of a mean, per RGB channel.
@@ -44,6 +44,7 @@ pub fn estimate_mean(n: usize, seed: u64, mut sample: impl FnMut(&mut Rng) -> Ve
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::Sampler;
 
     #[test]
     fn estimates_uniform_mean() {

@@ -15,6 +15,7 @@ use glam::Vec3;
 use gltf::json::Value;
 
 use super::extension_json::{finite, malformed};
+use crate::image_limits::{check_exr_layers, check_texels};
 use crate::light::EnvironmentMap;
 use crate::loader::uri::read_uri;
 
@@ -100,6 +101,7 @@ pub(super) fn load_map(base: &Path, uri: &str) -> Result<EnvironmentMap, String>
 /// layer.
 fn read_exr(bytes: Vec<u8>) -> Result<(usize, usize, Vec<Vec3>), String> {
     use exr::prelude::{ReadChannels, ReadLayers};
+    check_exr_layers(bytes.as_slice())?;
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -127,6 +129,8 @@ fn read_radiance(bytes: Vec<u8>) -> Result<(usize, usize, Vec<Vec3>), String> {
     // `#?RGBE`, which the lenient decoder skips as a comment.
     let decoder = image::codecs::hdr::HdrDecoder::new_nonstrict(Cursor::new(bytes))
         .map_err(|e| format!("Radiance HDR: {e}"))?;
+    let (width, height) = image::ImageDecoder::dimensions(&decoder);
+    check_texels(width as usize, height as usize)?;
     let image = image::DynamicImage::from_decoder(decoder)
         .map_err(|e| format!("Radiance HDR: {e}"))?
         .into_rgb32f();
