@@ -16,7 +16,8 @@ noise. It covers the part of the conventions that Mitsuba models exactly:
   once, as Mitsuba samples a textured emitter through its UV map),
 - `KHR_lights_punctual` point and directional lights, and spot lights whose cones
   are less than 0.01 rad apart (Mitsuba draws the edge between them differently),
-- the `VCM_environment` extension with a constant colour,
+- the `VCM_environment` extension: a constant colour, or an equirectangular image
+  (OpenEXR or Radiance HDR, from a file),
 - the first perspective camera (or none: framed from +Z as the conventions say).
 
 Anything else (other textures, texture transforms, the glTF dielectric-base
@@ -219,6 +220,44 @@ def material_plugins(material, doc, base_dir, work_dir):
     return bsdf, emitter
 
 
+# How many times finer than the image the grid handed to Mitsuba's envmap is, per axis.
+ENVMAP_UPSAMPLE = 8
+
+
+def environment_plugin(environment, base_dir, work_dir):
+    """Mitsuba's emitter for the `VCM_environment` extension: a constant, or an envmap.
+
+    vcm-rs's map is constant over each pixel, its rows spanning equal polar angles from the
+    zenith. Mitsuba's envmap interpolates bilinearly between grid points whose first row
+    lies on the zenith and whose last lies on the nadir. So the image is sampled at the
+    points of a grid ENVMAP_UPSAMPLE times finer: the two then differ only next to the
+    pixels' edges. The two maps' centre columns look along +X (vcm-rs) and +Z (Mitsuba):
+    the envmap is turned 90 degrees about +Y.
+    """
+    colour = np.array(environment.get("color", [1, 1, 1]), dtype=float)
+    colour = colour * environment.get("strength", 1.0)
+    if "image" not in environment:
+        return {"type": "constant", "radiance": rgb(colour)}
+    uri = environment["image"]
+    if uri.startswith("data:"):
+        raise Unsupported("an environment image in a data URI")
+    bitmap = mi.Bitmap(os.path.join(base_dir, urllib.parse.unquote(uri)))
+    texels = np.array(bitmap.convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32,
+                                     srgb_gamma=False))
+    height, width = texels.shape[:2]
+    rows, cols = height * ENVMAP_UPSAMPLE, width * ENVMAP_UPSAMPLE
+    # Polar angle / pi of each grid row, azimuthal coordinate of each grid column.
+    v = np.arange(rows) / (rows - 1)
+    u = (np.arange(cols) + 0.5) / cols
+    source_rows = np.minimum((v * height).astype(int), height - 1)
+    source_cols = np.minimum((u * width).astype(int), width - 1)
+    grid = texels[source_rows][:, source_cols] * colour
+    path = os.path.join(work_dir, "environment.exr")
+    mi.Bitmap(grid.astype(np.float32)).write(path)
+    return {"type": "envmap", "filename": path,
+            "to_world": mi.ScalarTransform4f().rotate(axis=[0, 1, 0], angle=90)}
+
+
 def write_ply(path, positions, normals, uvs, faces):
     """A binary little-endian PLY with float positions (normals, UVs) and int faces."""
     with open(path, "wb") as f:
@@ -333,10 +372,7 @@ def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
 
     environment = doc.get("extensions", {}).get("VCM_environment")
     if environment is not None:
-        if "image" in environment:
-            raise Unsupported("an environment image")
-        colour = np.array(environment.get("color", [1, 1, 1])) * environment.get("strength", 1.0)
-        scene["environment"] = {"type": "constant", "radiance": rgb(colour)}
+        scene["environment"] = environment_plugin(environment, base_dir, work_dir)
 
     if camera is not None:
         perspective = camera[0].get("perspective")
