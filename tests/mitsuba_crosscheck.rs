@@ -588,7 +588,10 @@ fn vcm_render_agrees_with_mitsuba() {
         Case::pt("cornell-box", load_scene("cornell-box")),
         Case::pt("cornell-indirect", load_scene("cornell-indirect")),
         Case::pt("cornell-specular", load_scene("cornell-specular")),
-        Case::pt("cornell-specular-close", load_scene("cornell-specular-close")),
+        Case::pt(
+            "cornell-specular-close",
+            load_scene("cornell-specular-close"),
+        ),
         Case::pt("cornell-specular-depth-3", load_scene("cornell-specular")).with("pt", Some(3)),
         Case::pt(
             "cornell-specular-depth-3-bpt",
