@@ -8,7 +8,6 @@
 //! * [`estimate_mean`]: fixed-seed Monte Carlo mean with its standard error.
 //! * [`bsdf_chi2_test`] and [`estimate_albedo`]: the above for a [`Bsdf`](crate::bsdf::Bsdf)
 //!   (sampling vs pdf; directional albedo ∫ f_cos dωi by importance sampling).
-//!
 //! * [`exr_claiming`]: an OpenEXR file whose header claims a given size (for size limits).
 //!
 //! Available to other crates' tests through the `testing` feature.

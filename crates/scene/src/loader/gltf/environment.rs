@@ -127,15 +127,18 @@ fn read_exr(bytes: Vec<u8>) -> Result<(usize, usize, Vec<Vec3>), String> {
 fn read_radiance(bytes: Vec<u8>) -> Result<(usize, usize, Vec<Vec3>), String> {
     // Strict decoding accepts only a `#?RADIANCE` first line; Mitsuba and others write
     // `#?RGBE`, which the lenient decoder skips as a comment.
-    let decoder = image::codecs::hdr::HdrDecoder::new_nonstrict(Cursor::new(bytes))
-        .map_err(|e| format!("Radiance HDR: {e}"))?;
+    let decoding = |e: image::ImageError| format!("Radiance HDR: {e}");
+    let decoder =
+        image::codecs::hdr::HdrDecoder::new_nonstrict(Cursor::new(bytes)).map_err(decoding)?;
     let (width, height) = image::ImageDecoder::dimensions(&decoder);
-    check_texels(width as usize, height as usize)?;
-    let image = image::DynamicImage::from_decoder(decoder)
-        .map_err(|e| format!("Radiance HDR: {e}"))?
-        .into_rgb32f();
-    let (width, height) = (image.width() as usize, image.height() as usize);
-    let texels = image.pixels().map(|p| Vec3::from(p.0)).collect();
+    let (width, height) = (width as usize, height as usize);
+    check_texels(width, height)?;
+    let image = image::DynamicImage::from_decoder(decoder).map_err(decoding)?;
+    let texels = image
+        .into_rgb32f()
+        .pixels()
+        .map(|p| Vec3::from(p.0))
+        .collect();
     Ok((width, height, texels))
 }
 
