@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, WritableImage};
 use glam::Vec3;
 
 /// Why an image could not be read or written.
@@ -62,14 +63,24 @@ impl RgbImage {
     /// Writes the image as a 32-bit float RGB OpenEXR file.
     pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
         write_atomically(path, |temporary| {
-            exr::prelude::write_rgb_file(temporary, self.width, self.height, |x, y| {
-                let p = self.pixels[y * self.width + x];
+            let channels = SpecificChannels::rgb(|exr::math::Vec2(x, y)| {
+                let p: Vec3 = self.pixels[y * self.width + x];
                 (p.x, p.y, p.z)
-            })
-            .map_err(|e| ImageError::Exr {
-                path: path.to_path_buf(),
-                reason: e.to_string(),
-            })
+            });
+            // Blocks stored in increasing order: with exr's default (unspecified) order its
+            // parallel writer stored them as its threads finished, so the same image gave
+            // files that differ byte for byte.
+            let encoding = Encoding {
+                line_order: LineOrder::Increasing,
+                ..Encoding::FAST_LOSSLESS
+            };
+            Image::from_encoded_channels((self.width, self.height), encoding, channels)
+                .write()
+                .to_file(temporary)
+                .map_err(|e| ImageError::Exr {
+                    path: path.to_path_buf(),
+                    reason: e.to_string(),
+                })
         })
     }
 
@@ -202,6 +213,31 @@ mod tests {
         image.write_png(&dir.path().join("image.png"), 0.0).unwrap();
         let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(files.len(), 2, "temporary files left behind");
+    }
+
+    /// The same image gives the same file, byte for byte: its blocks are stored in increasing
+    /// order (in exr's default order, its parallel writer stored them as its threads finished).
+    #[test]
+    fn the_same_image_gives_the_same_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let (width, height) = (512, 1024);
+        let image = RgbImage {
+            width,
+            height,
+            pixels: (0..width * height)
+                .map(|i| Vec3::splat((i as f32 * 0.618).fract()) + Vec3::new(0.0, 1.0, 2.0))
+                .collect(),
+        };
+        let files: Vec<Vec<u8>> = (0..4)
+            .map(|i| {
+                let path = dir.path().join(format!("{i}.exr"));
+                image.write_exr(&path).unwrap();
+                std::fs::read(path).unwrap()
+            })
+            .collect();
+        assert!(files.iter().all(|file| *file == files[0]));
+        let meta = exr::meta::MetaData::read_from_buffered(&files[0][..], false).unwrap();
+        assert_eq!(meta.headers[0].line_order, LineOrder::Increasing);
     }
 
     #[test]
