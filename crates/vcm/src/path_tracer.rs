@@ -14,7 +14,7 @@ use crate::error::RenderError;
 use crate::film::Film;
 use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
 use crate::path_state::{PathState, ShadowRay};
-use crate::shade::{ShadeContext, shade};
+use crate::shade::{ShadeContext, shade, vertex_sampler};
 use crate::wave::{fill_extension_rays, shade_in_parallel};
 
 /// What a [`PathTracer`] renders.
@@ -224,7 +224,9 @@ impl Wavefront for PtWavefront<'_> {
             scene: self.scene,
             max_segments: self.settings.max_depth.unwrap_or(u32::MAX),
         };
-        shade_in_parallel(&mut self.paths, hits, |path, hit| shade(&ctx, path, hit));
+        shade_in_parallel(&mut self.paths, hits, vertex_sampler, |path, hit| {
+            shade(&ctx, path, hit)
+        });
         let shadows = self.paths.iter().filter_map(|p| p.shadow.as_ref());
         ShadowRay::fill_batch(shadow_rays, shadows);
     }

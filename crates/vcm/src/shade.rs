@@ -11,7 +11,7 @@ use glam::Vec3;
 use vcm_scene::Scene;
 use vcm_scene::bsdf::{FixedOutgoing, LobeKind, Pdfs, TransportMode};
 use vcm_scene::mesh::SurfacePoint;
-use vcm_scene::sampling::{Sampler, power_heuristic};
+use vcm_scene::sampling::{Sampler, SobolSampler, power_heuristic};
 
 use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
 use crate::shadow::LightSample;
@@ -30,6 +30,12 @@ pub(crate) struct ShadeContext<'a> {
     pub max_segments: u32,
 }
 
+/// The sampler of `path`, moved to the numbers of the vertex it has reached.
+pub(crate) fn vertex_sampler(path: &mut PathState) -> &mut SobolSampler {
+    path.rng.start_step(path.segments, PAIRS_PER_VERTEX);
+    &mut path.rng
+}
+
 /// Shades the vertex where `path` hit the scene (`None`: it escaped and ends). Adds the
 /// weighted emission to the path's radiance, queues at most one shadow ray and either
 /// prepares the next segment or ends the path.
@@ -46,7 +52,7 @@ pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) 
         return;
     };
     let scene = ctx.scene;
-    path.rng.start_step(path.segments, PAIRS_PER_VERTEX);
+    vertex_sampler(path);
     let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
     let point = surface.point;
     path.radiance += path.throughput * emission(scene, path, &point, hit);

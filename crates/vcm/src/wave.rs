@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
+use vcm_scene::sampling::SobolSampler;
 use vcm_traversal::{HitBatch, RayBatch};
 
 use crate::surface_hit::Hit;
@@ -15,15 +16,33 @@ pub(crate) fn fill_extension_rays(
     rays.refill(segments.map(|(origin, direction)| (origin, direction, 0.0, f32::INFINITY)));
 }
 
+/// Paths shaded together: their random numbers are computed in one go first.
+const SHADE_CHUNK: usize = 64;
+
 /// Calls `shade` for every path with its closest hit (`hits[i]` for path `i`), in parallel.
+///
+/// Before a chunk of paths is shaded, the numbers of the vertices they hit are computed
+/// together ([`SobolSampler::prefetch`], SIMD across paths): `vertex_sampler` moves a path's
+/// sampler to the numbers of the vertex it has reached and returns it.
 pub(crate) fn shade_in_parallel<P: Send>(
     paths: &mut [P],
     hits: &HitBatch,
+    vertex_sampler: impl Fn(&mut P) -> &mut SobolSampler + Sync,
     shade: impl Fn(&mut P, Option<Hit>) + Sync,
 ) {
     paths
-        .par_iter_mut()
-        .with_min_len(64)
+        .par_chunks_mut(SHADE_CHUNK)
         .enumerate()
-        .for_each(|(i, path)| shade(path, Hit::from_batch(hits, i)));
+        .for_each(|(chunk_index, chunk)| {
+            let first = chunk_index * SHADE_CHUNK;
+            let hit_paths = chunk.iter_mut().enumerate();
+            SobolSampler::prefetch(
+                hit_paths
+                    .filter(|(i, _)| hits.is_hit(first + i))
+                    .map(|(_, path)| vertex_sampler(path)),
+            );
+            for (i, path) in chunk.iter_mut().enumerate() {
+                shade(path, Hit::from_batch(hits, first + i));
+            }
+        });
 }

@@ -21,7 +21,15 @@ use glam::Vec2;
 /// Samples of one sequence before the next block starts.
 const BLOCK_BITS: u32 = 16;
 
-/// The numbers of one sample of a pixel (or of any other keyed sequence): 12 bytes of state.
+/// Pairs of dimensions [`SobolSampler::prefetch`] computes ahead: enough for one path vertex
+/// of every integrator here.
+pub const PREFETCH_PAIRS: usize = 6;
+
+/// Samplers [`SobolSampler::prefetch`] computes together: eight 32-bit lanes fill one AVX2
+/// register.
+const LANES: usize = 8;
+
+/// The numbers of one sample of a pixel (or of any other keyed sequence).
 #[derive(Clone, Debug)]
 pub struct SobolSampler {
     /// Hash of the key and of the sample's block of 2^16 samples.
@@ -30,6 +38,18 @@ pub struct SobolSampler {
     index_rev: u32,
     /// Next unused pair of dimensions.
     pair: u32,
+    /// First pair after those reserved for the current step ([`start_step`](Self::start_step)).
+    step_end: u32,
+    /// Pairs computed ahead by [`prefetch`](Self::prefetch), if any.
+    ahead: Option<PairsAhead>,
+}
+
+/// Pairs `first .. first + len` of a sampler, computed before they are drawn.
+#[derive(Clone, Debug)]
+struct PairsAhead {
+    first: u32,
+    len: usize,
+    values: [Vec2; PREFETCH_PAIRS],
 }
 
 impl SobolSampler {
@@ -43,6 +63,8 @@ impl SobolSampler {
             seed: (seed ^ (seed >> 32)) as u32,
             index_rev: ((index & ((1 << BLOCK_BITS) - 1)) as u32).reverse_bits(),
             pair: 0,
+            step_end: 0,
+            ahead: None,
         }
     }
 
@@ -52,6 +74,7 @@ impl SobolSampler {
     #[inline]
     pub fn start_step(&mut self, step: u32, pairs: u32) {
         self.pair = self.pair.max(step.saturating_mul(pairs));
+        self.step_end = step.saturating_add(1).saturating_mul(pairs);
     }
 
     /// A random stream of its own in place of the next pair of dimensions, for numbers that
@@ -67,12 +90,71 @@ impl SobolSampler {
         rng
     }
 
+    /// Computes the pairs of dimensions each of `samplers` has left in its current step (at
+    /// most [`PREFETCH_PAIRS`], at least one) before they are drawn, eight samplers at a time
+    /// in SIMD lanes where the target has them. Draws from those pairs then return them
+    /// without computing: the same numbers, which depend only on the sample and the pair.
+    pub fn prefetch<'a>(samplers: impl IntoIterator<Item = &'a mut SobolSampler>) {
+        let mut group: [Option<&mut SobolSampler>; LANES] = Default::default();
+        let mut filled = 0;
+        for sampler in samplers {
+            group[filled] = Some(sampler);
+            filled += 1;
+            if filled == LANES {
+                prefetch_lanes(&mut group);
+                filled = 0;
+            }
+        }
+        prefetch_lanes(&mut group[..filled]);
+    }
+
+    /// The next pair of dimensions if it was computed ahead, moving on past it.
+    #[inline(always)]
+    fn next_pair_ahead(&mut self) -> Option<Vec2> {
+        let ahead = self.ahead.as_ref()?;
+        let k = self.pair.wrapping_sub(ahead.first) as usize;
+        let value = *ahead.values[..ahead.len].get(k)?;
+        self.pair += 1;
+        Some(value)
+    }
+
     /// The seed of the next pair of dimensions of this sample.
     #[inline]
     fn next_pair_seed(&mut self) -> u32 {
-        let seed = self.seed ^ self.pair.wrapping_mul(0x9E37_79B9);
+        let seed = pair_seed(self.seed, self.pair);
         self.pair += 1;
         seed
+    }
+}
+
+/// Fills the samplers of `group` (at most [`LANES`]) with their next pairs, lane by lane in
+/// loops the compiler vectorizes.
+fn prefetch_lanes(group: &mut [Option<&mut SobolSampler>]) {
+    let (mut seed, mut index_rev, mut first) = ([0u32; LANES], [0u32; LANES], [0u32; LANES]);
+    let mut len = 1;
+    for (lane, sampler) in group.iter().enumerate() {
+        if let Some(sampler) = sampler {
+            (seed[lane], index_rev[lane], first[lane]) =
+                (sampler.seed, sampler.index_rev, sampler.pair);
+            len = len.max(sampler.step_end.saturating_sub(sampler.pair) as usize);
+        }
+    }
+    let len = len.min(PREFETCH_PAIRS);
+    let mut values = [[[0.0f32; LANES]; 2]; PREFETCH_PAIRS];
+    for (k, [x, y]) in values.iter_mut().enumerate().take(len) {
+        for lane in 0..LANES {
+            let pair = first[lane].wrapping_add(k as u32);
+            (x[lane], y[lane]) = pair_numbers(index_rev[lane], pair_seed(seed[lane], pair));
+        }
+    }
+    for (lane, slot) in group.iter_mut().enumerate() {
+        if let Some(sampler) = slot.take() {
+            sampler.ahead = Some(PairsAhead {
+                first: first[lane],
+                len,
+                values: std::array::from_fn(|k| Vec2::new(values[k][0][lane], values[k][1][lane])),
+            });
+        }
     }
 }
 
@@ -80,6 +162,9 @@ impl Sampler for SobolSampler {
     /// The first dimension of a fresh pair (stratified in one dimension).
     #[inline]
     fn uniform(&mut self) -> f32 {
+        if let Some(pair) = self.next_pair_ahead() {
+            return pair.x;
+        }
         let seed = self.next_pair_seed();
         let (bits, seed) = shuffle(self.index_rev, seed);
         owen_to_unit(bits, hash(seed ^ SCRAMBLE_X))
@@ -87,18 +172,12 @@ impl Sampler for SobolSampler {
 
     #[inline]
     fn uniform2(&mut self) -> Vec2 {
-        let seed = self.next_pair_seed();
-        let (bits, seed) = shuffle(self.index_rev, seed);
-        // Reversed-bit Sobol values: dimension 0 (van der Corput) is the index itself,
-        // dimension 1 (the Pascal matrix mod 2) XORs into bit j every index bit k ⊇ j.
-        let mut pascal = bits;
-        for (shift, mask) in [(1, 0xAAAA), (2, 0xCCCC), (4, 0xF0F0), (8, 0xFF00)] {
-            pascal ^= (pascal & mask) >> shift;
+        if let Some(pair) = self.next_pair_ahead() {
+            return pair;
         }
-        Vec2::new(
-            owen_to_unit(bits, hash(seed ^ SCRAMBLE_X)),
-            owen_to_unit(pascal, hash(seed ^ SCRAMBLE_Y)),
-        )
+        let seed = self.next_pair_seed();
+        let (x, y) = pair_numbers(self.index_rev, seed);
+        Vec2::new(x, y)
     }
 }
 
@@ -128,6 +207,29 @@ impl SampleSequence {
 /// Scramble constants of dimensions 0 and 1 (those of `sobol_burley`).
 const SCRAMBLE_X: u32 = 0x912F_69BA;
 const SCRAMBLE_Y: u32 = 0x174F_18AB;
+
+/// The seed of pair `pair` of the sample whose seed is `seed`.
+#[inline(always)]
+fn pair_seed(seed: u32, pair: u32) -> u32 {
+    seed ^ pair.wrapping_mul(0x9E37_79B9)
+}
+
+/// Both numbers of the pair of dimensions with seed `seed` of the sample whose reversed index
+/// is `index_rev`.
+#[inline(always)]
+fn pair_numbers(index_rev: u32, seed: u32) -> (f32, f32) {
+    let (bits, seed) = shuffle(index_rev, seed);
+    // Reversed-bit Sobol values: dimension 0 (van der Corput) is the index itself,
+    // dimension 1 (the Pascal matrix mod 2) XORs into bit j every index bit k ⊇ j.
+    let mut pascal = bits;
+    for (shift, mask) in [(1, 0xAAAA), (2, 0xCCCC), (4, 0xF0F0), (8, 0xFF00)] {
+        pascal ^= (pascal & mask) >> shift;
+    }
+    (
+        owen_to_unit(bits, hash(seed ^ SCRAMBLE_X)),
+        owen_to_unit(pascal, hash(seed ^ SCRAMBLE_Y)),
+    )
+}
 
 /// The nested uniform shuffle by `seed` of the index whose reversed bits are `index_rev` (an
 /// Owen scramble of them), and the seed the dimensions' scrambles derive from.
@@ -189,6 +291,8 @@ mod tests {
                     seed,
                     index_rev: index.reverse_bits(),
                     pair: 0,
+                    step_end: 0,
+                    ahead: None,
                 };
                 assert_eq!(sampler.uniform2(), expected, "index {index} seed {seed}");
                 sampler.pair = 0;
@@ -280,5 +384,51 @@ mod tests {
         let next_block = SobolSampler::new(&[9], 3 + (1 << 16)).uniform2();
         assert_ne!(first, next_block);
         assert!(next_block.cmpge(Vec2::ZERO).all() && next_block.cmplt(Vec2::ONE).all());
+    }
+
+    /// Prefetched pairs are the pairs the samplers compute on their own, for groups of any
+    /// size and whatever mix of single and paired draws takes them; draws past the
+    /// prefetched window compute as before.
+    #[test]
+    fn prefetched_pairs_match_computed_ones() {
+        for count in [1usize, 7, 8, 9, 21] {
+            let fresh: Vec<SobolSampler> = (0..count)
+                .map(|i| {
+                    let mut s = SobolSampler::new(&[5, i as u64], i as u64 * 37);
+                    s.start_step(i as u32 % 4, 3);
+                    s
+                })
+                .collect();
+            let mut prefetched = fresh.clone();
+            SobolSampler::prefetch(prefetched.iter_mut());
+            for (i, (mut plain, mut ahead)) in fresh.into_iter().zip(prefetched).enumerate() {
+                // The step's three pairs, where sampler 0 draws from its first step.
+                let window = ahead.ahead.as_ref().map(|a| a.len);
+                assert_eq!(window, Some(3), "sampler {i} of {count}");
+                for draw in 0..PREFETCH_PAIRS + 3 {
+                    if (draw + i) % 2 == 0 {
+                        assert_eq!(plain.uniform().to_bits(), ahead.uniform().to_bits());
+                    } else {
+                        assert_eq!(plain.uniform2(), ahead.uniform2(), "draw {draw}");
+                    }
+                }
+                plain.start_step(40, 3);
+                ahead.start_step(40, 3);
+                assert_eq!(plain.uniform2(), ahead.uniform2());
+            }
+        }
+    }
+
+    /// A sampler whose next pair lies outside its prefetched window computes it.
+    #[test]
+    fn pairs_outside_the_window_are_computed() {
+        let mut plain = SobolSampler::new(&[2], 11);
+        let mut ahead = plain.clone();
+        SobolSampler::prefetch([&mut ahead]);
+        plain.start_step(2, PREFETCH_PAIRS as u32);
+        ahead.start_step(2, PREFETCH_PAIRS as u32);
+        for _ in 0..3 {
+            assert_eq!(plain.uniform2(), ahead.uniform2());
+        }
     }
 }

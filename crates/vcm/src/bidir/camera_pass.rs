@@ -147,7 +147,7 @@ impl Wavefront for CameraWavefront<'_> {
     /// in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let iterations = self.iterations;
-        shade_in_parallel(&mut self.paths, hits, |path, hit| {
+        shade_in_parallel(&mut self.paths, hits, vertex_sampler, |path, hit| {
             shade(&iterations[path.sample as usize], path, hit)
         });
         let shadows = self.paths.iter().flat_map(|p| &p.shadows);
@@ -212,6 +212,10 @@ fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
         shadows: SmallVec::new(),
     }
 }
+/// The sampler of `path`, moved to the numbers of the vertex it has reached.
+fn vertex_sampler(path: &mut CameraPathState) -> &mut SobolSampler {
+    path.walk.start_vertex(PAIRS_PER_VERTEX)
+}
 
 /// Shades the vertex where a camera path hit the scene (`None`: it escaped and ends).
 fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
@@ -227,7 +231,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     };
     let scene = ctx.scene;
     let algorithm = ctx.settings.algorithm;
-    path.walk.start_vertex(PAIRS_PER_VERTEX);
+    vertex_sampler(path);
     let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
     let wo = -path.walk.direction;
     path.walk

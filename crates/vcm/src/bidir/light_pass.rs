@@ -6,7 +6,7 @@ use std::sync::{Mutex, PoisonError};
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
-use vcm_scene::sampling::Sampler;
+use vcm_scene::sampling::{Sampler, SobolSampler};
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
@@ -280,7 +280,7 @@ impl Wavefront for LightWavefront<'_> {
     /// camera connections, in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let (iterations, splat) = (self.iterations, self.splat);
-        shade_in_parallel(&mut self.paths, hits, |path, hit| {
+        shade_in_parallel(&mut self.paths, hits, vertex_sampler, |path, hit| {
             shade(&iterations[path.sample as usize], path, hit, splat)
         });
         for path in &mut self.paths {
@@ -372,6 +372,10 @@ fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathSt
     path.alive = path.walk.throughput.max_element() > 0.0 && path.walk.throughput.is_finite();
     path
 }
+/// The sampler of `path`, moved to the numbers of the vertex it has reached.
+fn vertex_sampler(path: &mut LightPathState) -> &mut SobolSampler {
+    path.walk.start_vertex(PAIRS_PER_VERTEX)
+}
 
 /// Shades the vertex where a light path hit the scene (`None`: it escaped and ends): records
 /// it as a cacheable vertex, connects it to the camera (`splat`), and continues the path.
@@ -380,7 +384,7 @@ fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat:
         path.alive = false;
         return;
     };
-    path.walk.start_vertex(PAIRS_PER_VERTEX);
+    vertex_sampler(path);
     let scene = ctx.scene;
     let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
     let wo = -path.walk.direction;

@@ -30,9 +30,10 @@ pub(crate) struct Walk {
 
 impl Walk {
     /// Moves the subpath's numbers to those of the vertex it has just reached, `pairs` pairs
-    /// of dimensions per vertex ([`SobolSampler::start_step`]).
-    pub fn start_vertex(&mut self, pairs: u32) {
+    /// of dimensions per vertex ([`SobolSampler::start_step`]), and returns them.
+    pub fn start_vertex(&mut self, pairs: u32) -> &mut SobolSampler {
         self.rng.start_step(self.segments, pairs);
+        &mut self.rng
     }
 
     /// Samples the BSDF at `surface` (`seen` from the previous vertex) for the next segment,
