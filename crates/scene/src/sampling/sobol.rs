@@ -40,15 +40,15 @@ pub struct SobolSampler {
     pair: u32,
     /// First pair after those reserved for the current step ([`start_step`](Self::start_step)).
     step_end: u32,
-    /// Pairs computed ahead by [`prefetch`](Self::prefetch), if any.
-    ahead: Option<PairsAhead>,
+    /// Pairs computed ahead by [`prefetch`](Self::prefetch) (none until it runs).
+    ahead: PairsAhead,
 }
 
 /// Pairs `first .. first + len` of a sampler, computed before they are drawn.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 struct PairsAhead {
     first: u32,
-    len: usize,
+    len: u32,
     values: [Vec2; PREFETCH_PAIRS],
 }
 
@@ -64,7 +64,7 @@ impl SobolSampler {
             index_rev: ((index & ((1 << BLOCK_BITS) - 1)) as u32).reverse_bits(),
             pair: 0,
             step_end: 0,
-            ahead: None,
+            ahead: PairsAhead::default(),
         }
     }
 
@@ -111,9 +111,12 @@ impl SobolSampler {
     /// The next pair of dimensions if it was computed ahead, moving on past it.
     #[inline(always)]
     fn next_pair_ahead(&mut self) -> Option<Vec2> {
-        let ahead = self.ahead.as_ref()?;
-        let k = self.pair.wrapping_sub(ahead.first) as usize;
-        let value = *ahead.values[..ahead.len].get(k)?;
+        let ahead = &self.ahead;
+        let k = self.pair.wrapping_sub(ahead.first);
+        if k >= ahead.len {
+            return None;
+        }
+        let value = ahead.values[k as usize];
         self.pair += 1;
         Some(value)
     }
@@ -149,11 +152,11 @@ fn prefetch_lanes(group: &mut [Option<&mut SobolSampler>]) {
     }
     for (lane, slot) in group.iter_mut().enumerate() {
         if let Some(sampler) = slot.take() {
-            sampler.ahead = Some(PairsAhead {
+            sampler.ahead = PairsAhead {
                 first: first[lane],
-                len,
+                len: len as u32,
                 values: std::array::from_fn(|k| Vec2::new(values[k][0][lane], values[k][1][lane])),
-            });
+            };
         }
     }
 }
@@ -292,7 +295,7 @@ mod tests {
                     index_rev: index.reverse_bits(),
                     pair: 0,
                     step_end: 0,
-                    ahead: None,
+                    ahead: PairsAhead::default(),
                 };
                 assert_eq!(sampler.uniform2(), expected, "index {index} seed {seed}");
                 sampler.pair = 0;
@@ -403,8 +406,7 @@ mod tests {
             SobolSampler::prefetch(prefetched.iter_mut());
             for (i, (mut plain, mut ahead)) in fresh.into_iter().zip(prefetched).enumerate() {
                 // The step's three pairs, where sampler 0 draws from its first step.
-                let window = ahead.ahead.as_ref().map(|a| a.len);
-                assert_eq!(window, Some(3), "sampler {i} of {count}");
+                assert_eq!(ahead.ahead.len, 3, "sampler {i} of {count}");
                 for draw in 0..PREFETCH_PAIRS + 3 {
                     if (draw + i) % 2 == 0 {
                         assert_eq!(plain.uniform().to_bits(), ahead.uniform().to_bits());
