@@ -90,10 +90,11 @@ impl SobolSampler {
         rng
     }
 
-    /// Computes the pairs of dimensions each of `samplers` has left in its current step (at
-    /// most [`PREFETCH_PAIRS`], at least one) before they are drawn, eight samplers at a time
-    /// in SIMD lanes where the target has them. Draws from those pairs then return them
-    /// without computing: the same numbers, which depend only on the sample and the pair.
+    /// Computes the pairs of dimensions each of `samplers` has left in its current step
+    /// before they are drawn, eight samplers at a time in SIMD lanes where the target has
+    /// them (at least one pair and at most [`PREFETCH_PAIRS`]; the eight share the longest
+    /// count). Draws from those pairs then return them without computing: the same numbers,
+    /// which depend only on the sample and the pair.
     pub fn prefetch<'a>(samplers: impl IntoIterator<Item = &'a mut SobolSampler>) {
         let mut group: [Option<&mut SobolSampler>; LANES] = Default::default();
         let mut filled = 0;
@@ -105,7 +106,9 @@ impl SobolSampler {
                 filled = 0;
             }
         }
-        prefetch_lanes(&mut group[..filled]);
+        if filled > 0 {
+            prefetch_lanes(&mut group[..filled]);
+        }
     }
 
     /// The next pair of dimensions if it was computed ahead, moving on past it.
