@@ -87,6 +87,11 @@ impl Lobe for CompensatedDiffuse {
         mean(self.albedo * self.layer_transmission(wo.z))
     }
 
+    /// Without a reflecting layer the transmission is exactly 1 at every angle.
+    fn constant_selection_weight(&self) -> Option<f32> {
+        self.layer.is_none().then(|| mean(self.albedo))
+    }
+
     fn kind(&self) -> LobeKind {
         LobeKind::Diffuse
     }

@@ -85,6 +85,12 @@ pub(super) trait Lobe {
     /// be non-zero).
     fn selection_weight(&self, wo: Vec3, eta: f32) -> f32;
 
+    /// [`selection_weight`](Lobe::selection_weight) where it is the same for every `wo` and
+    /// `eta` (a plain Lambert lobe), bit for bit; `None` where it depends on them.
+    fn constant_selection_weight(&self) -> Option<f32> {
+        None
+    }
+
     /// Class of the lobe ([`LobeKind::Specular`] for delta lobes).
     fn kind(&self) -> LobeKind;
 }

@@ -33,6 +33,8 @@ pub(super) struct Mixture {
     diffuse: Option<CompensatedDiffuse>,
     dielectric: Option<Dielectric>,
     thin: Option<ThinDielectric>,
+    /// The selection at every `wo`, where no lobe's weight depends on it (plain Lambert).
+    constant_selection: Option<Selection>,
 }
 
 /// A direction sampled from the mixture, in the local frame.
@@ -73,6 +75,19 @@ fn sanitize3(v: Vec3, default: f32, lo: f32, hi: f32) -> Vec3 {
     )
 }
 
+/// Selection probabilities from selection weights `w` (all zero unless their sum is
+/// positive and finite).
+#[inline]
+fn normalized(mut w: [f32; LOBES]) -> Selection {
+    let total: f32 = w.iter().sum();
+    if total > 0.0 && total.is_finite() {
+        w.iter_mut().for_each(|wk| *wk /= total);
+        w
+    } else {
+        [0.0; LOBES]
+    }
+}
+
 impl Mixture {
     /// Lobes and weights of the glTF model (see the [module docs](super)).
     pub fn new(params: &BsdfParams) -> Mixture {
@@ -103,7 +118,7 @@ impl Mixture {
         let f90 = metallic * Vec3::ONE + w_base * layer_f90;
         let diffuse_albedo = w_base * base;
         let index_matched = (ior - 1.0).abs() < 1e-4;
-        Mixture {
+        let mut mixture = Mixture {
             ior,
             specular: (f0.max(f90).max_element() > 0.0)
                 .then(|| SchlickReflection::new(f0, f90, ggx)),
@@ -120,7 +135,10 @@ impl Mixture {
                 ior,
                 ggx,
             }),
-        }
+            constant_selection: None,
+        };
+        mixture.constant_selection = mixture.constant_weights().map(normalized);
+        mixture
     }
 
     /// IOR of the material (non-finite or < 1 replaced by 1.5).
@@ -164,19 +182,34 @@ impl Mixture {
     /// [`Mixture::eval`] and [`Mixture::sample`] take, so that one `wo` computes them once.
     #[inline]
     pub fn selection(&self, wo: Vec3, eta: f32) -> Selection {
-        let mut p = [0.0; LOBES];
-        for (pk, lobe) in p.iter_mut().zip(self.lobes()) {
+        match self.constant_selection {
+            Some(p) => p,
+            None => self.selection_at(wo, eta),
+        }
+    }
+
+    /// [`Mixture::selection`] computed from the lobes' weights at `wo`.
+    #[inline]
+    fn selection_at(&self, wo: Vec3, eta: f32) -> Selection {
+        let mut w = [0.0; LOBES];
+        for (wk, lobe) in w.iter_mut().zip(self.lobes()) {
             if let Some(lobe) = lobe {
-                *pk = lobe.selection_weight(wo, eta).max(0.0);
+                *wk = lobe.selection_weight(wo, eta).max(0.0);
             }
         }
-        let total: f32 = p.iter().sum();
-        if total > 0.0 && total.is_finite() {
-            p.iter_mut().for_each(|pk| *pk /= total);
-        } else {
-            p = [0.0; LOBES];
+        normalized(w)
+    }
+
+    /// The lobes' selection weights (as [`Mixture::selection`] clamps them) if none depends
+    /// on the direction.
+    fn constant_weights(&self) -> Option<[f32; LOBES]> {
+        let mut w = [0.0; LOBES];
+        for (wk, lobe) in w.iter_mut().zip(self.lobes()) {
+            if let Some(lobe) = lobe {
+                *wk = lobe.constant_selection_weight()?.max(0.0);
+            }
         }
-        p
+        Some(w)
     }
 
     /// f·|cos θi| of the non-delta lobes and the mixture pdf of `wi` (local, `wo.z > 0`),
@@ -279,5 +312,44 @@ impl Mixture {
     pub fn delta_pdf(&self, wo: Vec3, eta: f32, lobe: usize, transmitted: bool) -> f32 {
         let p = self.selection(wo, eta);
         self.lobes()[lobe].map_or(0.0, |l| p[lobe] * l.delta_prob(wo, eta, transmitted))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plain Lambert material selects its lobe the same way at every `wo` and computes that
+    /// once, bit for bit what the lobes' weights give at each `wo`; a dielectric base, whose
+    /// reflecting layer weighs more at grazing angles, computes it at each `wo`.
+    #[test]
+    fn constant_selection_is_the_selection_at_every_direction() {
+        let lambert = Mixture::new(&BsdfParams {
+            base_color: Vec3::new(0.8, 0.5, 0.2),
+            metallic: 0.0,
+            roughness: 1.0,
+            specular: 0.0,
+            ..BsdfParams::default()
+        });
+        let constant = lambert.constant_selection.expect("a plain Lambert lobe");
+        for wo in [
+            Vec3::Z,
+            Vec3::new(0.3, 0.1, 0.9),
+            Vec3::new(0.99, 0.0, 0.05),
+        ] {
+            let wo = wo.normalize();
+            assert_eq!(lambert.selection_at(wo, 1.5), constant, "wo {wo}");
+        }
+        let layered = Mixture::new(&BsdfParams {
+            metallic: 0.0,
+            roughness: 0.5,
+            ..BsdfParams::default()
+        });
+        assert!(layered.constant_selection.is_none());
+        let (head_on, grazing) = (Vec3::Z, Vec3::new(0.99, 0.0, 0.05).normalize());
+        assert_ne!(
+            layered.selection(head_on, 1.5),
+            layered.selection(grazing, 1.5)
+        );
     }
 }
