@@ -137,7 +137,9 @@ impl Mixture {
             }),
             constant_selection: None,
         };
-        mixture.constant_selection = mixture.constant_weights().map(normalized);
+        mixture.constant_selection = mixture
+            .weights(|lobe| lobe.constant_selection_weight())
+            .map(normalized);
         mixture
     }
 
@@ -191,22 +193,18 @@ impl Mixture {
     /// [`Mixture::selection`] computed from the lobes' weights at `wo`.
     #[inline]
     fn selection_at(&self, wo: Vec3, eta: f32) -> Selection {
-        let mut w = [0.0; LOBES];
-        for (wk, lobe) in w.iter_mut().zip(self.lobes()) {
-            if let Some(lobe) = lobe {
-                *wk = lobe.selection_weight(wo, eta).max(0.0);
-            }
-        }
-        normalized(w)
+        let w = self.weights(|lobe| Some(lobe.selection_weight(wo, eta)));
+        w.map_or([0.0; LOBES], normalized)
     }
 
-    /// The lobes' selection weights (as [`Mixture::selection`] clamps them) if none depends
-    /// on the direction.
-    fn constant_weights(&self) -> Option<[f32; LOBES]> {
+    /// Each lobe slot's selection weight from `weight`, clamped at 0 (absent lobes 0), or
+    /// `None` where `weight` gives none for a present lobe.
+    #[inline]
+    fn weights(&self, weight: impl Fn(&dyn Lobe) -> Option<f32>) -> Option<[f32; LOBES]> {
         let mut w = [0.0; LOBES];
         for (wk, lobe) in w.iter_mut().zip(self.lobes()) {
             if let Some(lobe) = lobe {
-                *wk = lobe.constant_selection_weight()?.max(0.0);
+                *wk = weight(lobe)?.max(0.0);
             }
         }
         Some(w)
