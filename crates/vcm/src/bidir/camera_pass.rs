@@ -212,6 +212,7 @@ fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
         shadows: SmallVec::new(),
     }
 }
+
 /// The sampler of `path`, moved to the numbers of the vertex it has reached.
 fn vertex_sampler(path: &mut CameraPathState) -> &mut SobolSampler {
     path.walk.start_vertex(PAIRS_PER_VERTEX)

@@ -372,6 +372,7 @@ fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathSt
     path.alive = path.walk.throughput.max_element() > 0.0 && path.walk.throughput.is_finite();
     path
 }
+
 /// The sampler of `path`, moved to the numbers of the vertex it has reached.
 fn vertex_sampler(path: &mut LightPathState) -> &mut SobolSampler {
     path.walk.start_vertex(PAIRS_PER_VERTEX)
