@@ -2,9 +2,12 @@
 //! false-colour error images. Every write goes to a temporary file in the same folder that is
 //! renamed over the target, so an interrupted write never leaves a broken image.
 
+use std::io::Seek;
 use std::path::{Path, PathBuf};
 
-use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, WritableImage};
+use exr::prelude::{
+    Encoding, Image, LineOrder, ReadChannels, ReadLayers, SpecificChannels, WritableImage,
+};
 use glam::Vec3;
 
 /// Why an image could not be read or written.
@@ -86,27 +89,34 @@ impl RgbImage {
 
     /// Reads the first RGB(A) layer of an OpenEXR file.
     /// Images over [`MAX_TEXELS`](vcm_scene::image_limits::MAX_TEXELS) are refused from
-    /// their headers, before anything is allocated for them.
+    /// their headers, before anything is allocated for them; the pixels are then read from
+    /// the same open file, so the file checked is the file read.
     pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
         let fail = |reason: String| ImageError::Exr {
             path: path.to_path_buf(),
             reason,
         };
-        let file = std::fs::File::open(path).map_err(|e| fail(e.to_string()))?;
-        vcm_scene::image_limits::check_exr_layers(file).map_err(fail)?;
-        let image = exr::prelude::read_first_rgba_layer_from_file(
-            path,
-            |resolution, _| RgbImage {
-                width: resolution.width(),
-                height: resolution.height(),
-                pixels: vec![Vec3::ZERO; resolution.width() * resolution.height()],
-            },
-            |image: &mut RgbImage, position, (r, g, b, _a): (f32, f32, f32, f32)| {
-                let width = image.width;
-                image.pixels[position.y() * width + position.x()] = Vec3::new(r, g, b);
-            },
-        )
-        .map_err(|e| fail(e.to_string()))?;
+        let mut file = std::fs::File::open(path).map_err(|e| fail(e.to_string()))?;
+        vcm_scene::image_limits::check_exr_layers(&mut file).map_err(fail)?;
+        file.rewind().map_err(|e| fail(e.to_string()))?;
+        let image = exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .rgba_channels(
+                |resolution, _| RgbImage {
+                    width: resolution.width(),
+                    height: resolution.height(),
+                    pixels: vec![Vec3::ZERO; resolution.width() * resolution.height()],
+                },
+                |image: &mut RgbImage, position, (r, g, b, _a): (f32, f32, f32, f32)| {
+                    let width = image.width;
+                    image.pixels[position.y() * width + position.x()] = Vec3::new(r, g, b);
+                },
+            )
+            .first_valid_layer()
+            .all_attributes()
+            .from_unbuffered(file)
+            .map_err(|e| fail(e.to_string()))?;
         Ok(image.layer_data.channel_data.pixels)
     }
 
