@@ -224,9 +224,13 @@ impl Wavefront for PtWavefront<'_> {
             scene: self.scene,
             max_segments: self.settings.max_depth.unwrap_or(u32::MAX),
         };
-        shade_in_parallel(&mut self.paths, hits, vertex_sampler, |path, hit| {
-            shade(&ctx, path, hit)
-        });
+        shade_in_parallel(
+            self.scene,
+            &mut self.paths,
+            hits,
+            vertex_sampler,
+            |path, hit| shade(&ctx, path, hit),
+        );
         let shadows = self.paths.iter().filter_map(|p| p.shadow.as_ref());
         ShadowRay::fill_batch(shadow_rays, shadows);
     }

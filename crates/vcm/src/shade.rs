@@ -39,21 +39,20 @@ pub(crate) fn vertex_sampler(path: &mut PathState) -> &mut SobolSampler {
 /// Shades the vertex where `path` hit the scene (`None`: it escaped and ends). Adds the
 /// weighted emission to the path's radiance, queues at most one shadow ray and either
 /// prepares the next segment or ends the path.
-pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) {
+pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<(Hit, &SurfaceHit)>) {
     path.shadow = None;
     // `max_depth` 0 allows not even the camera segment.
     if path.segments > ctx.max_segments {
         path.alive = false;
         return;
     }
-    let Some(hit) = hit else {
+    let Some((hit, surface)) = hit else {
         path.radiance += path.throughput * escaped(ctx.scene, path);
         path.alive = false;
         return;
     };
     let scene = ctx.scene;
     vertex_sampler(path);
-    let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
     let point = surface.point;
     path.radiance += path.throughput * emission(scene, path, &point, hit);
 
@@ -68,7 +67,7 @@ pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<Hit>) 
         return;
     };
     if bsdf.has_non_delta() {
-        path.shadow = next_event(scene, path, &surface, &seen);
+        path.shadow = next_event(scene, path, surface, &seen);
     }
     path.alive = scatter(path, &seen, |w| surface.spawn(w));
 }

@@ -147,9 +147,13 @@ impl Wavefront for CameraWavefront<'_> {
     /// in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let iterations = self.iterations;
-        shade_in_parallel(&mut self.paths, hits, vertex_sampler, |path, hit| {
-            shade(&iterations[path.sample as usize], path, hit)
-        });
+        shade_in_parallel(
+            iterations[0].scene,
+            &mut self.paths,
+            hits,
+            vertex_sampler,
+            |path, hit| shade(&iterations[path.sample as usize], path, hit),
+        );
         let shadows = self.paths.iter().flat_map(|p| &p.shadows);
         ShadowRay::fill_batch(shadow_rays, shadows);
     }
@@ -219,13 +223,13 @@ fn vertex_sampler(path: &mut CameraPathState) -> &mut SobolSampler {
 }
 
 /// Shades the vertex where a camera path hit the scene (`None`: it escaped and ends).
-fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
+fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<(Hit, &SurfaceHit)>) {
     let max_segments = ctx.max_segments();
     if path.walk.segments > max_segments {
         path.alive = false;
         return;
     }
-    let Some(hit) = hit else {
+    let Some((hit, surface)) = hit else {
         path.radiance += path.walk.throughput * escaped(ctx, path);
         path.alive = false;
         return;
@@ -233,7 +237,6 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     let scene = ctx.scene;
     let algorithm = ctx.settings.algorithm;
     vertex_sampler(path);
-    let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
     let wo = -path.walk.direction;
     path.walk
         .mis
@@ -256,13 +259,13 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
             picks
                 .indices()
                 .for_each(|i| prefetch(&ctx.cache.vertices()[i]));
-            if let Some(shadow) = light_sample(ctx, path, &surface, &seen) {
+            if let Some(shadow) = light_sample(ctx, path, surface, &seen) {
                 path.shadows.push(shadow);
             }
-            connect_to_cache(ctx, path, &surface, &seen, &picks);
+            connect_to_cache(ctx, path, surface, &seen, &picks);
         }
         if ctx.plan.merges {
-            path.radiance += path.walk.throughput * merge(ctx, path, &surface, &seen);
+            path.radiance += path.walk.throughput * merge(ctx, path, surface, &seen);
             // Photon mapping proper stops at the first diffuse or glossy vertex.
             if algorithm == Algorithm::Ppm {
                 path.alive = false;
@@ -272,7 +275,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<Hit>) {
     }
     path.alive = path
         .walk
-        .scatter(&surface, &seen, TransportMode::Radiance, &ctx.factors)
+        .scatter(surface, &seen, TransportMode::Radiance, &ctx.factors)
         .is_some();
 }
 

@@ -280,9 +280,13 @@ impl Wavefront for LightWavefront<'_> {
     /// camera connections, in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let (iterations, splat) = (self.iterations, self.splat);
-        shade_in_parallel(&mut self.paths, hits, vertex_sampler, |path, hit| {
-            shade(&iterations[path.sample as usize], path, hit, splat)
-        });
+        shade_in_parallel(
+            iterations[0].scene,
+            &mut self.paths,
+            hits,
+            vertex_sampler,
+            |path, hit| shade(&iterations[path.sample as usize], path, hit, splat),
+        );
         for path in &mut self.paths {
             if let Some(vertex) = path.vertex.take() {
                 let results = &mut self.results[path.sample as usize];
@@ -380,14 +384,18 @@ fn vertex_sampler(path: &mut LightPathState) -> &mut SobolSampler {
 
 /// Shades the vertex where a light path hit the scene (`None`: it escaped and ends): records
 /// it as a cacheable vertex, connects it to the camera (`splat`), and continues the path.
-fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat: bool) {
-    let Some(hit) = hit else {
+fn shade(
+    ctx: &FrameContext,
+    path: &mut LightPathState,
+    hit: Option<(Hit, &SurfaceHit)>,
+    splat: bool,
+) {
+    let Some((hit, surface)) = hit else {
         path.alive = false;
         return;
     };
     vertex_sampler(path);
     let scene = ctx.scene;
-    let surface = SurfaceHit::new(scene, hit.triangle, hit.u, hit.v);
     let wo = -path.walk.direction;
     let distance_sq = (path.walk.segments > 1 || !path.from_infinity).then_some(hit.t * hit.t);
     path.walk.mis.arrive(distance_sq, surface.cos_geometric(wo));
@@ -408,7 +416,7 @@ fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat:
         if splat && path.walk.segments < max_segments {
             path.splat = seen
                 .as_ref()
-                .and_then(|seen| connect_to_camera(ctx, &surface, seen, &vertex));
+                .and_then(|seen| connect_to_camera(ctx, surface, seen, &vertex));
         }
         path.vertex = Some(vertex);
     }
@@ -416,7 +424,7 @@ fn shade(ctx: &FrameContext, path: &mut LightPathState, hit: Option<Hit>, splat:
     path.alive = path.walk.segments.saturating_add(2) <= max_segments
         && seen.is_some_and(|seen| {
             path.walk
-                .scatter(&surface, &seen, TransportMode::Importance, &ctx.factors)
+                .scatter(surface, &seen, TransportMode::Importance, &ctx.factors)
                 .is_some()
         });
 }
