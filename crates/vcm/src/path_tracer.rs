@@ -15,6 +15,7 @@ use crate::film::Film;
 use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
 use crate::path_state::{PathState, ShadowRay};
 use crate::shade::{ShadeContext, shade, vertex_sampler};
+use crate::surface_hit::SurfaceHit;
 use crate::wave::{fill_extension_rays, shade_in_parallel};
 
 /// What a [`PathTracer`] renders.
@@ -224,11 +225,12 @@ impl Wavefront for PtWavefront<'_> {
             scene: self.scene,
             max_segments: self.settings.max_depth.unwrap_or(u32::MAX),
         };
+        let scene = self.scene;
         shade_in_parallel(
-            self.scene,
             &mut self.paths,
             hits,
             vertex_sampler,
+            |_, hit| SurfaceHit::at(scene, hit),
             |path, hit| shade(&ctx, path, hit),
         );
         let shadows = self.paths.iter().filter_map(|p| p.shadow.as_ref());

@@ -51,6 +51,12 @@ impl SurfaceHit {
         }
     }
 
+    /// The point where `hit` met the scene.
+    #[inline]
+    pub fn at(scene: &Scene, hit: Hit) -> SurfaceHit {
+        SurfaceHit::new(scene, hit.triangle, hit.u, hit.v)
+    }
+
     /// Origin for a ray leaving the surface in direction `w`: offset to `w`'s side by the
     /// position's error bound.
     pub fn spawn(&self, w: Vec3) -> Vec3 {

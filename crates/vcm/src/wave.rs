@@ -3,11 +3,10 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
-use vcm_scene::Scene;
 use vcm_scene::sampling::SobolSampler;
 use vcm_traversal::{HitBatch, RayBatch};
 
-use crate::surface_hit::{Hit, SurfaceHit};
+use crate::surface_hit::Hit;
 
 /// Refills `rays` with one unbounded ray per (origin, direction) segment, in order.
 pub(crate) fn fill_extension_rays(
@@ -17,25 +16,24 @@ pub(crate) fn fill_extension_rays(
     rays.refill(segments.map(|(origin, direction)| (origin, direction, 0.0, f32::INFINITY)));
 }
 
-/// Paths shaded together: their random numbers and surface points are computed in one go
-/// first.
+/// Paths shaded together: what their shading can do ahead is done for all of them first.
 const SHADE_CHUNK: usize = 64;
 
-/// Calls `shade` for every path with its closest hit (`hits[i]` for path `i`) and the
-/// surface point there, in parallel.
+/// Calls `shade` for every path with its closest hit (`hits[i]` for path `i`), in parallel,
+/// and for a path that hit something, what `prepare` computed from that hit ahead.
 ///
 /// Before a chunk of paths is shaded, the numbers of the vertices they hit are computed
 /// together ([`SobolSampler::prefetch`], SIMD across paths): `vertex_sampler` moves a path's
-/// sampler to the numbers of the vertex it has reached and returns it. Then the chunk's
-/// surface points are computed in a loop of their own: one path's shading is a long chain of
-/// dependent steps, while the surface points of different paths are independent, so the CPU
-/// overlaps them (the same arithmetic as computing each in its path's turn).
-pub(crate) fn shade_in_parallel<P: Send>(
-    scene: &Scene,
+/// sampler to the numbers of the vertex it has reached and returns it. Then `prepare` runs
+/// for every hit path of the chunk in a loop of its own (the surface point, and loads that
+/// take long to arrive): one path's shading is a long chain of dependent steps, while these
+/// first steps of different paths are independent, so the CPU overlaps them.
+pub(crate) fn shade_in_parallel<P: Send, T>(
     paths: &mut [P],
     hits: &HitBatch,
     vertex_sampler: impl Fn(&mut P) -> &mut SobolSampler + Sync,
-    shade: impl Fn(&mut P, Option<(Hit, &SurfaceHit)>) + Sync,
+    prepare: impl Fn(&P, Hit) -> T + Sync,
+    shade: impl Fn(&mut P, Option<(Hit, &T)>) + Sync,
 ) {
     paths
         .par_chunks_mut(SHADE_CHUNK)
@@ -48,13 +46,13 @@ pub(crate) fn shade_in_parallel<P: Send>(
                     .filter(|(i, _)| hits.is_hit(first + i))
                     .map(|(_, path)| vertex_sampler(path)),
             );
-            let len = chunk.len();
-            let surfaces: [Option<(Hit, SurfaceHit)>; SHADE_CHUNK] = std::array::from_fn(|i| {
-                let hit = (i < len).then(|| Hit::from_batch(hits, first + i))??;
-                Some((hit, SurfaceHit::new(scene, hit.triangle, hit.u, hit.v)))
+            let prepared: [Option<(Hit, T)>; SHADE_CHUNK] = std::array::from_fn(|i| {
+                let path = chunk.get(i)?;
+                let hit = Hit::from_batch(hits, first + i)?;
+                Some((hit, prepare(path, hit)))
             });
-            for (path, surface) in chunk.iter_mut().zip(&surfaces) {
-                shade(path, surface.as_ref().map(|(hit, point)| (*hit, point)));
+            for (path, prepared) in chunk.iter_mut().zip(&prepared) {
+                shade(path, prepared.as_ref().map(|(hit, ahead)| (*hit, ahead)));
             }
         });
 }

@@ -81,13 +81,20 @@ impl SobolSampler {
     /// gain nothing from stratification or need more bits (e.g. uniform integer picks).
     #[inline]
     pub fn stream(&mut self) -> Rng {
-        let rng = Rng::from_key(&[
+        let rng = self.next_stream();
+        self.pair += 1;
+        rng
+    }
+
+    /// The stream the next [`stream`](Self::stream) call returns, without moving on: for
+    /// work that can start before the numbers are drawn (e.g. fetching what they will pick).
+    #[inline]
+    pub fn next_stream(&self) -> Rng {
+        Rng::from_key(&[
             u64::from(self.seed),
             u64::from(self.index_rev),
             u64::from(self.pair),
-        ]);
-        self.pair += 1;
-        rng
+        ])
     }
 
     /// Computes the pairs of dimensions each of `samplers` has left in its current step
@@ -283,6 +290,22 @@ fn hash(mut n: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `next_stream` is the stream the next `stream` call returns, and draws nothing.
+    #[test]
+    fn next_stream_is_the_next_stream() {
+        let mut sampler = SobolSampler::new(&[3, 4], 5);
+        sampler.uniform2();
+        let mut ahead = sampler.next_stream();
+        let mut again = sampler.next_stream();
+        let mut drawn = sampler.stream();
+        for _ in 0..4 {
+            let x = drawn.next_u32();
+            assert_eq!((ahead.next_u32(), again.next_u32()), (x, x));
+        }
+        let mut after = sampler.stream();
+        assert_ne!(after.next_u32(), sampler.next_stream().next_u32());
+    }
 
     /// The same values as the `sobol_burley` crate's reference implementation, bit for bit.
     #[test]

@@ -148,10 +148,10 @@ impl Wavefront for CameraWavefront<'_> {
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let iterations = self.iterations;
         shade_in_parallel(
-            iterations[0].scene,
             &mut self.paths,
             hits,
             vertex_sampler,
+            |path, hit| prepare(&iterations[path.sample as usize], path, hit),
             |path, hit| shade(&iterations[path.sample as usize], path, hit),
         );
         let shadows = self.paths.iter().flat_map(|p| &p.shadows);
@@ -222,6 +222,20 @@ fn vertex_sampler(path: &mut CameraPathState) -> &mut SobolSampler {
     path.walk.start_vertex(PAIRS_PER_VERTEX)
 }
 
+/// What a camera vertex computes before its chunk of paths is shaded
+/// ([`shade_in_parallel`]): the surface point, and where the vertex will connect to the
+/// cache, the picked light vertices start loading. They lie all over the cache and take a
+/// while to arrive; the chunk's other paths are shaded meanwhile.
+fn prepare(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> SurfaceHit {
+    if ctx.plan.connects {
+        let picks = CachePicks::next(&path.walk.rng, ctx);
+        picks
+            .indices()
+            .for_each(|i| prefetch(&ctx.cache.vertices()[i]));
+    }
+    SurfaceHit::at(ctx.scene, hit)
+}
+
 /// Shades the vertex where a camera path hit the scene (`None`: it escaped and ends).
 fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<(Hit, &SurfaceHit)>) {
     let max_segments = ctx.max_segments();
@@ -254,11 +268,8 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<(Hit, &Sur
     };
     if bsdf.has_non_delta() {
         if ctx.plan.connects {
-            // The picks lie all over the cache: fetch them while the light is sampled.
+            // `prepare` started loading the picks' vertices.
             let picks = CachePicks::draw(&mut path.walk.rng, ctx);
-            picks
-                .indices()
-                .for_each(|i| prefetch(&ctx.cache.vertices()[i]));
             if let Some(shadow) = light_sample(ctx, path, surface, &seen) {
                 path.shadows.push(shadow);
             }
@@ -370,6 +381,13 @@ impl CachePicks {
     /// Draws the picks of one camera vertex from a stream of their own that `rng` gives (its
     /// next pair of dimensions).
     fn draw(rng: &mut SobolSampler, ctx: &CameraContext) -> CachePicks {
+        let picks = CachePicks::next(rng, ctx);
+        rng.stream();
+        picks
+    }
+
+    /// The picks [`CachePicks::draw`] will make from `rng`, without drawing them.
+    fn next(rng: &SobolSampler, ctx: &CameraContext) -> CachePicks {
         let vertices = ctx.cache.len();
         let count = if vertices == 0 {
             0
@@ -377,7 +395,7 @@ impl CachePicks {
             ctx.settings.connections
         };
         CachePicks {
-            rng: rng.stream(),
+            rng: rng.next_stream(),
             count,
             vertices,
         }

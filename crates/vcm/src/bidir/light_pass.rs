@@ -280,11 +280,12 @@ impl Wavefront for LightWavefront<'_> {
     /// camera connections, in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let (iterations, splat) = (self.iterations, self.splat);
+        let scene = iterations[0].scene;
         shade_in_parallel(
-            iterations[0].scene,
             &mut self.paths,
             hits,
             vertex_sampler,
+            |_, hit| SurfaceHit::at(scene, hit),
             |path, hit| shade(&iterations[path.sample as usize], path, hit, splat),
         );
         for path in &mut self.paths {
