@@ -223,17 +223,23 @@ fn vertex_sampler(path: &mut CameraPathState) -> &mut SobolSampler {
 }
 
 /// What a camera vertex computes before its chunk of paths is shaded
-/// ([`shade_in_parallel`]): the surface point, and where the vertex will connect to the
-/// cache, the picked light vertices start loading. They lie all over the cache and take a
-/// while to arrive; the chunk's other paths are shaded meanwhile.
+/// ([`shade_in_parallel`]): the surface point, and the light vertices it will read start
+/// loading: where it connects to the cache, the picked ones; where it merges, those within
+/// the radius (the grid is queried again when merging, its entries then cached). They lie
+/// all over the cache and take a while to arrive; the chunk's other paths are shaded
+/// meanwhile.
 fn prepare(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> SurfaceHit {
+    let vertices = ctx.cache.vertices();
     if ctx.plan.connects {
         let picks = CachePicks::next(&path.walk.rng, ctx);
-        picks
-            .indices()
-            .for_each(|i| prefetch(&ctx.cache.vertices()[i]));
+        picks.indices().for_each(|i| prefetch(&vertices[i]));
     }
-    SurfaceHit::at(ctx.scene, hit)
+    let surface = SurfaceHit::at(ctx.scene, hit);
+    if ctx.plan.merges {
+        ctx.grid
+            .query(surface.point.position, |i| prefetch(&vertices[i]));
+    }
+    surface
 }
 
 /// Shades the vertex where a camera path hit the scene (`None`: it escaped and ends).
