@@ -128,6 +128,15 @@ impl HashGrid {
         }
     }
 
+    /// Starts loading the grid entries a [`query`](Self::query) at `query` would read.
+    pub fn prefetch(&self, query: Vec3) {
+        for range in self.bucket_ranges(query).into_iter().flatten() {
+            if let Some(first) = self.entries.get(range.start) {
+                crate::prefetch::prefetch(first);
+            }
+        }
+    }
+
     /// The entry ranges of the buckets of the (at most 8) cells that points within the
     /// radius of `query` can lie in, each bucket once.
     fn bucket_ranges(&self, query: Vec3) -> [Option<std::ops::Range<usize>>; 8] {
@@ -294,9 +303,12 @@ mod tests {
     fn empty_and_far_queries_find_nothing() {
         let grid = HashGrid::build(&[], 0.1);
         grid.query(Vec3::ZERO, |_| panic!("no points"));
+        grid.prefetch(Vec3::ZERO);
         let points = [Vec3::ZERO];
         let grid = HashGrid::build(&points, 0.1);
         grid.query(Vec3::splat(5.0), |_| panic!("too far"));
+        grid.prefetch(Vec3::splat(5.0));
+        grid.prefetch(Vec3::splat(0.05));
         let mut hits = 0;
         grid.query(Vec3::splat(0.05), |_| hits += 1);
         assert_eq!(hits, 1);

@@ -223,11 +223,10 @@ fn vertex_sampler(path: &mut CameraPathState) -> &mut SobolSampler {
 }
 
 /// What a camera vertex computes before its chunk of paths is shaded
-/// ([`shade_in_parallel`]): the surface point, and the light vertices it will read start
-/// loading: where it connects to the cache, the picked ones; where it merges, those within
-/// the radius (the grid is queried again when merging, its entries then cached). They lie
-/// all over the cache and take a while to arrive; the chunk's other paths are shaded
-/// meanwhile.
+/// ([`shade_in_parallel`]): the surface point, and what it will read starts loading: where
+/// it connects to the cache, the picked light vertices; where it merges, the grid entries
+/// around it ([`merge`] then prefetches the vertices they name). These lie all over memory
+/// and take a while to arrive; the chunk's other paths are shaded meanwhile.
 fn prepare(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> SurfaceHit {
     let vertices = ctx.cache.vertices();
     if ctx.plan.connects {
@@ -236,8 +235,7 @@ fn prepare(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> SurfaceHit 
     }
     let surface = SurfaceHit::at(ctx.scene, hit);
     if ctx.plan.merges {
-        ctx.grid
-            .query(surface.point.position, |i| prefetch(&vertices[i]));
+        ctx.grid.prefetch(surface.point.position);
     }
     surface
 }
@@ -499,8 +497,14 @@ fn merge(
     let max_segments = ctx.max_segments();
     let ppm = ctx.settings.algorithm == Algorithm::Ppm;
     let mut sum = Vec3::ZERO;
+    // The vertices within the radius, all requested before the first is read.
+    let mut found = SmallVec::<[u32; 16]>::new();
     ctx.grid.query(surface.point.position, |i| {
-        let vertex = &vertices[i];
+        prefetch(&vertices[i]);
+        found.push(i as u32);
+    });
+    found.into_iter().for_each(|i| {
+        let vertex = &vertices[i as usize];
         if path.walk.segments.saturating_add(vertex.path_length) > max_segments {
             return;
         }
