@@ -46,13 +46,18 @@ pub(crate) fn shade_in_parallel<P: Send, T>(
                     .filter(|(i, _)| hits.is_hit(first + i))
                     .map(|(_, path)| vertex_sampler(path)),
             );
-            let prepared: [Option<(Hit, T)>; SHADE_CHUNK] = std::array::from_fn(|i| {
-                let path = chunk.get(i)?;
-                let hit = Hit::from_batch(hits, first + i)?;
-                Some((hit, prepare(path, hit)))
-            });
-            for (path, prepared) in chunk.iter_mut().zip(&prepared) {
-                shade(path, prepared.as_ref().map(|(hit, ahead)| (*hit, ahead)));
+            // Filled in place by a plain loop: built with `array::from_fn`, each element went
+            // through a closure call and a copy of its result.
+            let mut chunk_hits = [None; SHADE_CHUNK];
+            let mut prepared: [Option<T>; SHADE_CHUNK] = [const { None }; SHADE_CHUNK];
+            for (i, path) in chunk.iter().enumerate() {
+                if let Some(hit) = Hit::from_batch(hits, first + i) {
+                    chunk_hits[i] = Some(hit);
+                    prepared[i] = Some(prepare(path, hit));
+                }
+            }
+            for ((path, hit), ahead) in chunk.iter_mut().zip(chunk_hits).zip(&prepared) {
+                shade(path, hit.zip(ahead.as_ref()));
             }
         });
 }
