@@ -42,6 +42,9 @@ impl PreparedRay {
         if !valid {
             return None;
         }
+        // Arrays, not `Vec3`: indexing a `Vec3` at a run-time axis is a chain of branches on
+        // the axis, which incoherent rays mispredict; an array index is a plain load.
+        let (o, d) = (origin.to_array(), direction.to_array());
         let abs = direction.abs();
         let kz = if abs.x >= abs.y && abs.x >= abs.z {
             0
@@ -51,7 +54,7 @@ impl PreparedRay {
             2
         };
         let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        if direction[kz] < 0.0 {
+        if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
         let safe_dir = Vec3A::from(direction.signum() * abs.max(Vec3::splat(MIN_DIR_COMPONENT)));
@@ -62,7 +65,7 @@ impl PreparedRay {
             .zip(negative)
             .filter(|&(_, negative)| !negative)
             .fold(0, |octant, (bits, _)| octant | bits);
-        let sz = 1.0 / direction[kz];
+        let sz = 1.0 / d[kz];
         Some(Self {
             origin: origin.into(),
             inv_dir,
@@ -71,8 +74,8 @@ impl PreparedRay {
             tmin,
             tmax,
             axes: [kx, ky, kz],
-            origin_permuted: [origin[kx], origin[ky], origin[kz]],
-            shear: [direction[kx] * sz, direction[ky] * sz, sz],
+            origin_permuted: [o[kx], o[ky], o[kz]],
+            shear: [d[kx] * sz, d[ky] * sz, sz],
         })
     }
 }
