@@ -46,6 +46,7 @@ mod bidir;
 mod error;
 mod film;
 pub mod hash_grid;
+mod huge_pages;
 pub mod image_io;
 mod integrator;
 pub mod light_vertex_cache;

@@ -6,6 +6,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::bidir::mis::SubpathMis;
+use crate::huge_pages::advise_huge_pages;
 
 /// Head room of the cache over the preprocess estimate.
 const CAPACITY_MARGIN: f64 = 1.1;
@@ -47,8 +48,10 @@ pub struct LightVertexCache {
 impl LightVertexCache {
     /// An empty cache that holds at most `capacity` vertices (allocated up front).
     pub fn with_capacity(capacity: usize) -> LightVertexCache {
+        let mut vertices = Vec::with_capacity(capacity);
+        advise_huge_pages(&mut vertices);
         LightVertexCache {
-            vertices: Vec::with_capacity(capacity),
+            vertices,
             capacity,
             discarded: 0,
         }
