@@ -52,6 +52,15 @@ struct Outgoing {
     selection: Selection,
 }
 
+/// A direction `wi` toward the next vertex that is consistent with an [`Outgoing`] (see
+/// [`Bsdf::consistent`]), in the frame of that outgoing direction's side.
+struct Incoming {
+    world: Vec3,
+    local: Vec3,
+    /// |wi·n_g|.
+    cos_g: f32,
+}
+
 /// A [`Bsdf`] with its outgoing direction `wo` fixed ([`Bsdf::fix_outgoing`]): evaluations
 /// and samples that share `wo` find its side, local direction and lobe selection once.
 pub struct FixedOutgoing<'a> {
@@ -219,15 +228,46 @@ impl Bsdf {
         Some((wi_l, self.consistent(out.side, wi, wi_l)?))
     }
 
-    /// f_cos and the forward pdf of the pair (`out`, `wi`), if both are non-zero and finite.
+    /// f_cos and the forward pdf of the pair (`out`, `wi`), if both are non-zero and finite,
+    /// with the [`Incoming`] direction they were evaluated at.
     #[inline]
-    fn eval_from(&self, out: &Outgoing, wi: Vec3, mode: TransportMode) -> Option<(Vec3, f32)> {
+    fn eval_from(
+        &self,
+        out: &Outgoing,
+        wi: Vec3,
+        mode: TransportMode,
+    ) -> Option<(Vec3, f32, Incoming)> {
         let (wi_l, cos_gi) = self.incoming(out, wi)?;
         let (f_cos, pdf) = self
             .mixture
             .eval(&out.selection, out.local, wi_l, out.side.eta, mode);
         let f_cos = self.adjoint(f_cos, mode, out.world, out.local, wi_l, cos_gi);
-        (f_cos.is_finite() && pdf.is_finite() && pdf > 0.0).then_some((f_cos, pdf))
+        let incoming = Incoming {
+            world: wi,
+            local: wi_l,
+            cos_g: cos_gi,
+        };
+        (f_cos.is_finite() && pdf.is_finite() && pdf > 0.0).then_some((f_cos, pdf, incoming))
+    }
+
+    /// [`Bsdf::pdf`] from `wi` back to `out`'s direction, for a `wi` that [`Bsdf::eval_from`]
+    /// accepted. A reflection stays on `out`'s side, so the side, its η and both local
+    /// directions `Bsdf::pdf` would find again are already known (bit for bit the same: the
+    /// same operations on the same inputs); a transmitted `wi` takes the general path.
+    #[inline]
+    fn reverse_pdf(&self, out: &Outgoing, wi: &Incoming) -> f32 {
+        // `side` rejects |wi·n_g| ≤ GRAZING_COS, `consistent` only |wi·n_g| < GRAZING_COS.
+        if !(wi.local.z > 0.0 && wi.cos_g > GRAZING_COS) {
+            return self.pdf(wi.world, out.world);
+        }
+        let eta = out.side.eta;
+        let selection = self.mixture.selection(wi.local, eta);
+        let pdf = self.mixture.pdf(&selection, wi.local, out.local, eta);
+        if pdf.is_finite() && pdf > 0.0 {
+            pdf
+        } else {
+            0.0
+        }
     }
 
     /// Samples `wi` given `wo` with `u_lobe` (lobe choice) and `u` (direction), both in
@@ -325,7 +365,7 @@ impl FixedOutgoing<'_> {
     /// [`Bsdf::eval_with`] at the fixed `wo`.
     #[inline]
     pub fn eval(&self, wi: Vec3, mode: TransportMode, pdfs: Pdfs) -> BsdfEval {
-        let Some((f_cos, pdf_fwd)) = self.bsdf.eval_from(&self.out, wi, mode) else {
+        let Some((f_cos, pdf_fwd, incoming)) = self.bsdf.eval_from(&self.out, wi, mode) else {
             return BsdfEval::default();
         };
         BsdfEval {
@@ -333,7 +373,7 @@ impl FixedOutgoing<'_> {
             pdf_fwd,
             pdf_rev: match pdfs {
                 Pdfs::Forward => 0.0,
-                Pdfs::Both => self.bsdf.pdf(wi, self.out.world),
+                Pdfs::Both => self.bsdf.reverse_pdf(&self.out, &incoming),
             },
         }
     }
@@ -367,8 +407,12 @@ impl FixedOutgoing<'_> {
             }
             // Evaluated at the final world direction, so that the sample agrees with eval().
             None => {
-                let (f_cos, pdf_fwd) = bsdf.eval_from(out, wi, mode)?;
-                let pdf_rev = if reverse { bsdf.pdf(wi, wo) } else { 0.0 };
+                let (f_cos, pdf_fwd, incoming) = bsdf.eval_from(out, wi, mode)?;
+                let pdf_rev = if reverse {
+                    bsdf.reverse_pdf(out, &incoming)
+                } else {
+                    0.0
+                };
                 (f_cos, pdf_fwd, pdf_rev)
             }
         };

@@ -76,6 +76,44 @@ fn pdf_alone_is_the_pdf_of_eval() {
 }
 
 #[test]
+fn reverse_pdfs_are_the_pdf_back_from_wi() {
+    // eval() and sample() take a reflection's reverse pdf from the forward evaluation's local
+    // directions: it must be exactly Bsdf::pdf(wi, wo), which fixes the BSDF at wi anew, for
+    // every lobe mix, side, sidedness and mode (transmissions take Bsdf::pdf itself).
+    let mut rng = Rng::new(25, 0);
+    let mut reflected = 0;
+    for &roughness in &ROUGHNESS_SWEEP {
+        for (name, params) in material_classes(roughness) {
+            for (tilt, double_sided) in [(0.0, false), (0.25, false), (0.25, true)] {
+                let b = Bsdf::new(&params, n_g(), tilted_normal(tilt), double_sided);
+                for _ in 0..300 {
+                    let random_direction = |rng: &mut Rng| {
+                        let (c, phi) = (2.0 * rng.uniform() - 1.0, TAU * rng.uniform());
+                        direction(n_g(), c, phi)
+                    };
+                    let (wo, wi) = (random_direction(&mut rng), random_direction(&mut rng));
+                    let ctx = format!("{name} tilt {tilt} two-sided {double_sided}: {wo} -> {wi}");
+                    for mode in MODES {
+                        let e = b.eval(wo, wi, mode);
+                        let expected = if e.pdf_fwd > 0.0 { b.pdf(wi, wo) } else { 0.0 };
+                        assert_eq!(e.pdf_rev, expected, "{ctx} {mode:?}");
+                        reflected +=
+                            usize::from(expected > 0.0 && wo.dot(n_g()) * wi.dot(n_g()) > 0.0);
+                        let (u_lobe, u) = (rng.uniform(), rng.uniform2());
+                        if let Some(s) = b.sample(wo, u_lobe, u, mode)
+                            && s.lobe != LobeKind::Specular
+                        {
+                            assert_eq!(s.pdf_rev, b.pdf(s.wi, wo), "{ctx} {mode:?}: {s:?}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(reflected > 1000, "only {reflected} reflected pairs");
+}
+
+#[test]
 fn delta_reverse_pdfs_of_pure_interfaces() {
     // For a single smooth interface the reverse choice has the same probability: R(θo) =
     // R(θi) for the mirror, and T is the same on both sides of a refraction.
