@@ -262,12 +262,7 @@ impl Bsdf {
         }
         let eta = out.side.eta;
         let selection = self.mixture.selection(wi.local, eta);
-        let pdf = self.mixture.pdf(&selection, wi.local, out.local, eta);
-        if pdf.is_finite() && pdf > 0.0 {
-            pdf
-        } else {
-            0.0
-        }
+        self.mixture_pdf(&selection, wi.local, out.local, eta)
     }
 
     /// Samples `wi` given `wo` with `u_lobe` (lobe choice) and `u` (direction), both in
@@ -314,15 +309,24 @@ impl Bsdf {
     /// the reverse pdf); it does not depend on the transport mode.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let pdf = self.outgoing(wo).and_then(|out| {
-            let (wi_l, _) = self.incoming(&out, wi)?;
-            Some(
-                self.mixture
-                    .pdf(&out.selection, out.local, wi_l, out.side.eta),
-            )
-        });
-        pdf.filter(|pdf| pdf.is_finite() && *pdf > 0.0)
+        self.outgoing(wo)
+            .and_then(|out| {
+                let (wi_l, _) = self.incoming(&out, wi)?;
+                Some(self.mixture_pdf(&out.selection, out.local, wi_l, out.side.eta))
+            })
             .unwrap_or(0.0)
+    }
+
+    /// The mixture's pdf of local `wi` from local `wo` with lobe selection `selection`, or 0
+    /// where it is not positive and finite.
+    #[inline]
+    fn mixture_pdf(&self, selection: &Selection, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
+        let pdf = self.mixture.pdf(selection, wo, wi, eta);
+        if pdf.is_finite() && pdf > 0.0 {
+            pdf
+        } else {
+            0.0
+        }
     }
 
     /// The shading normal (front orientation): radiance-mode `f_cos` is f·|ωi·n_s|, so

@@ -60,10 +60,6 @@ fn pdf_alone_is_the_pdf_of_eval() {
             for tilt in [0.0, 0.25] {
                 let b = Bsdf::new(&params, n_g(), tilted_normal(tilt), false);
                 for _ in 0..400 {
-                    let random_direction = |rng: &mut Rng| {
-                        let (c, phi) = (2.0 * rng.uniform() - 1.0, TAU * rng.uniform());
-                        direction(n_g(), c, phi)
-                    };
                     let (wo, wi) = (random_direction(&mut rng), random_direction(&mut rng));
                     let expected = b.eval(wo, wi, TransportMode::Radiance).pdf_fwd;
                     assert_eq!(b.pdf(wo, wi), expected, "{name} tilt {tilt}: {wo} -> {wi}");
@@ -87,10 +83,6 @@ fn reverse_pdfs_are_the_pdf_back_from_wi() {
             for (tilt, double_sided) in [(0.0, false), (0.25, false), (0.25, true)] {
                 let b = Bsdf::new(&params, n_g(), tilted_normal(tilt), double_sided);
                 for _ in 0..300 {
-                    let random_direction = |rng: &mut Rng| {
-                        let (c, phi) = (2.0 * rng.uniform() - 1.0, TAU * rng.uniform());
-                        direction(n_g(), c, phi)
-                    };
                     let (wo, wi) = (random_direction(&mut rng), random_direction(&mut rng));
                     let ctx = format!("{name} tilt {tilt} two-sided {double_sided}: {wo} -> {wi}");
                     for mode in MODES {

@@ -13,7 +13,9 @@ mod sides;
 
 use super::{Bsdf, BsdfParams, TransportMode};
 use crate::frame::Frame;
+use crate::sampling::{Rng, Sampler};
 use glam::Vec3;
+use std::f32::consts::TAU;
 
 /// The perceptual roughness sweep; 0.001 and 0.01 are below the smooth threshold (delta).
 const ROUGHNESS_SWEEP: [f32; 6] = [0.001, 0.01, 0.1, 0.3, 0.6, 1.0];
@@ -37,6 +39,12 @@ fn direction(n: Vec3, cos_theta: f32, phi: f32) -> Vec3 {
             cos_theta,
         ))
         .normalize()
+}
+
+/// A direction uniform over the sphere (either side of `n_g()`).
+fn random_direction(rng: &mut Rng) -> Vec3 {
+    let (c, phi) = (2.0 * rng.uniform() - 1.0, TAU * rng.uniform());
+    direction(n_g(), c, phi)
 }
 
 /// A shading normal tilted away from `n_g()` by `angle` radians.
