@@ -83,6 +83,8 @@ pub struct SceneFeatures {
     pub normal_maps: bool,
     /// Some vertex has a color other than white (glTF `COLOR_0`).
     pub vertex_colors: bool,
+    /// Some used material bounds a solid that absorbs ([`Material::absorption`]).
+    pub absorbing_volumes: bool,
 }
 
 /// The range of a texture channel's values (0..=1), or the full range without a texture.
@@ -139,6 +141,7 @@ impl SceneFeatures {
             alpha_masks: false,
             normal_maps: false,
             vertex_colors: mesh.colors.iter().any(|&c| c != Vec3::ONE),
+            absorbing_volumes: false,
         };
         for material in materials
             .iter()
@@ -153,6 +156,8 @@ impl SceneFeatures {
                 || material.emissive_texture.is_some();
             features.alpha_masks |= matches!(material.alpha_mode, AlphaMode::Mask { .. });
             features.normal_maps |= material.normal_texture.is_some();
+            features.absorbing_volumes |=
+                material.bounds_volume() && material.absorption != Vec3::ZERO;
         }
         for light in lights {
             let counts = &mut features.lights;
@@ -186,8 +191,12 @@ impl fmt::Display for SceneFeatures {
         )?;
         write!(
             f,
-            "textures {}, alpha masks {}, normal maps {}, vertex colors {}",
-            self.textures, self.alpha_masks, self.normal_maps, self.vertex_colors
+            "textures {}, alpha masks {}, normal maps {}, vertex colors {}, absorbing volumes {}",
+            self.textures,
+            self.alpha_masks,
+            self.normal_maps,
+            self.vertex_colors,
+            self.absorbing_volumes
         )
     }
 }

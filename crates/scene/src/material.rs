@@ -52,6 +52,10 @@ pub struct Material {
     pub ior: f32,
     /// True unless `KHR_materials_volume.thicknessFactor` > 0 (then the mesh bounds a solid).
     pub thin_walled: bool,
+    /// Absorption coefficient σ_a (per scene unit of length, linear RGB) inside the solid a
+    /// [volume boundary](Material::bounds_volume) encloses: from `KHR_materials_volume`,
+    /// −ln(attenuationColor) / attenuationDistance (Beer–Lambert); zero for a clear solid.
+    pub absorption: Vec3,
     /// Alpha usage.
     pub alpha_mode: AlphaMode,
     /// glTF `doubleSided`: one-sided materials are black seen from the back.
@@ -77,6 +81,7 @@ impl Default for Material {
             transmission: 0.0,
             ior: 1.5,
             thin_walled: true,
+            absorption: Vec3::ZERO,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
         }
@@ -123,6 +128,12 @@ impl Material {
             double_sided: true,
             ..Material::default()
         }
+    }
+
+    /// Whether the surface is the boundary of a solid that light enters: it transmits and is
+    /// not thin-walled.
+    pub fn bounds_volume(&self) -> bool {
+        self.transmission > 0.0 && !self.thin_walled
     }
 
     /// BSDF parameters at texture coordinates `uv`.

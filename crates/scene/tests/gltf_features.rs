@@ -131,6 +131,46 @@ fn material_extensions_map_to_the_material_model() {
     assert_eq!(point.uv, Vec2::ZERO);
 }
 
+/// `KHR_materials_volume` attenuation is Beer–Lambert absorption inside a solid:
+/// σ = −ln(attenuationColor) / attenuationDistance; a thin-walled surface has no inside, and
+/// a distance that is not positive is an error naming the material.
+#[test]
+fn volume_attenuation_is_an_absorption_coefficient() {
+    let glass = |volume: &str| {
+        format!(
+            r#"[{{"name": "tinted", "pbrMetallicRoughness": {{"metallicFactor": 0}},
+            "extensions": {{"KHR_materials_transmission": {{"transmissionFactor": 1}},
+                "KHR_materials_volume": {volume}}}}}]"#
+        )
+    };
+    let solid = r#"{"thicknessFactor": 1, "attenuationColor": [1, 0.5, 0.25],
+        "attenuationDistance": 2}"#;
+    let scene = load(&document(r#"[{"mesh": 0}]"#, &glass(solid), "")).unwrap();
+    let m = &scene.materials[0];
+    assert!(m.bounds_volume());
+    let expected = Vec3::new(0.0, 2.0f32.ln() / 2.0, 4.0f32.ln() / 2.0);
+    assert!(
+        (m.absorption - expected).abs().max_element() < 1e-6,
+        "{}",
+        m.absorption
+    );
+    assert!(scene.features.absorbing_volumes);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+
+    let clear = r#"{"thicknessFactor": 1}"#;
+    let scene = load(&document(r#"[{"mesh": 0}]"#, &glass(clear), "")).unwrap();
+    assert_eq!(scene.materials[0].absorption, Vec3::ZERO);
+    assert!(!scene.features.absorbing_volumes);
+
+    let thin = r#"{"attenuationColor": [0.5, 0.5, 0.5], "attenuationDistance": 1}"#;
+    let scene = load(&document(r#"[{"mesh": 0}]"#, &glass(thin), "")).unwrap();
+    assert!(scene.materials[0].thin_walled && !scene.features.absorbing_volumes);
+
+    let bad = r#"{"thicknessFactor": 1, "attenuationDistance": 0}"#;
+    let error = load(&document(r#"[{"mesh": 0}]"#, &glass(bad), "")).unwrap_err();
+    assert!(error.to_string().contains("tinted"), "{error}");
+}
+
 #[test]
 fn bad_documents_are_errors_not_panics() {
     let cases = [

@@ -222,12 +222,29 @@ pub(super) fn read_material(
         }
         t.transmission_factor()
     });
-    let thin_walled = m.volume().is_none_or(|v| {
-        if v.attenuation_distance().is_finite() {
-            builder.warn_unsupported("KHR_materials_volume attenuation");
+    let thin_walled = m.volume().is_none_or(|v| v.thickness_factor() <= 0.0);
+    // The glTF specification ignores a thin-walled surface's volume properties.
+    let absorption = match m.volume() {
+        Some(v) if !thin_walled => {
+            if v.thickness_texture().is_some() {
+                builder.warn_unsupported(
+                    "KHR_materials_volume thicknessTexture (a path tracer measures thickness)",
+                );
+            }
+            let distance = v.attenuation_distance();
+            if distance.is_nan() || distance <= 0.0 {
+                return Err(SceneError::gltf(
+                    builder.path(),
+                    format!(
+                        "material '{}' has attenuationDistance {distance} (must be > 0)",
+                        m.name().unwrap_or("unnamed")
+                    ),
+                ));
+            }
+            absorption(v.attenuation_color(), distance)
         }
-        v.thickness_factor() <= 0.0
-    });
+        _ => Vec3::ZERO,
+    };
     let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
     let material = Material {
         name: m.name().unwrap_or("unnamed").to_string(),
@@ -245,10 +262,19 @@ pub(super) fn read_material(
         transmission,
         ior: m.ior().unwrap_or(1.5),
         thin_walled,
+        absorption,
         alpha_mode,
         double_sided: m.double_sided(),
     };
     validate(builder, material)
+}
+
+/// Beer–Lambert absorption coefficient of `KHR_materials_volume`: light keeps the fraction
+/// `color` of itself over `distance` (> 0; infinite: no absorption). A black channel absorbs
+/// all but the smallest positive fraction, so the coefficient stays finite.
+fn absorption(color: [f32; 3], distance: f32) -> Vec3 {
+    let kept = Vec3::from(color).clamp(Vec3::splat(f32::MIN_POSITIVE), Vec3::ONE);
+    -kept.ln() / distance
 }
 
 /// Rejects non-finite or out-of-range factors, naming the material.
@@ -256,6 +282,7 @@ fn validate(builder: &SceneBuilder, m: Material) -> Result<Material, SceneError>
     let finite = m.base_color.is_finite()
         && m.emission.is_finite()
         && m.specular_color.is_finite()
+        && m.absorption.is_finite()
         && [
             m.metallic,
             m.roughness,
