@@ -50,6 +50,7 @@ mod huge_pages;
 pub mod image_io;
 mod integrator;
 pub mod light_vertex_cache;
+mod medium;
 pub mod metrics;
 mod path_state;
 mod path_tracer;

@@ -4,6 +4,7 @@ use glam::Vec3;
 use vcm_scene::sampling::SobolSampler;
 use vcm_traversal::RayBatch;
 
+use crate::medium::Medium;
 use crate::roulette::Roulette;
 
 /// How the direction of a path's current segment was chosen, which decides the MIS weight of
@@ -53,8 +54,10 @@ pub(crate) struct PathState {
     pub origin: Vec3,
     /// Unit direction of the current segment.
     pub direction: Vec3,
-    /// Product of f·cos / pdf (and Russian roulette factors) so far.
+    /// Product of f·cos / pdf, transmittances and Russian roulette factors so far.
     pub throughput: Vec3,
+    /// What the current segment runs through.
+    pub medium: Medium,
     /// How Russian roulette judges the throughput.
     pub roulette: Roulette,
     /// Radiance gathered so far (RGB), added to the film when the path ends.
@@ -85,6 +88,7 @@ impl PathState {
             origin,
             direction,
             throughput: Vec3::ONE,
+            medium: Medium::OUTSIDE,
             roulette: Roulette::UNIT,
             radiance: Vec3::ZERO,
             segments: 1,

@@ -47,12 +47,14 @@ pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<(Hit, 
         return;
     }
     let Some((hit, surface)) = hit else {
-        path.radiance += path.throughput * escaped(ctx.scene, path);
+        let transmittance = path.medium.transmittance(f32::INFINITY);
+        path.radiance += path.throughput * transmittance * escaped(ctx.scene, path);
         path.alive = false;
         return;
     };
     let scene = ctx.scene;
     vertex_sampler(path);
+    path.throughput *= path.medium.transmittance(hit.t);
     let point = surface.point;
     path.radiance += path.throughput * emission(scene, path, &point, hit);
 
@@ -70,6 +72,7 @@ pub(crate) fn shade(ctx: &ShadeContext, path: &mut PathState, hit: Option<(Hit, 
         path.shadow = next_event(scene, path, surface, &seen);
     }
     path.alive = scatter(path, &seen, |w| surface.spawn(w));
+    path.medium = path.medium.toward(scene, &point, path.direction);
 }
 
 /// Emitted radiance toward the path at `point`, MIS-weighted against light sampling
@@ -121,8 +124,12 @@ fn next_event(
     } else {
         power_heuristic(1.0, light_pdf_w, 1.0, sample.eval.pdf_fwd)
     };
-    let contribution =
-        path.throughput * sample.illumination.value * sample.eval.f_cos * (weight / light_pdf_w);
+    let transmittance = sample.transmittance(scene, surface, path.medium);
+    let contribution = path.throughput
+        * transmittance
+        * sample.illumination.value
+        * sample.eval.f_cos
+        * (weight / light_pdf_w);
     Some(sample.shadow_ray(surface, contribution))
 }
 

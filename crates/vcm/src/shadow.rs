@@ -7,6 +7,7 @@ use vcm_scene::bsdf::{BsdfEval, FixedOutgoing, Pdfs, TransportMode};
 use vcm_scene::light::{Illumination, Light};
 use vcm_scene::sampling::Sampler;
 
+use crate::medium::Medium;
 use crate::path_state::ShadowRay;
 use crate::ray_offset::{barycentric_error, offset_ray_origin};
 use crate::surface_hit::SurfaceHit;
@@ -46,6 +47,15 @@ impl LightSample<'_> {
             illumination,
             eval,
         })
+    }
+
+    /// The fraction of the light that crosses the segment from `surface` to the sample, for
+    /// a path that reached `surface` through `medium`.
+    pub fn transmittance(&self, scene: &Scene, surface: &SurfaceHit, medium: Medium) -> Vec3 {
+        let to_light = self.illumination.direction;
+        medium
+            .toward(scene, &surface.point, to_light)
+            .transmittance(self.illumination.distance)
     }
 
     /// Solid-angle pdf of the sample at the receiver, with the light's selection probability.

@@ -21,6 +21,7 @@ use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::hash_grid::HashGrid;
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
+use crate::medium::Medium;
 use crate::path_state::ShadowRay;
 use crate::prefetch::prefetch;
 use crate::roulette::Roulette;
@@ -207,6 +208,7 @@ fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
             origin: camera.position,
             direction,
             throughput: Vec3::ONE,
+            medium: Medium::OUTSIDE,
             mis: SubpathMis::camera(camera_pdf_w, &ctx.factors),
             segments: 1,
             roulette: Roulette::UNIT,
@@ -248,6 +250,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<(Hit, &Sur
         return;
     }
     let Some((hit, surface)) = hit else {
+        path.walk.cross(f32::INFINITY);
         path.radiance += path.walk.throughput * escaped(ctx, path);
         path.alive = false;
         return;
@@ -255,6 +258,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<(Hit, &Sur
     let scene = ctx.scene;
     let algorithm = ctx.settings.algorithm;
     vertex_sampler(path);
+    path.walk.cross(hit.t);
     let wo = -path.walk.direction;
     path.walk
         .mis
@@ -290,7 +294,7 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<(Hit, &Sur
     }
     path.alive = path
         .walk
-        .scatter(surface, &seen, TransportMode::Radiance, &ctx.factors)
+        .scatter(scene, surface, &seen, TransportMode::Radiance, &ctx.factors)
         .is_some();
 }
 
@@ -366,8 +370,12 @@ fn light_sample(
         bsdf_rev_pdf_w: eval.pdf_rev,
     };
     let weight = light_sample_weight(&path.walk.mis, &pdfs, &ctx.factors);
-    let contribution =
-        path.walk.throughput * illumination.value * eval.f_cos * (weight / pdfs.direct_pdf_w);
+    let transmittance = sample.transmittance(ctx.scene, surface, path.walk.medium);
+    let contribution = path.walk.throughput
+        * transmittance
+        * illumination.value
+        * eval.f_cos
+        * (weight / pdfs.direct_pdf_w);
     Some(sample.shadow_ray(surface, contribution))
 }
 
@@ -450,7 +458,8 @@ fn connect(
     if distance_sq == 0.0 {
         return None;
     }
-    let direction = to_light / distance_sq.sqrt();
+    let distance = distance_sq.sqrt();
+    let direction = to_light / distance;
     let camera_eval = seen.eval(direction, TransportMode::Radiance, Pdfs::Both);
     if camera_eval.f_cos == Vec3::ZERO {
         return None;
@@ -469,7 +478,13 @@ fn connect(
         light_rev_pdf_w: light_eval.pdf_rev,
     };
     let weight = connection_weight(&path.walk.mis, &vertex.mis, &pdfs, &ctx.factors);
+    let transmittance = path
+        .walk
+        .medium
+        .toward(ctx.scene, &surface.point, direction)
+        .transmittance(distance);
     let contribution = path.walk.throughput
+        * transmittance
         * vertex.throughput
         * camera_eval.f_cos
         * light_eval.f_cos

@@ -16,6 +16,7 @@ use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::LightVertex;
+use crate::medium::Medium;
 use crate::path_state::ShadowRay;
 use crate::roulette::Roulette;
 use crate::shadow::{offset_off_light, segment_to};
@@ -341,6 +342,7 @@ fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathSt
             origin: Vec3::ZERO,
             direction: Vec3::Z,
             throughput: Vec3::ZERO,
+            medium: Medium::OUTSIDE,
             mis: SubpathMis::default(),
             segments: 1,
             roulette: Roulette::UNIT,
@@ -397,6 +399,7 @@ fn shade(
     };
     vertex_sampler(path);
     let scene = ctx.scene;
+    path.walk.cross(hit.t);
     let wo = -path.walk.direction;
     let distance_sq = (path.walk.segments > 1 || !path.from_infinity).then_some(hit.t * hit.t);
     path.walk.mis.arrive(distance_sq, surface.cos_geometric(wo));
@@ -417,7 +420,7 @@ fn shade(
         if splat && path.walk.segments < max_segments {
             path.splat = seen
                 .as_ref()
-                .and_then(|seen| connect_to_camera(ctx, surface, seen, &vertex));
+                .and_then(|seen| connect_to_camera(ctx, surface, seen, &vertex, path.walk.medium));
         }
         path.vertex = Some(vertex);
     }
@@ -425,18 +428,25 @@ fn shade(
     path.alive = path.walk.segments.saturating_add(2) <= max_segments
         && seen.is_some_and(|seen| {
             path.walk
-                .scatter(surface, &seen, TransportMode::Importance, &ctx.factors)
+                .scatter(
+                    scene,
+                    surface,
+                    &seen,
+                    TransportMode::Importance,
+                    &ctx.factors,
+                )
                 .is_some()
         });
 }
 
-/// Connects a light vertex to the camera: its splat, if the vertex projects into the image
-/// and scatters toward the camera.
+/// Connects a light vertex, reached through `medium`, to the camera: its splat, if the vertex
+/// projects into the image and scatters toward the camera.
 fn connect_to_camera(
     ctx: &FrameContext,
     surface: &SurfaceHit,
     seen: &FixedOutgoing,
     vertex: &LightVertex,
+    medium: Medium,
 ) -> Option<Splat> {
     let camera = &ctx.scene.camera;
     let VcmSettings { width, height, .. } = *ctx.settings;
@@ -458,7 +468,12 @@ fn connect_to_camera(
     } else {
         camera_connection_weight(&vertex.mis, camera_pdf_a, eval.pdf_rev, &ctx.factors)
     };
+    let distance = distance_sq.sqrt();
+    let transmittance = medium
+        .toward(ctx.scene, &surface.point, direction)
+        .transmittance(distance);
     let contribution = vertex.throughput
+        * transmittance
         * eval.f_cos
         * (weight * camera_pdf_w / (distance_sq * ctx.factors.light_paths));
     let origin = surface.spawn(direction);

@@ -1,10 +1,12 @@
 //! What camera and light subpaths share: the random walk from vertex to vertex.
 
 use glam::Vec3;
+use vcm_scene::Scene;
 use vcm_scene::bsdf::{FixedOutgoing, LobeKind, Pdfs, TransportMode};
 use vcm_scene::sampling::{Sampler, SobolSampler};
 
 use super::mis::{MisFactors, SubpathMis};
+use crate::medium::Medium;
 use crate::roulette::Roulette;
 use crate::surface_hit::SurfaceHit;
 
@@ -18,8 +20,10 @@ pub(crate) struct Walk {
     /// Unit direction of the current segment.
     pub direction: Vec3,
     /// Product of the sampling weights so far (camera: dimensionless; light: emitted power
-    /// over the sampling pdfs).
+    /// over the sampling pdfs), with the transmittances of the segments.
     pub throughput: Vec3,
+    /// What the current segment runs through.
+    pub medium: Medium,
     /// The recursive MIS quantities.
     pub mis: SubpathMis,
     /// Segments including the current one (the first ray is 1).
@@ -36,11 +40,18 @@ impl Walk {
         &mut self.rng
     }
 
+    /// Reaches the end of the current segment, `distance` from its origin: the throughput
+    /// takes the segment's transmittance.
+    pub fn cross(&mut self, distance: f32) {
+        self.throughput *= self.medium.transmittance(distance);
+    }
+
     /// Samples the BSDF at `surface` (`seen` from the previous vertex) for the next segment,
     /// updates the MIS quantities and plays Russian roulette. Returns the sampled lobe's
     /// class, or `None` when the walk ends.
     pub fn scatter(
         &mut self,
+        scene: &Scene,
         surface: &SurfaceHit,
         seen: &FixedOutgoing,
         mode: TransportMode,
@@ -66,6 +77,7 @@ impl Walk {
         }
         self.origin = surface.spawn(sample.wi);
         self.direction = sample.wi;
+        self.medium = self.medium.toward(scene, &surface.point, sample.wi);
         self.segments += 1;
         Some(sample.lobe)
     }
