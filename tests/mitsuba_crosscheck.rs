@@ -1,10 +1,10 @@
 //! Cross-check against an independent renderer: Mitsuba 3 renders the same glTF files, read by
 //! `tools/mitsuba_reference.py` into its own plugins, and `vcm render` must give the same
 //! images up to noise. This checks the scene conventions (units, one-sided emitters, Fresnel,
-//! GGX roughness, thin sheets, tinted transmission, punctual lights, the environment, the
-//! camera, the box pixel filter, sRGB base colour and emissive textures with their UV
-//! orientation, filter and wrap, mirrored nodes, one- and double-sided surfaces) against a
-//! renderer that references come from, not against this renderer's own idea of them.
+//! GGX roughness, thin sheets, tinted transmission, absorbing solids, punctual lights, the
+//! environment, the camera, the box pixel filter, sRGB base colour and emissive textures with
+//! their UV orientation, filter and wrap, mirrored nodes, one- and double-sided surfaces)
+//! against a renderer that references come from, not against this renderer's own idea of them.
 //!
 //! Needs `python3` with the packages of `tools/requirements.txt`. Without them the test is
 //! skipped with a message, unless `VCM_REQUIRE_MITSUBA=1` (set by `.ci/run`): then it fails.
@@ -94,6 +94,16 @@ fn thin_sheet() -> Value {
         .unwrap()
         .remove("KHR_materials_volume");
     glass["pbrMetallicRoughness"]["baseColorFactor"] = json!([0.9, 0.6, 0.4, 1.0]);
+    doc
+}
+
+/// cornell-specular with the glass sphere absorbing inside (`KHR_materials_volume`
+/// attenuation: Mitsuba renders it as a homogeneous medium that only absorbs).
+fn absorbing_glass() -> Value {
+    let mut doc = load_scene("cornell-specular");
+    let volume = &mut material(&mut doc, "glass")["extensions"]["KHR_materials_volume"];
+    volume["attenuationColor"] = json!([0.9, 0.4, 0.2]);
+    volume["attenuationDistance"] = json!(0.3);
     doc
 }
 
@@ -602,6 +612,8 @@ fn vcm_render_agrees_with_mitsuba() {
         Case::pt("rough", rough()),
         Case::pt("rough-bpt", rough()).with("bpt", None),
         Case::pt("thin-sheet", thin_sheet()),
+        Case::pt("absorbing-glass", absorbing_glass()),
+        Case::pt("absorbing-glass-bpt", absorbing_glass()).with("bpt", None),
         Case::pt("punctual-lights", punctual_lights()),
         Case::pt("punctual-lights-bpt", punctual_lights()).with("bpt", None),
         Case::pt("spot", spot()),

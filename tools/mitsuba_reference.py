@@ -10,7 +10,9 @@ noise. It covers the part of the conventions that Mitsuba models exactly:
 - mirrors and rough conductors whose base colour is white (F0 = 1, so Schlick
   and Mitsuba's conductor agree; other colours are refused),
 - smooth and rough dielectric solids (transmission 1 with `KHR_materials_volume`)
-  and smooth thin-walled sheets (without it), the base colour tinting transmission,
+  and smooth thin-walled sheets (without it), the base colour tinting transmission;
+  a solid's `attenuationColor` / `attenuationDistance` as a purely absorbing
+  homogeneous interior medium (then Mitsuba's volumetric path tracer renders),
 - one-sided area lights (`emissiveFactor` x `emissiveStrength`, or an sRGB
   emissive texture where their product is 1 and the UVs map the unit square
   once, as Mitsuba samples a textured emitter through its UV map),
@@ -144,6 +146,24 @@ def colour_texture(doc, base_dir, work_dir, info, name):
     return {"type": "bitmap", "filename": path, "raw": False,
             "filter_type": "nearest" if filters.pop() else "bilinear",
             "wrap_mode": wrap.pop()}
+
+
+def interior_medium(material):
+    """The absorbing medium inside a solid dielectric with `KHR_materials_volume`
+    attenuation (Beer-Lambert: sigma = -ln(attenuationColor) / attenuationDistance), or
+    None for a clear solid or any other material."""
+    ext = material.get("extensions", {})
+    volume = ext.get("KHR_materials_volume", {})
+    transmission = ext.get("KHR_materials_transmission", {}).get("transmissionFactor", 0.0)
+    distance = volume.get("attenuationDistance", math.inf)
+    if transmission <= 0.0 or volume.get("thicknessFactor", 0.0) <= 0.0 or math.isinf(distance):
+        return None
+    colour = [min(max(c, 1e-38), 1.0) for c in volume.get("attenuationColor", [1, 1, 1])]
+    sigma = [-math.log(c) / distance for c in colour]
+    # Mitsuba reads an RGB `sigma_t` as a reflectance (at most 1): scale it into that range.
+    scale = max(max(sigma), 1e-30)
+    return {"type": "homogeneous", "albedo": 0.0,
+            "sigma_t": rgb([v / scale for v in sigma]), "scale": scale}
 
 
 def material_plugins(material, doc, base_dir, work_dir):
@@ -353,6 +373,7 @@ def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
                 faces = faces[:, ::-1]
             material = doc["materials"][primitive["material"]] if "material" in primitive else {}
             bsdf, emitter = material_plugins(material, doc, base_dir, work_dir)
+            medium = interior_medium(material)
             if emitter is not None:
                 normals = None  # emitters are flat: the winding order picks their front
             ply = os.path.join(work_dir, f"mesh{len(scene)}.ply")
@@ -367,6 +388,9 @@ def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
                 shape["face_normals"] = True
             if emitter is not None:
                 shape["emitter"] = emitter
+            if medium is not None:
+                shape["interior"] = medium
+                scene["integrator"]["type"] = "volpath"
             scene[f"shape{len(scene)}"] = shape
             lo, hi = np.minimum(lo, positions.min(0)), np.maximum(hi, positions.max(0))
 
