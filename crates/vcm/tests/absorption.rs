@@ -15,7 +15,7 @@
 mod common;
 
 use glam::{DVec3, Vec3, Vec3Swizzles};
-use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
+use vcm::{Algorithm, Integrator};
 use vcm_scene::light::{EnvironmentLight, Light, PointLight};
 use vcm_scene::{Camera, Material, Scene};
 
@@ -127,31 +127,15 @@ fn slab_irradiance_integral(tau: f64) -> f64 {
     (f(0.0) + inner + f(1.0)) * h / 3.0
 }
 
-/// The path tracer (`None`) or `algorithm` rendering `scene` at `size`², merging (where it
-/// merges) within `radius_fraction` of the scene's radius.
+/// The path tracer (`None`) or `algorithm` rendering `scene` at `size`² (seed 5), merging
+/// (where it merges) within `radius_fraction` of the scene's radius.
 fn integrator(
     scene: &Scene,
     algorithm: Option<Algorithm>,
     size: u32,
     radius_fraction: f32,
 ) -> Box<dyn Integrator> {
-    match algorithm {
-        None => Box::new(common::path_tracer(
-            scene.clone(),
-            PtSettings {
-                seed: 5,
-                ..common::pt_settings(size, size)
-            },
-        )),
-        Some(algorithm) => Box::new(common::vcm(
-            scene.clone(),
-            VcmSettings {
-                seed: 5,
-                radius_fraction,
-                ..common::vcm_settings(algorithm, size, size)
-            },
-        )),
-    }
+    common::integrator(scene, algorithm, size, 5, radius_fraction)
 }
 
 #[test]

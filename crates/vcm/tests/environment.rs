@@ -9,7 +9,7 @@ mod common;
 use std::sync::Arc;
 
 use glam::Vec3;
-use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
+use vcm::{Algorithm, PtSettings, VcmSettings};
 use vcm_scene::light::{EnvironmentLight, EnvironmentMap, Light};
 use vcm_scene::{Camera, Material, Scene};
 
@@ -37,26 +37,10 @@ fn floor_under_the_sky(camera: Camera) -> Scene {
 /// Renders `scene` with `algorithm` and asserts that every pixel converges to `expected`.
 fn assert_every_algorithm_sees(scene: &Scene, expected: f64, view: &str) {
     for algorithm in common::EVERY_ALGORITHM {
-        let mut integrator: Box<dyn Integrator> = match algorithm {
-            None => Box::new(common::path_tracer(
-                scene.clone(),
-                PtSettings {
-                    seed: 3,
-                    ..common::pt_settings(SIZE, SIZE)
-                },
-            )),
-            // A radius at which the 256 light paths of a frame meet camera vertices often
-            // enough for 100 frames to measure the spread; the floor is flat and evenly lit,
-            // so merging within it adds no bias (the disks stay inside the floor).
-            Some(algorithm) => Box::new(common::vcm(
-                scene.clone(),
-                VcmSettings {
-                    seed: 3,
-                    radius_fraction: 0.1,
-                    ..common::vcm_settings(algorithm, SIZE, SIZE)
-                },
-            )),
-        };
+        // A radius at which the 256 light paths of a frame meet camera vertices often enough
+        // for 100 frames to measure the spread; the floor is flat and evenly lit, so merging
+        // within it adds no bias (the disks stay inside the floor).
+        let mut integrator = common::integrator(scene, algorithm, SIZE, 3, 0.1);
         let series = common::render_series(integrator.as_mut(), FRAMES);
         let pixels = vec![expected; (SIZE * SIZE) as usize];
         common::assert_pixels_match(&series, &pixels, &format!("{view}, {algorithm:?}"));

@@ -453,7 +453,8 @@ fn connect_to_camera(
     let raster = ctx.projection.raster_of(vertex.position)?;
     let to_camera = camera.position - vertex.position;
     let distance_sq = to_camera.length_squared();
-    let direction = to_camera / distance_sq.sqrt();
+    let distance = distance_sq.sqrt();
+    let direction = to_camera / distance;
     let eval = seen.eval(direction, TransportMode::Importance, Pdfs::Both);
     if eval.f_cos == Vec3::ZERO {
         return None;
@@ -468,7 +469,6 @@ fn connect_to_camera(
     } else {
         camera_connection_weight(&vertex.mis, camera_pdf_a, eval.pdf_rev, &ctx.factors)
     };
-    let distance = distance_sq.sqrt();
     let transmittance = medium
         .toward(ctx.scene, &surface.point, direction)
         .transmittance(distance);

@@ -123,6 +123,35 @@ pub fn vcm(scene: Scene, settings: VcmSettings) -> Vcm {
     Vcm::new(Arc::new(scene), traversal, settings).unwrap()
 }
 
+/// The path tracer (`None`) or `algorithm` rendering `scene` at `size`² from `seed`, with
+/// independent frames, merging (where it merges) within `radius_fraction` of the scene's
+/// radius.
+pub fn integrator(
+    scene: &Scene,
+    algorithm: Option<Algorithm>,
+    size: u32,
+    seed: u64,
+    radius_fraction: f32,
+) -> Box<dyn Integrator> {
+    match algorithm {
+        None => Box::new(path_tracer(
+            scene.clone(),
+            PtSettings {
+                seed,
+                ..pt_settings(size, size)
+            },
+        )),
+        Some(algorithm) => Box::new(vcm(
+            scene.clone(),
+            VcmSettings {
+                seed,
+                radius_fraction,
+                ..vcm_settings(algorithm, size, size)
+            },
+        )),
+    }
+}
+
 /// Per-pixel and image-wide means over independent frames, with standard errors computed from
 /// the spread of the per-frame values (channel means of RGB).
 pub struct FrameSeries {
