@@ -16,7 +16,7 @@ mod common;
 
 use glam::{DVec3, Vec3, Vec3Swizzles};
 use vcm::{Algorithm, Integrator};
-use vcm_scene::light::{EnvironmentLight, Light, PointLight};
+use vcm_scene::light::{Light, PointLight};
 use vcm_scene::{Camera, Material, Scene};
 
 const SKY: Vec3 = Vec3::new(1.0, 0.5, 0.25);
@@ -99,13 +99,7 @@ fn floor_in_a_slab(sigma: f32) -> Scene {
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     common::push_floor(&mut positions, &mut triangles, 4.0);
     let mesh = with_slab(positions, triangles, DEPTH);
-    let bounds = mesh.bounds();
-    let sky = Light::Environment(EnvironmentLight {
-        radiance: SKY,
-        map: None,
-        scene_center: bounds.center(),
-        scene_radius: bounds.radius(),
-    });
+    let sky = common::sky(SKY, None, &mesh);
     let camera = common::camera(Vec3::new(0.0, 0.0, 3.0), 0.5);
     common::scene(mesh, materials(sigma), vec![sky], camera)
 }

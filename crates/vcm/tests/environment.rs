@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use vcm::{Algorithm, PtSettings, VcmSettings};
-use vcm_scene::light::{EnvironmentLight, EnvironmentMap, Light};
+use vcm_scene::light::EnvironmentMap;
 use vcm_scene::{Camera, Material, Scene};
 
 const SKY: Vec3 = Vec3::new(1.0, 0.5, 0.25);
@@ -23,13 +23,7 @@ fn floor_under_the_sky(camera: Camera) -> Scene {
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     common::push_floor(&mut positions, &mut triangles, 1.0);
     let mesh = common::mesh(positions, triangles, vec![0, 0]);
-    let bounds = mesh.bounds();
-    let sky = Light::Environment(EnvironmentLight {
-        radiance: SKY,
-        map: None,
-        scene_center: bounds.center(),
-        scene_radius: bounds.radius(),
-    });
+    let sky = common::sky(SKY, None, &mesh);
     let floor = Material::diffuse("floor", Vec3::splat(ALBEDO));
     common::scene(mesh, vec![floor], vec![sky], camera)
 }
@@ -99,7 +93,6 @@ fn algorithms_agree_where_the_sky_is_partly_occluded() {
         [(-1.0, -1.0), (-1.0, 1.0), (0.0, 1.0), (0.0, -1.0)].map(|(x, y)| Vec3::new(x, y, 0.4));
     common::push_quad(&mut positions, &mut triangles, roof);
     let mesh = common::mesh(positions, triangles, vec![0; 4]);
-    let bounds = mesh.bounds();
     let camera = Camera {
         forward: Vec3::new(0.0, 0.6, -0.8),
         up: Vec3::new(0.0, 0.8, 0.6),
@@ -107,12 +100,7 @@ fn algorithms_agree_where_the_sky_is_partly_occluded() {
     };
     let material = Material::diffuse("grey", Vec3::splat(ALBEDO));
     for (name, map) in [("constant", None), ("painted", Some(painted_sky()))] {
-        let sky = Light::Environment(EnvironmentLight {
-            radiance: SKY,
-            map,
-            scene_center: bounds.center(),
-            scene_radius: bounds.radius(),
-        });
+        let sky = common::sky(SKY, map, &mesh);
         let scene = common::scene(mesh.clone(), vec![material.clone()], vec![sky], camera);
         let frames = 400;
         let mut tracer = common::path_tracer(

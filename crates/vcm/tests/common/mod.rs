@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use glam::{DVec3, Vec2, Vec3, Vec4};
 use vcm::{Algorithm, Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
-use vcm_scene::light::Light;
+use vcm_scene::light::{EnvironmentLight, EnvironmentMap, Light};
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Camera, Material, Mesh, Scene};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};
@@ -64,6 +64,18 @@ pub fn inward_icosphere(subdivisions: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let (positions, outward) = vcm_scene::shapes::icosphere(subdivisions);
     let inward = outward.into_iter().map(|[a, b, c]| [a, c, b]).collect();
     (positions, inward)
+}
+
+/// A sky of `radiance` (times `map` where given) around `mesh`: light paths from it start
+/// on the disk of the mesh's bounding sphere.
+pub fn sky(radiance: Vec3, map: Option<Arc<EnvironmentMap>>, mesh: &Mesh) -> Light {
+    let bounds = mesh.bounds();
+    Light::Environment(EnvironmentLight {
+        radiance,
+        map,
+        scene_center: bounds.center(),
+        scene_radius: bounds.radius(),
+    })
 }
 
 /// A scene from parts, with no textures and no warnings.
