@@ -2,6 +2,8 @@
 
 use glam::{DVec3, Vec3};
 
+use crate::image_io::RgbImage;
+
 /// Radiance samples accumulated per pixel in f64, with a box pixel filter: each sample's
 /// position is uniform over its pixel, so a pixel's value is the plain mean of its samples.
 ///
@@ -92,6 +94,15 @@ impl Film {
             .collect()
     }
 
+    /// The [mean](Film::mean) as an image, to write as EXR or tone-mapped PNG.
+    pub fn image(&self) -> RgbImage {
+        RgbImage {
+            width: self.width as usize,
+            height: self.height as usize,
+            pixels: self.mean(),
+        }
+    }
+
     /// Adds the samples of `other`, a film of the same size (panics otherwise).
     pub fn merge(&mut self, other: &Film) {
         assert_eq!(
@@ -120,6 +131,9 @@ mod tests {
         film.add(0, Vec3::new(3.0, 2.0, 1.0));
         assert_eq!(film.mean(), vec![Vec3::splat(2.0), Vec3::ZERO]);
         assert_eq!((film.samples(0), film.samples(1)), (2, 0));
+        let image = film.image();
+        assert_eq!((image.width, image.height), (2, 1));
+        assert_eq!(image.pixels, film.mean());
     }
 
     #[test]

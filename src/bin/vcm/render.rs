@@ -133,11 +133,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             outcome.spp
         );
     }
-    let image = RgbImage {
-        width: width as usize,
-        height: height as usize,
-        pixels: film.mean(),
-    };
+    let image = film.image();
     image.write_exr(&args.output)?;
     let png = args.output.with_extension("png");
     image.write_png(&png, 0.0)?;
