@@ -6,9 +6,42 @@
 //! - [`scene`]: loading glTF/OBJ scenes, materials, BSDFs, lights, camera, [`scene::SceneFeatures`].
 //! - [`traversal`]: the [`traversal::Traversal`] trait over ray batches and its CPU backend.
 //! - [`traversal_wgpu`]: the GPU backend (WGSL compute shaders through wgpu).
+//! - [`vcm`]: the integrators themselves, the [`vcm::Film`] they accumulate into and image I/O.
 //! - [`Backend`]: the traversal backends, chosen at run time.
 //! - [`integrators`]: the light transport algorithms, their options and one builder for all.
 //! - [`plot`]: PNG plots of error, CPU utilization and scheduler speed-ups.
+//!
+//! Rendering an image: a scene, a traversal backend, an integrator from the builder, frames
+//! into a film (one sample per pixel per frame by default; frame `i` renders sample `i`, and
+//! the image is a pure function of the scene, the options and the seed):
+//!
+//! ```
+//! use std::sync::Arc;
+//! use vcm_rs::integrators::{self, Algorithm, IntegratorOptions};
+//! use vcm_rs::vcm::Film;
+//!
+//! let scene = Arc::new(vcm_rs::scene::Scene::load("scenes/cornell-box.gltf")?);
+//! let traversal = Arc::new(vcm_rs::cpu_traversal(&scene)?);
+//! let (width, height) = integrators::image_size(&scene, 48, None); // height from the camera
+//! let options = IntegratorOptions {
+//!     seed: 7,
+//!     ..IntegratorOptions::default()
+//! };
+//! let mut vcm = integrators::build(Algorithm::Vcm, &scene, traversal, (width, height), &options)?;
+//! let mut film = Film::new(width, height);
+//! for sample in 0..4 {
+//!     vcm.render_frame(&mut film, sample);
+//! }
+//! let image = film.image(); // mean radiance per pixel, row by row from the top left
+//! assert_eq!(image.pixels.len(), (width * height) as usize);
+//! assert!(image.pixels.iter().all(|p| p.is_finite() && p.min_element() >= 0.0));
+//! let exr = std::env::temp_dir().join(format!("vcm-rs-doc-{}.exr", std::process::id()));
+//! image.write_exr(&exr)?; // through a temporary file, renamed when complete
+//! # std::fs::remove_file(&exr)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! Tracing rays directly:
 //!
 //! ```no_run
 //! use vcm_rs::traversal::{HitBatch, RayBatch, Traversal};
@@ -30,6 +63,7 @@ pub mod frames;
 pub mod integrators;
 pub mod plot;
 
+pub use vcm;
 pub use vcm_scene as scene;
 pub use vcm_traversal as traversal;
 pub use vcm_traversal_wgpu as traversal_wgpu;
