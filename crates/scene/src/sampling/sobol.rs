@@ -99,7 +99,7 @@ impl SobolSampler {
 
     /// Computes the pairs of dimensions each of `samplers` has left in its current step
     /// before they are drawn, eight samplers at a time in SIMD lanes where the target has
-    /// them (at least one pair and at most [`PREFETCH_PAIRS`]; the eight share the longest
+    /// them (at least one pair and at most six; the eight share the longest
     /// count). Draws from those pairs then return them without computing: the same numbers,
     /// which depend only on the sample and the pair.
     pub fn prefetch<'a>(samplers: impl IntoIterator<Item = &'a mut SobolSampler>) {
