@@ -20,6 +20,8 @@
 //! # Ok::<(), vcm_scene::SceneError>(())
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod bsdf;
 pub mod camera;
 pub mod decision;
