@@ -85,10 +85,10 @@ pub struct IntegratorOptions {
     #[arg(long, default_value_t = 1)]
     pub connections: u32,
     /// Initial merge radius as a fraction of the scene's bounding-sphere radius (ppm, bpm, vcm).
-    #[arg(long, default_value_t = DEFAULT_RADIUS_FRACTION)]
+    #[arg(long, default_value_t = DEFAULT_RADIUS_FRACTION, allow_negative_numbers = true)]
     pub radius: f32,
     /// Radius reduction exponent: frame i merges within r₀ · i^((α − 1) / 2) (ppm, bpm, vcm).
-    #[arg(long, default_value_t = DEFAULT_ALPHA)]
+    #[arg(long, default_value_t = DEFAULT_ALPHA, allow_negative_numbers = true)]
     pub alpha: f32,
     /// Run every part of the algorithm and of shading, even those the scene does not need
     /// (`vcm render --explain` lists them); the image's expectation is the same.

@@ -161,7 +161,9 @@ fn every_algorithm_renders_from_the_command_line() {
 
 #[test]
 fn bad_input_is_a_clear_error_with_non_zero_status() {
-    let cases: [(&[&str], &str); 10] = [
+    let folder = std::env::temp_dir();
+    let folder = folder.to_str().expect("a UTF-8 temporary folder");
+    let cases: [(&[&str], &str); 15] = [
         (&["render", "no/such/scene.gltf"], "scene.gltf"),
         (&["render", "--spp", "0"], "--spp"),
         (
@@ -171,6 +173,29 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
         (&["render", "--algo", "ppm", "--radius", "0"], "radius"),
         (&["render", "--algo", "bpm", "--alpha", "1.5"], "alpha"),
         (&["render", "-o", "/nonexistent-folder/out.exr"], "out.exr"),
+        // The tone-mapped PNG would replace the EXR, the plot the CSV, the render its
+        // reference: refused before rendering.
+        (
+            &["render", "-o", "x.png"],
+            "both the EXR image and the tone-mapped PNG",
+        ),
+        (&["render", "-o", folder], "is a folder"),
+        (
+            &["render", "-o", "r.exr", "--reference", "./r.exr"],
+            "would replace the input ./r.exr",
+        ),
+        (
+            &[
+                "convergence",
+                "scenes/cornell-box.gltf",
+                "--reference",
+                "r.exr",
+                "-o",
+                "c.csv",
+            ],
+            "both the plot and the CSV",
+        ),
+        (&["render", "--width", "0"], "--width"),
         (&["render", "--bogus-option"], "--bogus-option"),
         (&["render", "--spp-per-frame", "0"], "samples per frame"),
         (

@@ -10,7 +10,7 @@ use vcm::Film;
 
 use crate::progressive::{self, Budget, Outcome};
 use crate::render::{
-    RenderSetup, build_traversal, check_writable, interrupt_flag, load_scene, read_reference,
+    RenderSetup, build_traversal, check_outputs, interrupt_flag, load_scene, read_reference,
     relmse_points, set_threads, write_text,
 };
 use vcm_rs::integrators::{Algorithm, image_size};
@@ -30,7 +30,7 @@ pub struct ConvergenceArgs {
     )]
     algos: Vec<Algorithm>,
     /// Seconds each algorithm renders.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     time: f64,
     /// Reference EXR (of the same size) that errors are measured against.
     #[arg(long)]
@@ -47,7 +47,12 @@ pub struct ConvergenceArgs {
 pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
     set_threads(args.setup.threads)?;
     let budget = Budget::from_options(None, Some(args.time))?;
-    check_writable(&args.output)?;
+    let csv_path = args.output.with_extension("csv");
+    let outputs = [
+        ("the plot", args.output.clone()),
+        ("the CSV", csv_path.clone()),
+    ];
+    check_outputs(&outputs, &[&args.scene, &args.reference])?;
     let scene = load_scene(&args.scene)?;
     let size = image_size(&scene, args.setup.width, args.setup.height);
     let reference = read_reference(&args.reference, size)?;
@@ -73,7 +78,6 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
             break;
         }
     }
-    let csv_path = args.output.with_extension("csv");
     let mut csv = String::from("algorithm,seconds,spp,rmse,relmse,mae\n");
     for (algorithm, outcome) in &outcomes {
         for checkpoint in &outcome.checkpoints {

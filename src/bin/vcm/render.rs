@@ -23,10 +23,10 @@ use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 #[derive(clap::Args)]
 pub struct RenderSetup {
     /// Image width in pixels.
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..))]
     pub width: u32,
     /// Image height in pixels (default: from the camera's aspect ratio, else square).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub height: Option<u32>,
     /// Ray traversal backend.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
@@ -75,7 +75,7 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "time")]
     spp: Option<u32>,
     /// Render for this many seconds instead of a fixed sample count.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     time: Option<f64>,
     #[command(flatten)]
     setup: RenderSetup,
@@ -99,11 +99,38 @@ pub struct RenderArgs {
     explain: bool,
 }
 
+impl RenderArgs {
+    /// Every file the render writes, with what it is: the EXR, and beside it the PNG; the
+    /// report and the utilization CSVs and their plots when asked for.
+    fn outputs(&self) -> Vec<(&'static str, PathBuf)> {
+        let mut outputs = vec![
+            ("the EXR image", self.output.clone()),
+            ("the tone-mapped PNG", plot_beside(&self.output)),
+        ];
+        if let Some(csv) = &self.report {
+            outputs.push(("the error report", csv.clone()));
+            outputs.push(("the error plot", plot_beside(csv)));
+        }
+        if let Some(csv) = &self.utilization {
+            outputs.push(("the utilization CSV", csv.clone()));
+            outputs.push(("the utilization plot", plot_beside(csv)));
+        }
+        outputs
+    }
+
+    /// Every file the render reads.
+    fn inputs(&self) -> Vec<&Path> {
+        let mut inputs = vec![self.scene.as_path()];
+        inputs.extend(self.reference.as_deref());
+        inputs
+    }
+}
+
 /// Renders as the arguments say.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     set_threads(args.setup.threads)?;
     let budget = Budget::from_options(args.spp, args.time)?;
-    check_writable(&args.output)?;
+    check_outputs(&args.outputs(), &args.inputs())?;
     let scene = load_scene(&args.scene)?;
     let (width, height) = image_size(&scene, args.setup.width, args.setup.height);
     let reference = match &args.reference {
@@ -135,11 +162,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let image = film.image();
     image.write_exr(&args.output)?;
-    let png = args.output.with_extension("png");
+    let png = plot_beside(&args.output);
     image.write_png(&png, 0.0)?;
     if let Some(report) = &args.report {
         write_report(report, &outcome.checkpoints)?;
-        let plot = report.with_extension("png");
+        let plot = plot_beside(report);
         let series = Series {
             label: args.algo.name().to_string(),
             points: relmse_points(&outcome.checkpoints),
@@ -158,7 +185,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 .map(|&(t, u)| (t, u * 100.0))
                 .collect(),
         };
-        let plot = path.with_extension("png");
+        let plot = plot_beside(path);
         let title = format!("CPU utilization: {}", args.scene.display());
         plot_utilization(&plot, &title, &[series])?;
         say!("wrote {} and {}", path.display(), plot.display());
@@ -246,16 +273,61 @@ pub fn relmse_points(checkpoints: &[Checkpoint]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Fails early, before rendering, when the output folder does not exist.
-pub fn check_writable(output: &Path) -> anyhow::Result<()> {
-    let folder = match output.parent() {
+/// Fails early, before rendering, when an output cannot be written where it is asked for:
+/// its folder does not exist, it names a folder, two outputs are the same file (an EXR named
+/// `.png` would be replaced by its own PNG) or an output would replace one of the `inputs`.
+/// Each output comes with what it is, for the message.
+pub fn check_outputs(outputs: &[(&str, PathBuf)], inputs: &[&Path]) -> anyhow::Result<()> {
+    let mut written: Vec<(PathBuf, &str)> = Vec::new();
+    for (what, output) in outputs {
+        let folder = match output.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        if !folder.is_dir() {
+            bail!("{}: the output folder does not exist", output.display());
+        }
+        if output.is_dir() {
+            bail!("{}: is a folder, not a file to write", output.display());
+        }
+        let file = same_file_key(output);
+        if let Some((_, first)) = written.iter().find(|(key, _)| *key == file) {
+            bail!(
+                "{}: both {first} and {what} would be written there; choose another name",
+                output.display()
+            );
+        }
+        if let Some(input) = inputs.iter().find(|input| same_file_key(input) == file) {
+            bail!(
+                "{}: {what} would replace the input {}",
+                output.display(),
+                input.display()
+            );
+        }
+        written.push((file, what));
+    }
+    Ok(())
+}
+
+/// The PNG drawn beside the EXR or CSV at `path`.
+pub fn plot_beside(path: &Path) -> PathBuf {
+    path.with_extension("png")
+}
+
+/// `path` with its folder made absolute and free of links, so that two spellings of one file
+/// compare equal (the file itself need not exist).
+fn same_file_key(path: &Path) -> PathBuf {
+    let folder = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    if !folder.is_dir() {
-        bail!("{}: the output folder does not exist", output.display());
+    let folder = folder
+        .canonicalize()
+        .unwrap_or_else(|_| folder.to_path_buf());
+    match path.file_name() {
+        Some(name) => folder.join(name),
+        None => folder,
     }
-    Ok(())
 }
 
 /// Writes the convergence CSV through a temporary file.
