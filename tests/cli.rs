@@ -163,7 +163,7 @@ fn every_algorithm_renders_from_the_command_line() {
 fn bad_input_is_a_clear_error_with_non_zero_status() {
     let folder = std::env::temp_dir();
     let folder = folder.to_str().expect("a UTF-8 temporary folder");
-    let cases: [(&[&str], &str); 15] = [
+    let cases: [(&[&str], &str); 16] = [
         (&["render", "no/such/scene.gltf"], "scene.gltf"),
         (&["render", "--spp", "0"], "--spp"),
         (
@@ -196,6 +196,10 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
             "both the plot and the CSV",
         ),
         (&["render", "--width", "0"], "--width"),
+        (
+            &["compare", "a.exr", "b.exr", "--diff", "b.exr"],
+            "would replace the input b.exr",
+        ),
         (&["render", "--bogus-option"], "--bogus-option"),
         (&["render", "--spp-per-frame", "0"], "samples per frame"),
         (

@@ -6,6 +6,8 @@ use anyhow::bail;
 use vcm::image_io::{RgbImage, write_error_png};
 use vcm::metrics::{compare, relative_error_per_pixel};
 
+use crate::render::check_outputs;
+
 /// Arguments of `vcm compare`.
 #[derive(clap::Args)]
 pub struct CompareArgs {
@@ -20,6 +22,10 @@ pub struct CompareArgs {
 
 /// Prints RMSE, relMSE and MAE of `image` against `reference`.
 pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
+    if let Some(diff) = &args.diff {
+        let outputs = [("the error image", diff.clone())];
+        check_outputs(&outputs, &[&args.image, &args.reference])?;
+    }
     let image = RgbImage::read_exr(&args.image)?;
     let reference = RgbImage::read_exr(&args.reference)?;
     if (image.width, image.height) != (reference.width, reference.height) {
