@@ -3,7 +3,8 @@
 //! images up to noise. This checks the scene conventions (units, one-sided emitters, Fresnel,
 //! GGX roughness, thin sheets, tinted transmission, absorbing solids, punctual lights, the
 //! environment, the camera, the box pixel filter, sRGB base colour and emissive textures with
-//! their UV orientation, filter and wrap, mirrored nodes, one- and double-sided surfaces)
+//! their UV orientation, filter and wrap, alpha-masked cut-outs, mirrored nodes, one- and
+//! double-sided surfaces)
 //! against a renderer that references come from, not against this renderer's own idea of them.
 //!
 //! Needs `python3` with the packages of `tools/requirements.txt`. Without them the test is
@@ -310,10 +311,20 @@ fn push(doc: &mut Value, key: &str, value: Value) -> usize {
 /// looks away from the camera. One-sided, the camera sees its black back; double-sided, the
 /// lit face.
 fn panel(double_sided: bool) -> Value {
-    let mut doc = load_scene("cornell-box");
-    let centre = Vec3::new(0.1, 0.05, 0.35);
     let normal = Vec3::new(0.0, -0.5, -0.87).normalize();
-    let (u, v) = (Vec3::X * 0.35, normal.cross(Vec3::X) * 0.3);
+    quad(
+        Vec3::new(0.1, 0.05, 0.35),
+        normal,
+        (0.35, 0.3),
+        double_sided,
+    )
+}
+
+/// The Cornell box with a white rectangle named "panel" added: `half_sizes` along x and
+/// along `normal` × x from `centre`, its front (counter-clockwise) face towards `normal`.
+fn quad(centre: Vec3, normal: Vec3, half_sizes: (f32, f32), double_sided: bool) -> Value {
+    let mut doc = load_scene("cornell-box");
+    let (u, v) = (Vec3::X * half_sizes.0, normal.cross(Vec3::X) * half_sizes.1);
     // Counter-clockwise seen from the side `normal` points to: (u × v) ∥ normal.
     let corners = [
         centre - u - v,
@@ -374,6 +385,54 @@ fn panel(double_sided: bool) -> Value {
         .as_array_mut()
         .unwrap()
         .push(json!(node));
+    doc
+}
+
+/// A double-sided ceiling below the light, cut out by an alpha mask: a 4 × 4 texel RGBA
+/// texture (`mask.png`, written to `dir`, sampled nearest) whose alpha is 0 or 1 per texel,
+/// across it once. The light reaches the room only through the holes (shadow rays and light
+/// paths pass the cut-outs), the camera sees the light and the ceiling through them.
+fn masked_panel(dir: &Path) -> Value {
+    let holes = [[1, 0, 1, 1], [0, 1, 0, 1], [1, 1, 0, 0], [1, 0, 1, 1]];
+    let colours = [
+        [230u8, 40, 40],
+        [40, 200, 60],
+        [240, 240, 240],
+        [60, 60, 220],
+    ];
+    let texels: Vec<u8> = (0..16)
+        .flat_map(|i| {
+            let [r, g, b] = colours[i % 4];
+            [r, g, b, if holes[i / 4][i % 4] == 1 { 255 } else { 0 }]
+        })
+        .collect();
+    image::RgbaImage::from_raw(4, 4, texels)
+        .unwrap()
+        .save(dir.join("mask.png"))
+        .unwrap();
+
+    let mut doc = quad(Vec3::new(0.0, 0.7, 0.0), Vec3::NEG_Y, (0.8, 0.8), true);
+    // The panel's corners run (−u, −v), (u, −v), (u, v), (−u, v); glTF's v runs down the image.
+    let uvs: Vec<u8> = [[0.0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]
+        .into_iter()
+        .flatten()
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let view = push_buffer_view(&mut doc, &uvs);
+    let accessor = push(
+        &mut doc,
+        "accessors",
+        json!({"bufferView": view, "componentType": 5126, "count": 4, "type": "VEC2"}),
+    );
+    let panel = doc["meshes"].as_array().unwrap().len() - 1;
+    doc["meshes"][panel]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(accessor);
+    let material = material(&mut doc, "panel");
+    material["alphaMode"] = json!("MASK");
+    material["pbrMetallicRoughness"]["baseColorFactor"] = json!([1.0, 1.0, 1.0, 1.0]);
+    material["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    doc["samplers"] = json!([{"magFilter": 9728, "minFilter": 9728}]);
+    doc["images"] = json!([{"uri": "mask.png"}]);
+    doc["textures"] = json!([{"source": 0, "sampler": 0}]);
     doc
 }
 
@@ -633,11 +692,19 @@ fn vcm_render_agrees_with_mitsuba() {
         // slightly different t values from run to run.
         Case::pt("glowing-poster", poster(dir.path(), 9729, 10497, true)),
         Case::pt("glowing-poster-bpt", poster(dir.path(), 9729, 10497, true)).with("bpt", None),
+        Case::pt("masked-panel", masked_panel(dir.path())),
+        Case::pt("masked-panel-bpt", masked_panel(dir.path())).with("bpt", None),
         Case::pt("open-sky", open_sky(dir.path())),
         Case::pt("open-sky-bpt", open_sky(dir.path())).with("bpt", None),
     ];
+    // `VCM_CROSSCHECK_CASES=a,b` runs only the cases named (while working on one).
+    let only = std::env::var("VCM_CROSSCHECK_CASES").ok();
+    let wanted = |name: &str| {
+        only.as_ref()
+            .is_none_or(|o| o.split(',').any(|c| c == name))
+    };
     let mut failures = Vec::new();
-    for case in &cases {
+    for case in cases.iter().filter(|case| wanted(case.name)) {
         let name = case.name;
         let scene: PathBuf = dir.path().join(format!("{name}.gltf"));
         std::fs::write(&scene, serde_json::to_string(&case.scene).unwrap()).unwrap();

@@ -20,10 +20,13 @@ noise. It covers the part of the conventions that Mitsuba models exactly:
   are less than 0.01 rad apart (Mitsuba draws the edge between them differently),
 - the `VCM_environment` extension: a constant colour, or an equirectangular image
   (OpenEXR or Radiance HDR, from a file),
+- `alphaMode` MASK cut-outs (the base colour alpha against `alphaCutoff`) where the
+  texture is sampled nearest (then Mitsuba's volumetric path tracer renders, whose shadow
+  rays pass through the cut-outs),
 - the first perspective camera (or none: framed from +Z as the conventions say).
 
 Anything else (other textures, texture transforms, the glTF dielectric-base
-layer, spot lights with a soft edge) stops the script with a message, so that a reference is never silently a different scene.
+layer, spot lights with a soft edge, alpha blending) stops the script with a message, so that a reference is never silently a different scene.
 
 Usage:
     python3 -m pip install -r tools/requirements.txt
@@ -148,6 +151,33 @@ def colour_texture(doc, base_dir, work_dir, info, name):
             "wrap_mode": wrap.pop()}
 
 
+def alpha_mask(bsdf, material, doc, base_dir, work_dir):
+    """`bsdf` cut out where the material's alpha (base colour alpha factor times the base
+    colour texture's alpha, linear) is below `alphaCutoff`, as a Mitsuba `mask` whose opacity
+    is 0 or 1 per texel; the texture must be sampled nearest, as Mitsuba would otherwise blend
+    opacities across texel edges where glTF cuts the filtered alpha."""
+    name = material.get("name")
+    pbr = material.get("pbrMetallicRoughness", {})
+    cutoff = material.get("alphaCutoff", 0.5)
+    factor = pbr.get("baseColorFactor", [1, 1, 1, 1])[3]
+    info = pbr.get("baseColorTexture")
+    if info is None:
+        return bsdf if factor >= cutoff else {"type": "mask", "opacity": 0.0, "material": bsdf}
+    texture = colour_texture(doc, base_dir, work_dir, info, name)
+    if texture["filter_type"] != "nearest":
+        raise Unsupported(f"material {name!r}: an alpha mask sampled with a linear filter")
+    texels = np.array(mi.Bitmap(texture["filename"]))
+    if texels.ndim == 3 and texels.shape[2] == 4:
+        scale = np.iinfo(texels.dtype).max if texels.dtype.kind == "u" else 1.0
+        alpha = texels[:, :, 3].astype(np.float64) / scale
+    else:
+        alpha = np.ones(texels.shape[:2])
+    opacity = (alpha * factor >= cutoff).astype(np.float32)[:, :, None]
+    return {"type": "mask", "material": bsdf,
+            "opacity": {"type": "bitmap", "bitmap": mi.Bitmap(opacity), "raw": True,
+                        "filter_type": "nearest", "wrap_mode": texture["wrap_mode"]}}
+
+
 def interior_medium(material):
     """The absorbing medium inside a solid dielectric with `KHR_materials_volume`
     attenuation (Beer-Lambert: sigma = -ln(attenuationColor) / attenuationDistance), or
@@ -225,6 +255,13 @@ def material_plugins(material, doc, base_dir, work_dir):
                           f"transmission {transmission}) has the glTF dielectric layer")
     if two_sided:
         bsdf = {"type": "twosided", "material": bsdf}
+    alpha_mode = material.get("alphaMode", "OPAQUE")
+    if alpha_mode == "BLEND":
+        raise Unsupported(f"material {material.get('name')!r} is alpha-blended")
+    if alpha_mode == "MASK":
+        if np.any(np.array(material.get("emissiveFactor", [0, 0, 0])) > 0):
+            raise Unsupported(f"material {material.get('name')!r}: an alpha-masked emitter")
+        bsdf = alpha_mask(bsdf, material, doc, base_dir, work_dir)
 
     emissive = np.array(material.get("emissiveFactor", [0, 0, 0]), dtype=float)
     strength = ext.get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0)
@@ -390,6 +427,9 @@ def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
                 shape["emitter"] = emitter
             if medium is not None:
                 shape["interior"] = medium
+            # Mitsuba's path tracer stops shadow rays at any surface; its volumetric one
+            # lets them through cut-outs and index-matched boundaries.
+            if medium is not None or bsdf["type"] == "mask":
                 scene["integrator"]["type"] = "volpath"
             scene[f"shape{len(scene)}"] = shape
             lo, hi = np.minimum(lo, positions.min(0)), np.maximum(hi, positions.max(0))
