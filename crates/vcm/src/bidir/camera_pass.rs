@@ -508,7 +508,6 @@ fn merge(
     seen: &FixedOutgoing,
 ) -> Vec3 {
     let vertices = ctx.cache.vertices();
-    let n_s = seen.bsdf().shading_normal();
     let max_segments = ctx.max_segments();
     let ppm = ctx.settings.algorithm == Algorithm::Ppm;
     let mut sum = Vec3::ZERO;
@@ -538,8 +537,11 @@ fn merge(
                 &ctx.factors,
             )
         };
-        // The density estimate needs f, not f·cos: f_cos = f·|ωi·n_s| in radiance mode.
-        sum += vertex.throughput * eval.f_cos * (weight / vertex.wo.dot(n_s).abs());
+        // The light vertices' density is over the surface's area, so the photon's flux
+        // weighs f·|ωi·n_s| / |ωi·n_g|: f_cos (= f·|ωi·n_s| in radiance mode) over the
+        // geometric cosine. With shading normals the two cosines differ; f alone would
+        // reflect the light as if the shading normal were the geometric one.
+        sum += vertex.throughput * eval.f_cos * (weight / surface.cos_geometric(vertex.wo));
     });
     sum / (PI * ctx.radius * ctx.radius * ctx.factors.light_paths)
 }
