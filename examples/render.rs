@@ -32,6 +32,14 @@ fn render() -> Result<(), Box<dyn Error>> {
     let mut args = std::env::args().skip(1);
     let scene_path = PathBuf::from(args.next().unwrap_or("scenes/cornell-box.gltf".into()));
     let output = PathBuf::from(args.next().unwrap_or("render.exr".into()));
+    let png = output.with_extension("png");
+    if png == output {
+        return Err(format!(
+            "{}: name the output .exr (the PNG goes beside it)",
+            png.display()
+        )
+        .into());
+    }
     let algorithm = match args.next() {
         Some(name) => Algorithm::from_str(&name, true)
             .map_err(|_| format!("unknown algorithm {name:?} (pt, lt, bpt, ppm, bpm or vcm)"))?,
@@ -64,7 +72,7 @@ fn render() -> Result<(), Box<dyn Error>> {
     }
     let image = film.image();
     image.write_exr(&output)?;
-    image.write_png(&output.with_extension("png"), 0.0)?;
+    image.write_png(&png, 0.0)?;
     println!(
         "{}: {spp} spp at {width}×{height} with {}, {rays} rays, {} non-finite samples dropped; wrote {}",
         scene_path.display(),
