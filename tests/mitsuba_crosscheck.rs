@@ -86,6 +86,15 @@ fn rough() -> Value {
     doc
 }
 
+/// cornell-specular with a rough coloured conductor (copper-like F0, r = 0.3) as its mirror.
+fn rough_copper() -> Value {
+    let mut doc = load_scene("cornell-specular");
+    let mirror = &mut material(&mut doc, "mirror")["pbrMetallicRoughness"];
+    mirror["roughnessFactor"] = json!(0.3);
+    mirror["baseColorFactor"] = json!([0.95, 0.64, 0.54, 1.0]);
+    doc
+}
+
 /// cornell-specular with the glass as a tinted thin-walled sheet (no volume).
 fn thin_sheet() -> Value {
     let mut doc = load_scene("cornell-specular");
@@ -670,6 +679,7 @@ fn vcm_render_agrees_with_mitsuba() {
         Case::pt("cornell-water", load_scene("cornell-water")),
         Case::pt("rough", rough()),
         Case::pt("rough-bpt", rough()).with("bpt", None),
+        Case::pt("rough-copper", rough_copper()),
         Case::pt("thin-sheet", thin_sheet()),
         Case::pt("absorbing-glass", absorbing_glass()),
         Case::pt("absorbing-glass-bpt", absorbing_glass()).with("bpt", None),

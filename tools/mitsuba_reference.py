@@ -8,7 +8,9 @@ noise. It covers the part of the conventions that Mitsuba models exactly:
 - Lambertian diffuse (`metallicFactor` 0, `roughnessFactor` 1, specular 0), its
   base colour from a factor or from a texture (sRGB, the sampler's wrap and filter),
 - mirrors and rough conductors whose base colour is white (F0 = 1, so Schlick
-  and Mitsuba's conductor agree; other colours are refused),
+  and Mitsuba's conductor agree), and rough conductors of any base colour as
+  Mitsuba's fully metallic `principled` (Schlick from the base colour; coloured
+  perfect mirrors are refused),
 - smooth and rough dielectric solids (transmission 1 with `KHR_materials_volume`)
   and smooth thin-walled sheets (without it), the base colour tinting transmission;
   a solid's `attenuationColor` / `attenuationDistance` as a purely absorbing
@@ -226,9 +228,14 @@ def material_plugins(material, doc, base_dir, work_dir):
 
     if "baseColorTexture" in pbr and not (metallic == 0.0 and transmission == 0.0):
         raise Unsupported(f"material {material.get('name')!r}: a texture on a non-diffuse material")
-    if metallic == 1.0:
+    if metallic == 1.0 and roughness > 0.0 and any(c != 1.0 for c in base):
+        # Mitsuba's `conductor` takes a complex index of refraction; its `principled`, fully
+        # metallic, is GGX with alpha = roughness^2 and Schlick's Fresnel from the base colour.
+        bsdf = {"type": "principled", "base_color": rgb(base), "metallic": 1.0,
+                "roughness": roughness}
+    elif metallic == 1.0:
         if any(c != 1.0 for c in base):
-            raise Unsupported(f"conductor {material.get('name')!r} with base colour "
+            raise Unsupported(f"mirror {material.get('name')!r} with base colour "
                               f"{base}: Schlick F0 other than 1")
         if roughness == 0.0:
             bsdf = {"type": "conductor", "material": "none"}
