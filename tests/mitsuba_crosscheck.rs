@@ -227,13 +227,10 @@ fn poster(dir: &Path, filter: u32, wrap: u32, glowing: bool) -> Value {
         })
         .flat_map(f32::to_le_bytes)
         .collect();
-    let view = push_buffer_view(&mut doc, &uvs);
-    let accessor = push(
+    let accessor = push_accessor(
         &mut doc,
-        "accessors",
-        json!({
-            "bufferView": view, "componentType": 5126, "count": uvs.len() / 8, "type": "VEC2"
-        }),
+        &uvs,
+        json!({"componentType": 5126, "count": uvs.len() / 8, "type": "VEC2"}),
     );
     let material = push(
         &mut doc,
@@ -308,6 +305,13 @@ fn push_buffer_view(doc: &mut Value, bytes: &[u8]) -> usize {
     view
 }
 
+/// Appends `bytes` as a new buffer and view, and `accessor` (all but its `bufferView`) over
+/// them; returns the accessor's index.
+fn push_accessor(doc: &mut Value, bytes: &[u8], mut accessor: Value) -> usize {
+    accessor["bufferView"] = json!(push_buffer_view(doc, bytes));
+    push(doc, "accessors", accessor)
+}
+
 /// Appends `value` to the array `doc[key]`; returns its index.
 fn push(doc: &mut Value, key: &str, value: Value) -> usize {
     let array = doc[key].as_array_mut().unwrap();
@@ -355,22 +359,18 @@ fn quad(centre: Vec3, normal: Vec3, half_sizes: (f32, f32), double_sided: bool) 
         .into_iter()
         .flat_map(u32::to_le_bytes)
         .collect();
-    let view = push_buffer_view(&mut doc, &positions);
-    let position = push(
+    let position = push_accessor(
         &mut doc,
-        "accessors",
+        &positions,
         json!({
-            "bufferView": view, "componentType": 5126, "count": 4, "type": "VEC3",
+            "componentType": 5126, "count": 4, "type": "VEC3",
             "min": min.to_array(), "max": max.to_array()
         }),
     );
-    let view = push_buffer_view(&mut doc, &indices);
-    let index = push(
+    let index = push_accessor(
         &mut doc,
-        "accessors",
-        json!({
-            "bufferView": view, "componentType": 5125, "count": 6, "type": "SCALAR"
-        }),
+        &indices,
+        json!({"componentType": 5125, "count": 6, "type": "SCALAR"}),
     );
     let material = push(
         &mut doc,
@@ -427,11 +427,10 @@ fn masked_panel(dir: &Path) -> Value {
         .flatten()
         .flat_map(f32::to_le_bytes)
         .collect();
-    let view = push_buffer_view(&mut doc, &uvs);
-    let accessor = push(
+    let accessor = push_accessor(
         &mut doc,
-        "accessors",
-        json!({"bufferView": view, "componentType": 5126, "count": 4, "type": "VEC2"}),
+        &uvs,
+        json!({"componentType": 5126, "count": 4, "type": "VEC2"}),
     );
     let panel = doc["meshes"].as_array().unwrap().len() - 1;
     doc["meshes"][panel]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(accessor);

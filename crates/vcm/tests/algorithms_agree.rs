@@ -14,6 +14,7 @@ use glam::Vec3;
 use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
 use vcm_scene::Scene;
 use vcm_scene::light::{Light, PointLight};
+use vcm_scene::mesh::Mesh;
 
 /// The image is compared in REGIONS × REGIONS blocks.
 const REGIONS: usize = 4;
@@ -106,23 +107,8 @@ fn with_leaning_normals(name: &str) -> Scene {
             mesh.normals[i as usize] = (n + aside * 0.6).normalize();
         }
     }
-    let Scene {
-        path,
-        materials,
-        textures,
-        camera,
-        ..
-    } = loaded;
     // The Cornell scenes have no punctual lights: the area lights are made again.
-    Scene::new(
-        path,
-        mesh,
-        materials,
-        textures,
-        Vec::new(),
-        camera,
-        Vec::new(),
-    )
+    rebuilt(loaded, mesh, Vec::new())
 }
 
 /// The merge radius, as a fraction of the scene's radius, of the comparisons with every
@@ -139,12 +125,6 @@ const MERGE_RADIUS: f32 = 0.02;
 #[test]
 fn every_algorithm_agrees_where_shading_normals_lean() {
     let scene = with_leaning_normals("cornell-box.gltf");
-    let settings = PtSettings {
-        seed: 100,
-        ..common::pt_settings(SIZE, SIZE)
-    };
-    let mut tracer = common::path_tracer(scene.clone(), settings);
-    let reference = common::region_means(&mut tracer, FRAMES, REGIONS);
     let algorithms = [
         Algorithm::LightTracing,
         Algorithm::Bpt,
@@ -152,7 +132,19 @@ fn every_algorithm_agrees_where_shading_normals_lean() {
         Algorithm::Ppm,
         Algorithm::Bpm,
     ];
-    for algorithm in algorithms {
+    assert_every_technique_agrees(&scene, &algorithms, "leaning normals");
+}
+
+/// Asserts that each of `algorithms`, with every technique on (merging within
+/// [`MERGE_RADIUS`]), agrees with the path tracer on `scene` region by region.
+fn assert_every_technique_agrees(scene: &Scene, algorithms: &[Algorithm], label: &str) {
+    let settings = PtSettings {
+        seed: 100,
+        ..common::pt_settings(SIZE, SIZE)
+    };
+    let mut tracer = common::path_tracer(scene.clone(), settings);
+    let reference = common::region_means(&mut tracer, FRAMES, REGIONS);
+    for &algorithm in algorithms {
         let settings = VcmSettings {
             seed: 200,
             radius_fraction: MERGE_RADIUS,
@@ -164,10 +156,32 @@ fn every_algorithm_agrees_where_shading_normals_lean() {
         for (r, z) in z.iter().enumerate() {
             assert!(
                 z.abs() < Z_LIMIT,
-                "leaning normals, {algorithm:?}, region {r}: z = {z:.2}"
+                "{label}, {algorithm:?}, region {r}: z = {z:.2}"
             );
         }
     }
+}
+
+/// `loaded` assembled again with `mesh` and `punctual_lights` (its area lights made anew from
+/// the emissive triangles).
+fn rebuilt(loaded: Scene, mesh: Mesh, punctual_lights: Vec<Light>) -> Scene {
+    let Scene {
+        path,
+        materials,
+        textures,
+        camera,
+        ..
+    } = loaded;
+    let warnings = Vec::new();
+    Scene::new(
+        path,
+        mesh,
+        materials,
+        textures,
+        punctual_lights,
+        camera,
+        warnings,
+    )
 }
 
 /// A third-party model of `../shared/scenes/khronos-samples/` lit by a point light above its
@@ -184,23 +198,8 @@ fn lit_khronos_model(file: &str) -> Scene {
         position: bounds.center() + Vec3::new(1.0, 1.2, 1.5) * radius,
         intensity: Vec3::splat(3.0 * radius * radius),
     });
-    let Scene {
-        path,
-        mesh,
-        materials,
-        textures,
-        camera,
-        ..
-    } = loaded;
-    Scene::new(
-        path,
-        mesh,
-        materials,
-        textures,
-        vec![bulb, sky],
-        camera,
-        Vec::new(),
-    )
+    let mesh = loaded.mesh.clone();
+    rebuilt(loaded, mesh, vec![bulb, sky])
 }
 
 /// Real models, with what the Cornell scenes lack: base colour, metallic-roughness, normal
@@ -228,28 +227,6 @@ fn every_algorithm_agrees_on_textured_models() {
         ),
     ];
     for (file, algorithms) in models {
-        let scene = lit_khronos_model(file);
-        let settings = PtSettings {
-            seed: 100,
-            ..common::pt_settings(SIZE, SIZE)
-        };
-        let mut tracer = common::path_tracer(scene.clone(), settings);
-        let reference = common::region_means(&mut tracer, FRAMES, REGIONS);
-        for &algorithm in algorithms {
-            let settings = VcmSettings {
-                seed: 200,
-                radius_fraction: MERGE_RADIUS,
-                prune: false,
-                ..common::vcm_settings(algorithm, SIZE, SIZE)
-            };
-            let mut integrator = common::vcm(scene.clone(), settings);
-            let z = z_scores(&reference, &mut integrator, FRAMES);
-            for (r, z) in z.iter().enumerate() {
-                assert!(
-                    z.abs() < Z_LIMIT,
-                    "{file}, {algorithm:?}, region {r}: z = {z:.2}"
-                );
-            }
-        }
+        assert_every_technique_agrees(&lit_khronos_model(file), algorithms, file);
     }
 }
