@@ -105,15 +105,15 @@ impl RenderArgs {
     fn outputs(&self) -> Vec<(&'static str, PathBuf)> {
         let mut outputs = vec![
             ("the EXR image", self.output.clone()),
-            ("the tone-mapped PNG", plot_beside(&self.output)),
+            ("the tone-mapped PNG", png_beside(&self.output)),
         ];
         if let Some(csv) = &self.report {
             outputs.push(("the error report", csv.clone()));
-            outputs.push(("the error plot", plot_beside(csv)));
+            outputs.push(("the error plot", png_beside(csv)));
         }
         if let Some(csv) = &self.utilization {
             outputs.push(("the utilization CSV", csv.clone()));
-            outputs.push(("the utilization plot", plot_beside(csv)));
+            outputs.push(("the utilization plot", png_beside(csv)));
         }
         outputs
     }
@@ -162,11 +162,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let image = film.image();
     image.write_exr(&args.output)?;
-    let png = plot_beside(&args.output);
+    let png = png_beside(&args.output);
     image.write_png(&png, 0.0)?;
     if let Some(report) = &args.report {
         write_report(report, &outcome.checkpoints)?;
-        let plot = plot_beside(report);
+        let plot = png_beside(report);
         let series = Series {
             label: args.algo.name().to_string(),
             points: relmse_points(&outcome.checkpoints),
@@ -185,7 +185,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 .map(|&(t, u)| (t, u * 100.0))
                 .collect(),
         };
-        let plot = plot_beside(path);
+        let plot = png_beside(path);
         let title = format!("CPU utilization: {}", args.scene.display());
         plot_utilization(&plot, &title, &[series])?;
         say!("wrote {} and {}", path.display(), plot.display());
@@ -280,11 +280,7 @@ pub fn relmse_points(checkpoints: &[Checkpoint]) -> Vec<(f64, f64)> {
 pub fn check_outputs(outputs: &[(&str, PathBuf)], inputs: &[&Path]) -> anyhow::Result<()> {
     let mut written: Vec<(PathBuf, &str)> = Vec::new();
     for (what, output) in outputs {
-        let folder = match output.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        if !folder.is_dir() {
+        if !folder_of(output).is_dir() {
             bail!("{}: the output folder does not exist", output.display());
         }
         if output.is_dir() {
@@ -309,18 +305,23 @@ pub fn check_outputs(outputs: &[(&str, PathBuf)], inputs: &[&Path]) -> anyhow::R
     Ok(())
 }
 
-/// The PNG drawn beside the EXR or CSV at `path`.
-pub fn plot_beside(path: &Path) -> PathBuf {
+/// The PNG written beside the EXR or CSV at `path` (the tone-mapped image, or the plot).
+pub fn png_beside(path: &Path) -> PathBuf {
     path.with_extension("png")
+}
+
+/// The folder that holds `path` (`.` for a bare file name).
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
 }
 
 /// `path` with its folder made absolute and free of links, so that two spellings of one file
 /// compare equal (the file itself need not exist).
 fn same_file_key(path: &Path) -> PathBuf {
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
+    let folder = folder_of(path);
     let folder = folder
         .canonicalize()
         .unwrap_or_else(|_| folder.to_path_buf());
