@@ -119,12 +119,26 @@ const MERGE_RADIUS: f32 = 0.02;
 /// Shading normals leaning off the geometric ones: light paths scatter through the adjoint
 /// BSDF (Veach's correction), connections evaluate both ends' BSDFs, merges weigh each light
 /// vertex by f·|ωl·n_s| / |ωl·n_g|. Every technique must still agree with the path tracer,
-/// which only ever uses the BSDF in radiance mode. VCM runs with every technique (nothing is
-/// specular, so pruned it would run as BPT). With merges weighing by f alone (before this
-/// test), PPM and BPM were off by z of 17 and 22.
+/// which only ever uses the BSDF in radiance mode, with Lambertian surfaces and with glTF's
+/// dielectric layer (diffuse under GGX, r = 0.25, the most common glTF material). VCM runs
+/// with every technique (nothing is specular, so pruned it would run as BPT). With merges
+/// weighing by f alone (before this test), PPM and BPM were off by z of 17 and 22.
 #[test]
 fn every_algorithm_agrees_where_shading_normals_lean() {
-    let scene = with_leaning_normals("cornell-box.gltf");
+    let lambertian = with_leaning_normals("cornell-box.gltf");
+    let mut materials = lambertian.materials.clone();
+    for m in materials.iter_mut().filter(|m| !m.is_emissive()) {
+        (m.specular, m.roughness) = (1.0, 0.25);
+    }
+    let mesh = lambertian.mesh.clone();
+    let layered = rebuilt(
+        Scene {
+            materials,
+            ..lambertian.clone()
+        },
+        mesh,
+        Vec::new(),
+    );
     let algorithms = [
         Algorithm::LightTracing,
         Algorithm::Bpt,
@@ -132,7 +146,8 @@ fn every_algorithm_agrees_where_shading_normals_lean() {
         Algorithm::Ppm,
         Algorithm::Bpm,
     ];
-    assert_every_technique_agrees(&scene, &algorithms, "leaning normals");
+    assert_every_technique_agrees(&lambertian, &algorithms, "leaning normals");
+    assert_every_technique_agrees(&layered, &algorithms, "leaning normals, layered");
 }
 
 /// Asserts that each of `algorithms`, with every technique on (merging within
