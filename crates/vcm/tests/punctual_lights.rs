@@ -75,6 +75,12 @@ fn floor_under(
     algorithm: Option<Algorithm>,
 ) -> Box<dyn Integrator> {
     let scene = floor_scene(light, camera, half, extra, Vec3::ZERO);
+    integrator_for(scene, algorithm, true)
+}
+
+/// An integrator (`None`: the path tracer) for `scene`, seed 9; `prune: false` runs every
+/// part of the VCM family's algorithm even where the scene does not need it.
+fn integrator_for(scene: Scene, algorithm: Option<Algorithm>, prune: bool) -> Box<dyn Integrator> {
     match algorithm {
         None => {
             let settings = PtSettings {
@@ -86,6 +92,7 @@ fn floor_under(
         Some(algorithm) => {
             let settings = VcmSettings {
                 seed: 9,
+                prune,
                 ..common::vcm_settings(algorithm, SIZE, SIZE)
             };
             Box::new(common::vcm(scene, settings))
@@ -174,23 +181,7 @@ fn leaning_shading_normals_take_the_light_cosine_about_themselves() {
         Some(Algorithm::Vcm),
     ];
     for algorithm in algorithms {
-        let mut integrator: Box<dyn Integrator> = match algorithm {
-            None => Box::new(common::path_tracer(
-                scene.clone(),
-                PtSettings {
-                    seed: 9,
-                    ..common::pt_settings(SIZE, SIZE)
-                },
-            )),
-            Some(algorithm) => Box::new(common::vcm(
-                scene.clone(),
-                VcmSettings {
-                    seed: 9,
-                    prune: false,
-                    ..common::vcm_settings(algorithm, SIZE, SIZE)
-                },
-            )),
-        };
+        let mut integrator = integrator_for(scene.clone(), algorithm, false);
         let series = common::render_series(integrator.as_mut(), 512);
         let label = format!("leaning normals, {algorithm:?}");
         common::assert_pixels_match(&series, &expected, &label);
