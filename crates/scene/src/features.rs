@@ -4,7 +4,6 @@ use std::fmt;
 
 use glam::Vec3;
 
-use crate::bsdf::SMOOTH_ALPHA;
 use crate::light::Light;
 use crate::material::{AlphaMode, Material};
 use crate::mesh::{Bounds, Mesh};
@@ -115,12 +114,10 @@ impl MaterialClasses {
         self.diffuse |= diffuse > 0.0;
         self.transmission |= transmission > 0.0;
         if has_specular_lobe {
-            let alpha = (roughness.0 * roughness.0, roughness.1 * roughness.1);
-            // Lobes with α below the BSDF's threshold are perfect (delta) reflectors.
-            self.specular |= alpha.0 < SMOOTH_ALPHA;
-            self.glossy |= alpha.1 >= SMOOTH_ALPHA;
-            let near_specular = NEAR_SPECULAR_ROUGHNESS * NEAR_SPECULAR_ROUGHNESS;
-            self.near_specular |= alpha.1 >= SMOOTH_ALPHA && alpha.0 < near_specular;
+            // Roughness 0 makes the lobes perfect (delta) reflectors, any other GGX.
+            self.specular |= roughness.0 <= 0.0;
+            self.glossy |= roughness.1 > 0.0;
+            self.near_specular |= roughness.1 > 0.0 && roughness.0 < NEAR_SPECULAR_ROUGHNESS;
         }
     }
 }
@@ -229,6 +226,9 @@ mod tests {
         assert!(!just_above.specular_or_near());
         let mirror = classes(metal(0.0));
         assert!(mirror.specular && !mirror.near_specular && !mirror.non_specular());
+        // Any roughness above 0 is a GGX lobe, however polished.
+        let polished = classes(metal(0.005));
+        assert!(polished.glossy && polished.near_specular && !polished.specular);
         let diffuse = classes(Material::diffuse("white", Vec3::ONE));
         assert!(diffuse.diffuse && !diffuse.specular_or_near());
     }

@@ -8,7 +8,7 @@
 
 mod common;
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec3, Vec4};
 use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
 use vcm_scene::light::{DirectionalLight, Light, PointLight, SpotLight};
 use vcm_scene::{Material, Scene};
@@ -37,11 +37,12 @@ fn radiance(position: Vec3, intensity: f64, p: DVec3) -> f64 {
 /// The integrators every scene is rendered with (`None`: the path tracer).
 const ALGORITHMS: [Option<Algorithm>; 3] = [None, Some(Algorithm::Bpt), Some(Algorithm::Vcm)];
 
-/// The floor (of half side `half`, its vertex normals `normal`, zero for none; plus `extra`
-/// quads of material 1, black) under `light`, seen by `camera`.
+/// The floor (of material `floor` and half side `half`, its vertex normals `normal`, zero for
+/// none; plus `extra` quads of material 1, black) under `light`, seen by `camera`.
 fn floor_scene(
     light: Light,
     camera: vcm_scene::Camera,
+    floor: Material,
     half: f32,
     extra: &[[Vec3; 4]],
     normal: Vec3,
@@ -57,13 +58,15 @@ fn floor_scene(
     mesh.normals[..4].fill(normal);
     common::scene(
         mesh,
-        vec![
-            Material::diffuse("floor", Vec3::splat(ALBEDO)),
-            Material::diffuse("black", Vec3::ZERO),
-        ],
+        vec![floor, Material::diffuse("black", Vec3::ZERO)],
         vec![light],
         camera,
     )
+}
+
+/// The Lambertian floor of albedo `ALBEDO`.
+fn lambertian_floor() -> Material {
+    Material::diffuse("floor", Vec3::splat(ALBEDO))
 }
 
 /// An integrator (`None`: the path tracer) for the flat-shaded [`floor_scene`].
@@ -74,7 +77,7 @@ fn floor_under(
     extra: &[[Vec3; 4]],
     algorithm: Option<Algorithm>,
 ) -> Box<dyn Integrator> {
-    let scene = floor_scene(light, camera, half, extra, Vec3::ZERO);
+    let scene = floor_scene(light, camera, lambertian_floor(), half, extra, Vec3::ZERO);
     integrator_for(scene, algorithm, true)
 }
 
@@ -173,7 +176,15 @@ fn leaning_shading_normals_take_the_light_cosine_about_themselves() {
         let cos_s = (to_light.dot(normal) / d2.sqrt()).max(0.0);
         f64::from(ALBEDO) / std::f64::consts::PI * mean(light.intensity) * cos_s / d2
     });
-    let scene = floor_scene(Light::Point(light), camera, 20.0, &[], normal.as_vec3());
+    let floor = lambertian_floor();
+    let scene = floor_scene(
+        Light::Point(light),
+        camera,
+        floor,
+        20.0,
+        &[],
+        normal.as_vec3(),
+    );
     let algorithms = [
         None,
         Some(Algorithm::LightTracing),
@@ -184,6 +195,57 @@ fn leaning_shading_normals_take_the_light_cosine_about_themselves() {
         let mut integrator = integrator_for(scene.clone(), algorithm, false);
         let series = common::render_series(integrator.as_mut(), 512);
         let label = format!("leaning normals, {algorithm:?}");
+        common::assert_pixels_match(&series, &expected, &label);
+    }
+}
+
+/// GGX (Trowbridge-Reitz) D(h) and the height-correlated Smith G2 of width `alpha`, for the
+/// unit half vector `h` and the unit directions `wo`, `wi` (z: the surface normal).
+fn ggx_d_g2(alpha: f64, h: DVec3, wo: DVec3, wi: DVec3) -> (f64, f64) {
+    let a2 = alpha * alpha;
+    let t = (h.x * h.x + h.y * h.y) / a2 + h.z * h.z;
+    let d = 1.0 / (std::f64::consts::PI * a2 * t * t);
+    let lambda = |w: DVec3| {
+        let tan2 = (w.x * w.x + w.y * w.y) / (w.z * w.z);
+        0.5 * ((1.0 + a2 * tan2).sqrt() - 1.0)
+    };
+    (d, 1.0 / (1.0 + lambda(wo) + lambda(wi)))
+}
+
+/// A polished white metal floor (roughness 0.02: GGX α = r² = 4·10⁻⁴, F = 1) under a point
+/// light, seen from straight above through a field of view of 1.6 mrad that the light's
+/// highlight fills: L = D(h) G2 / (4 cos θo) · I / d² per pixel. The highlight exists only
+/// for a rough lobe (a perfect mirror cannot reflect a point light toward a pinhole), so
+/// this fails if any roughness above 0 renders as a mirror, or with α = r.
+#[test]
+fn a_polished_floor_shows_the_point_lights_ggx_highlight() {
+    let roughness = 0.02;
+    let alpha = f64::from(roughness).powi(2);
+    let camera = common::camera(Vec3::new(0.0, 0.0, 3.0), 1.6e-3);
+    let light = PointLight {
+        position: Vec3::new(0.0, 0.0, 1.5),
+        intensity: INTENSITY,
+    };
+    let expected = common::plane_pixel_values(&camera, SIZE, |p| {
+        let to_light = light.position.as_dvec3() - p;
+        let (wi, wo) = (
+            to_light.normalize(),
+            (camera.position.as_dvec3() - p).normalize(),
+        );
+        let (d, g2) = ggx_d_g2(alpha, (wi + wo).normalize(), wo, wi);
+        d * g2 / (4.0 * wo.z) * mean(light.intensity) / to_light.length_squared()
+    });
+    let floor = Material {
+        base_color: Vec4::ONE,
+        metallic: 1.0,
+        roughness,
+        ..Material::diffuse("polished", Vec3::ONE)
+    };
+    let scene = floor_scene(Light::Point(light), camera, floor, 20.0, &[], Vec3::ZERO);
+    for algorithm in ALGORITHMS {
+        let mut integrator = integrator_for(scene.clone(), algorithm, true);
+        let series = common::render_series(integrator.as_mut(), 512);
+        let label = format!("polished floor, {algorithm:?}");
         common::assert_pixels_match(&series, &expected, &label);
     }
 }

@@ -12,15 +12,15 @@
 //!
 //! A and B are tabulated once, lazily and deterministically (a rank-1 lattice rule over the
 //! visible normals; 64 × 48 entries, about 1 s of CPU spread over the available threads), on
-//! a grid over s = √μ ∈ [0, 1] (μ = cos θo) and r = √α ∈ [√SMOOTH_ALPHA, 1], both denser
+//! a grid over s = √μ ∈ [0, 1] (μ = cos θo) and r = √α ∈ [√MIN_ALPHA, 1], both denser
 //! where the albedo changes fastest, and looked up bilinearly in (s, r). The interpolation
 //! error is below `TABLE_TOLERANCE` = 2e-3 (asserted by a test against a converged
 //! integration). The averages are the exact averages of the bilinear interpolant, so 2 ∫ (1 − E(μ)) μ dμ = 1 − E_avg holds exactly for the looked-up
 //! E: the compensated diffuse lobe then has albedo exactly base·(1 − E(μo)).
-//! For α below [`SMOOTH_ALPHA`] the lobe is a mirror and E is analytic:
+//! A mirror (roughness 0, no GGX lobe) has the analytic E:
 //! E(μ) = F0 + (F90 − F0)(1 − μ)^5, E_avg = F0 · 20/21 + F90 / 21.
 
-use super::SMOOTH_ALPHA;
+use super::MIN_ALPHA;
 use super::fresnel::{reflect, schlick, schlick_weight};
 use super::microfacet::Ggx;
 use glam::{Vec2, Vec3};
@@ -29,7 +29,7 @@ use std::sync::OnceLock;
 /// Grid nodes in s = √μ (at μ = (j / (MU_RES − 1))²: dense at grazing angles, where the
 /// albedo of smooth-ish lobes changes on the scale μ ~ α).
 const MU_RES: usize = 64;
-/// Grid nodes in r = √α over [√SMOOTH_ALPHA, 1], at r = r_min + (1 − r_min)(k / (R_RES − 1))²:
+/// Grid nodes in r = √α over [√MIN_ALPHA, 1], at r = r_min + (1 − r_min)(k / (R_RES − 1))²:
 /// dense at small roughness, where the grazing-angle albedo changes fastest.
 const R_RES: usize = 48;
 /// Cosine used for the μ = 0 node (the grazing limit).
@@ -145,13 +145,13 @@ fn build_tables() -> Tables {
 
 /// r = √α of the table coordinate `x` ∈ [0, 1].
 fn r_of_node(x: f32) -> f32 {
-    let r_min = SMOOTH_ALPHA.sqrt();
+    let r_min = MIN_ALPHA.sqrt();
     r_min + (1.0 - r_min) * x * x
 }
 
 /// Table coordinate of α (inverse of [`r_of_node`]).
 fn node_of_alpha(alpha: f32) -> f32 {
-    let r_min = SMOOTH_ALPHA.sqrt();
+    let r_min = MIN_ALPHA.sqrt();
     ((alpha.sqrt() - r_min) / (1.0 - r_min)).max(0.0).sqrt()
 }
 
@@ -177,12 +177,12 @@ pub(super) struct SpecularAlbedo {
 }
 
 impl SpecularAlbedo {
-    /// Lobe with Schlick (F0, F90) and roughness `alpha` (a mirror below [`SMOOTH_ALPHA`]).
-    pub fn new(f0: Vec3, f90: Vec3, alpha: f32) -> SpecularAlbedo {
+    /// Lobe with Schlick (F0, F90) and the distribution `ggx` (`None`: a mirror).
+    pub fn new(f0: Vec3, f90: Vec3, ggx: Option<Ggx>) -> SpecularAlbedo {
         // A layer that reflects nothing (F0 = F90 = 0, e.g. specularFactor 0) has E = 0 at any
         // roughness: the closed form below gives that without touching (or building) the tables.
         let mut albedo = SpecularAlbedo { f0, f90, row: None };
-        if alpha >= SMOOTH_ALPHA && albedo.reflects() {
+        if let Some(Ggx { alpha }) = ggx.filter(|_| albedo.reflects()) {
             albedo.row = Some(locate(node_of_alpha(alpha), R_RES));
         }
         albedo
@@ -241,17 +241,14 @@ pub(super) mod tests {
     fn table_matches_converged_integration() {
         // Off-grid points (between nodes in both μ and √α), including grazing angles.
         let mut worst = 0.0f32;
-        for &r in &[0.04f32, 0.1, 0.23, 0.37, 0.55, 0.78, 0.95] {
+        for &r in &[0.013f32, 0.02, 0.04, 0.1, 0.23, 0.37, 0.55, 0.78, 0.95] {
             for &mu in &[0.02f32, 0.05, 0.11, 0.3, 0.52, 0.77, 0.99] {
                 let alpha = r * r;
-                if alpha < SMOOTH_ALPHA {
-                    continue;
-                }
                 let (a, b) = reference(mu, alpha);
-                let e_a = SpecularAlbedo::new(Vec3::ONE, Vec3::ZERO, alpha)
+                let e_a = SpecularAlbedo::new(Vec3::ONE, Vec3::ZERO, Some(Ggx { alpha }))
                     .directional(mu)
                     .x;
-                let e_b = SpecularAlbedo::new(Vec3::ZERO, Vec3::ONE, alpha)
+                let e_b = SpecularAlbedo::new(Vec3::ZERO, Vec3::ONE, Some(Ggx { alpha }))
                     .directional(mu)
                     .x;
                 worst = worst.max((e_a - a).abs()).max((e_b - b).abs());
@@ -264,19 +261,19 @@ pub(super) mod tests {
     fn smooth_limit_is_analytic() {
         let (f0, f90) = (Vec3::splat(0.04), Vec3::ONE);
         assert_eq!(
-            SpecularAlbedo::new(f0, f90, 0.0).directional(0.3),
+            SpecularAlbedo::new(f0, f90, None).directional(0.3),
             schlick(f0, f90, 0.3)
         );
         // 2 ∫ (1 − μ)^5 μ dμ = 1/21.
-        let avg = SpecularAlbedo::new(Vec3::ZERO, Vec3::ONE, 0.0).average().x;
+        let avg = SpecularAlbedo::new(Vec3::ZERO, Vec3::ONE, None).average().x;
         assert!((avg - 1.0 / 21.0).abs() < 1e-7);
     }
 
     #[test]
     fn averages_match_rows() {
         // The tabulated averages are the cosine-weighted means of the interpolated rows.
-        for alpha in [0.002f32, 0.05, 0.3, 1.0] {
-            let lobe = SpecularAlbedo::new(Vec3::ONE, Vec3::splat(0.5), alpha);
+        for alpha in [2e-4f32, 0.002, 0.05, 0.3, 1.0] {
+            let lobe = SpecularAlbedo::new(Vec3::ONE, Vec3::splat(0.5), Some(Ggx { alpha }));
             let n = 20_000;
             let mean: f64 = (0..n)
                 .map(|i| {

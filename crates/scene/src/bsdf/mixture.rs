@@ -12,7 +12,7 @@ use super::lobe::{Lobe, LobeSample};
 use super::microfacet::Ggx;
 use super::specular::SchlickReflection;
 use super::thin_dielectric::ThinDielectric;
-use super::{BsdfParams, LobeKind, SMOOTH_ALPHA, TransportMode};
+use super::{BsdfParams, LobeKind, TransportMode, ggx_alpha};
 use glam::{Vec2, Vec3};
 
 /// Number of lobe slots.
@@ -103,8 +103,7 @@ impl Mixture {
             1.5
         };
 
-        let alpha = roughness * roughness;
-        let ggx = (alpha >= SMOOTH_ALPHA).then_some(Ggx { alpha });
+        let ggx = ggx_alpha(roughness).map(|alpha| Ggx { alpha });
         let w_interface = (1.0 - metallic) * transmission;
         let w_base = (1.0 - metallic) * (1.0 - transmission);
 
@@ -112,7 +111,7 @@ impl Mixture {
         let r0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
         let layer_f0 = (r0 * specular_color).min(Vec3::ONE) * specular;
         let layer_f90 = Vec3::splat(specular);
-        let layer = SpecularAlbedo::new(layer_f0, layer_f90, alpha);
+        let layer = SpecularAlbedo::new(layer_f0, layer_f90, ggx);
 
         let f0 = metallic * base + w_base * layer_f0;
         let f90 = metallic * Vec3::ONE + w_base * layer_f90;

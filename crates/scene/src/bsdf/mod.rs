@@ -28,8 +28,10 @@
 //!   multiple-reflection R' = R + T²R/(1 − R²) (`thin_dielectric.rs`). The specular and
 //!   specular_color factors do not affect the interface.
 //!
-//! Every lobe with α < [`SMOOTH_ALPHA`] (roughness < 0.0316; pbrt-v4's "effectively
-//! smooth") is a Dirac delta: mirror reflection with the same Fresnel, or ideal refraction.
+//! Roughness 0 makes every lobe a Dirac delta: mirror reflection with the same Fresnel, or
+//! ideal refraction. Any roughness r > 0 is GGX with α = max(r², [`MIN_ALPHA`])
+//! ([`ggx_alpha`]), as the scene conventions ask: a polished surface (r = 0.02, α = 4·10⁻⁴)
+//! shows a point light's highlight, which a delta lobe cannot.
 //!
 //! # Sampling
 //! One lobe is chosen with probability proportional to its albedo estimate at ωo (the
@@ -71,9 +73,17 @@ pub use surface::{Bsdf, FixedOutgoing, GRAZING_COS, Lobes};
 
 use glam::Vec3;
 
-/// GGX α below which a lobe is treated as perfectly smooth (a Dirac delta); the
-/// corresponding perceptual roughness is √(1e-3) ≈ 0.0316.
-pub const SMOOTH_ALPHA: f32 = 1e-3;
+/// Smallest GGX α of a rough lobe (roughness r > 0 gives α = max(r², `MIN_ALPHA`), so
+/// r < 0.01 renders as r = 0.01). Mitsuba 3 clamps its microfacet α to the same floor; below
+/// it, f32 half vectors would resolve the lobe poorly and its pdfs (≈ 1/(πα²)) approach
+/// the range where MIS squares overflow.
+pub const MIN_ALPHA: f32 = 1e-4;
+
+/// The GGX α of a lobe with glTF perceptual `roughness`: r² at least [`MIN_ALPHA`]; `None`
+/// for roughness 0 (or below), a perfectly smooth (Dirac delta) lobe.
+pub fn ggx_alpha(roughness: f32) -> Option<f32> {
+    (roughness > 0.0).then(|| (roughness * roughness).max(MIN_ALPHA))
+}
 
 /// Material inputs after texture lookup (glTF metallic-roughness and extensions).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,7 +4,7 @@
 //!
 //! f(ωo, ωi) = F(ωo·m) D(m) G2(ωo, ωi) / (4 cos θo cos θi), m = normalize(ωo + ωi)
 //! (Walter et al. 2007, eq. 20), sampled with visible normals: pdf = D_ωo(m) / (4 ωo·m).
-//! Mirror (delta) when α < [`SMOOTH_ALPHA`](super::SMOOTH_ALPHA): coefficient F(cos θo).
+//! Mirror (delta) at roughness 0 ([`ggx_alpha`](super::ggx_alpha)): coefficient F(cos θo).
 
 use super::albedo::SpecularAlbedo;
 use super::fresnel::{reflect, schlick};
@@ -27,7 +27,7 @@ pub(super) struct SchlickReflection {
 impl SchlickReflection {
     /// Lobe with Schlick (F0, F90), GGX `ggx` or a mirror for `None`.
     pub fn new(f0: Vec3, f90: Vec3, ggx: Option<Ggx>) -> SchlickReflection {
-        let albedo = SpecularAlbedo::new(f0, f90, ggx.map_or(0.0, |g| g.alpha));
+        let albedo = SpecularAlbedo::new(f0, f90, ggx);
         SchlickReflection {
             f0,
             f90,

@@ -153,35 +153,52 @@ fn importance_mode_applies_the_shading_normal_correction() {
 }
 
 #[test]
-fn near_specular_roughness_becomes_delta() {
-    for roughness in [0.001f32, 0.01] {
+fn only_zero_roughness_is_delta() {
+    for params in [conductor(0.0), glass(0.0, 1.5), thin_glass(0.0)] {
+        let b = bsdf(&params);
+        assert!(b.is_delta() && !b.has_non_delta());
+        assert_eq!(b.classify(), LobeKind::Specular);
+        let wo = direction(n_g(), 0.6, 0.0);
+        let s = b
+            .sample(wo, 0.3, glam::Vec2::new(0.2, 0.7), TransportMode::Radiance)
+            .unwrap();
+        assert_eq!(s.lobe, LobeKind::Specular);
+        assert_eq!(
+            b.eval(wo, s.wi, TransportMode::Radiance),
+            crate::bsdf::BsdfEval::default()
+        );
+    }
+    // A smooth coat over diffuse is not delta: the diffuse part can be connected.
+    let b = bsdf(&dielectric_base(0.0));
+    assert!(!b.is_delta());
+    assert_eq!(b.classify(), LobeKind::Diffuse);
+
+    // Any roughness above 0 is GGX, polished ones too (a point light's highlight needs it);
+    // below r = 0.01 the lobe is that of r = 0.01 (α = MIN_ALPHA).
+    let wo = direction(n_g(), 0.6, 0.0);
+    let wi = direction(n_g(), 0.6, std::f32::consts::PI);
+    for roughness in [0.001f32, 0.01, 0.02] {
         for params in [
             conductor(roughness),
             glass(roughness, 1.5),
             thin_glass(roughness),
         ] {
             let b = bsdf(&params);
-            assert!(b.is_delta() && !b.has_non_delta());
-            assert_eq!(b.classify(), LobeKind::Specular);
-            let wo = direction(n_g(), 0.6, 0.0);
-            let s = b
-                .sample(wo, 0.3, glam::Vec2::new(0.2, 0.7), TransportMode::Radiance)
-                .unwrap();
-            assert_eq!(s.lobe, LobeKind::Specular);
-            assert_eq!(
-                b.eval(wo, s.wi, TransportMode::Radiance),
-                crate::bsdf::BsdfEval::default()
-            );
+            assert!(!b.is_delta() && b.has_non_delta(), "roughness {roughness}");
+            assert_eq!(b.classify(), LobeKind::Glossy, "roughness {roughness}");
         }
-        // A smooth coat over diffuse is not delta: the diffuse part can be connected.
-        let b = bsdf(&dielectric_base(roughness));
-        assert!(!b.is_delta());
-        assert_eq!(b.classify(), LobeKind::Diffuse);
     }
-    // Just above the threshold (α = 0.0011) the lobes are GGX.
-    let b = bsdf(&conductor(0.0332));
-    assert!(!b.is_delta());
-    assert_eq!(b.classify(), LobeKind::Glossy);
+    let white = |roughness| BsdfParams {
+        base_color: Vec3::ONE,
+        ..conductor(roughness)
+    };
+    let mirror_peak = |r| bsdf(&white(r)).eval(wo, wi, TransportMode::Radiance);
+    assert_eq!(mirror_peak(0.001), mirror_peak(0.01));
+    // At the mirror direction f·cos = F D G2 / (4 cos θo) with F = 1 and D = 1/(π α²): the
+    // peak of α = r² = 4·10⁻⁴ (G2 ≈ 1 this far from grazing).
+    let peak = mirror_peak(0.02).f_cos.x;
+    let expected = 1.0 / (std::f32::consts::PI * 4e-4 * 4e-4 * 4.0 * 0.6);
+    assert!((peak / expected - 1.0).abs() < 0.01, "{peak} vs {expected}");
     assert_eq!(bsdf(&lambert(Vec3::ONE)).classify(), LobeKind::Diffuse);
     assert_eq!(bsdf(&mixture(0.5)).classify(), LobeKind::Glossy);
 }
@@ -219,7 +236,7 @@ fn forward_only_evaluation_and_sampling_skip_just_the_reverse_pdf() {
 #[test]
 fn lobes_built_once_give_the_same_bsdf() {
     let mut classes = material_classes(0.3);
-    classes.extend(material_classes(0.001));
+    classes.extend(material_classes(0.0));
     classes.push(("lambert".into(), lambert(Vec3::new(0.7, 0.5, 0.2))));
     let mut rng = Rng::new(5, 9);
     for (name, params) in classes {

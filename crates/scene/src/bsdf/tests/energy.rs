@@ -5,6 +5,8 @@
 use super::*;
 use crate::bsdf::albedo::SpecularAlbedo;
 use crate::bsdf::albedo::tests::TABLE_TOLERANCE;
+use crate::bsdf::ggx_alpha;
+use crate::bsdf::microfacet::Ggx;
 use crate::testing::{Estimate, estimate_albedo};
 
 /// Samples per albedo estimate.
@@ -107,8 +109,8 @@ fn white_conductor_albedo_matches_table() {
         let b = bsdf(&params);
         for &c in &COS_SWEEP {
             let e = albedo(&b, direction(n_g(), c, 0.2), TransportMode::Radiance);
-            let alpha = roughness * roughness;
-            let table = SpecularAlbedo::new(Vec3::ONE, Vec3::ONE, alpha)
+            let ggx = ggx_alpha(roughness).map(|alpha| Ggx { alpha });
+            let table = SpecularAlbedo::new(Vec3::ONE, Vec3::ONE, ggx)
                 .directional(c)
                 .x as f64;
             let tol = 4.0 * e.std_err.x + EPS + TABLE_TOLERANCE as f64;

@@ -17,8 +17,9 @@ use crate::sampling::{Rng, Sampler};
 use glam::Vec3;
 use std::f32::consts::TAU;
 
-/// The perceptual roughness sweep; 0.001 and 0.01 are below the smooth threshold (delta).
-const ROUGHNESS_SWEEP: [f32; 6] = [0.001, 0.01, 0.1, 0.3, 0.6, 1.0];
+/// The perceptual roughness sweep: 0 is smooth (delta), 0.05 the narrowest lobe (α =
+/// 0.0025) the chi-square test's cells resolve.
+const ROUGHNESS_SWEEP: [f32; 6] = [0.0, 0.05, 0.1, 0.3, 0.6, 1.0];
 /// The non-delta part of the sweep.
 const ROUGH_SWEEP: [f32; 4] = [0.1, 0.3, 0.6, 1.0];
 /// Incident cosines cos θo.
