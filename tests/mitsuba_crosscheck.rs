@@ -2,9 +2,9 @@
 //! `tools/mitsuba_reference.py` into its own plugins, and `vcm render` must give the same
 //! images up to noise. This checks the scene conventions (units, one-sided emitters, Fresnel,
 //! GGX roughness, thin sheets, tinted transmission, absorbing solids, punctual lights, the
-//! environment, the camera, the box pixel filter, sRGB base colour and emissive textures with
-//! their UV orientation, filter and wrap, alpha-masked cut-outs, mirrored nodes, one- and
-//! double-sided surfaces)
+//! environment, the camera, the box pixel filter, glossy highlights of small lights, sRGB
+//! base colour and emissive textures with their UV orientation, filter and wrap, alpha-masked
+//! cut-outs, mirrored nodes, one- and double-sided surfaces)
 //! against a renderer that references come from, not against this renderer's own idea of them.
 //!
 //! Needs `python3` with the packages of `tools/requirements.txt`. Without them the test is
@@ -333,10 +333,24 @@ fn panel(double_sided: bool) -> Value {
     )
 }
 
-/// The Cornell box with a white rectangle named "panel" added: `half_sizes` along x and
-/// along `normal` × x from `centre`, its front (counter-clockwise) face towards `normal`.
+/// The Cornell box with a white rectangle named "panel" added (see [`add_quad`]).
 fn quad(centre: Vec3, normal: Vec3, half_sizes: (f32, f32), double_sided: bool) -> Value {
     let mut doc = load_scene("cornell-box");
+    let material = json!({
+        "name": "panel", "doubleSided": double_sided,
+        "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0],
+                                 "metallicFactor": 0.0, "roughnessFactor": 1.0},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
+    });
+    add_quad(&mut doc, "panel", (centre, normal, half_sizes), material);
+    doc
+}
+
+/// Adds to `doc` a rectangle named `name` of the glTF material `material`: `half_sizes` along
+/// x and along `normal` × x from `centre`, its front (counter-clockwise) face towards
+/// `normal`.
+fn add_quad(doc: &mut Value, name: &str, placement: (Vec3, Vec3, (f32, f32)), material: Value) {
+    let (centre, normal, half_sizes) = placement;
     let (u, v) = (Vec3::X * half_sizes.0, normal.cross(Vec3::X) * half_sizes.1);
     // Counter-clockwise seen from the side `normal` points to: (u × v) ∥ normal.
     let corners = [
@@ -360,7 +374,7 @@ fn quad(centre: Vec3, normal: Vec3, half_sizes: (f32, f32), double_sided: bool) 
         .flat_map(u32::to_le_bytes)
         .collect();
     let position = push_accessor(
-        &mut doc,
+        doc,
         &positions,
         json!({
             "componentType": 5126, "count": 4, "type": "VEC3",
@@ -368,32 +382,73 @@ fn quad(centre: Vec3, normal: Vec3, half_sizes: (f32, f32), double_sided: bool) 
         }),
     );
     let index = push_accessor(
-        &mut doc,
+        doc,
         &indices,
         json!({"componentType": 5125, "count": 6, "type": "SCALAR"}),
     );
-    let material = push(
-        &mut doc,
-        "materials",
-        json!({
-            "name": "panel", "doubleSided": double_sided,
-            "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0],
-                                     "metallicFactor": 0.0, "roughnessFactor": 1.0},
-            "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
-        }),
-    );
+    let material = push(doc, "materials", material);
     let mesh = push(
-        &mut doc,
+        doc,
         "meshes",
-        json!({"name": "panel", "primitives": [
+        json!({"name": name, "primitives": [
             {"attributes": {"POSITION": position}, "indices": index, "material": material}
         ]}),
     );
-    let node = push(&mut doc, "nodes", json!({"name": "panel", "mesh": mesh}));
+    let node = push(doc, "nodes", json!({"name": name, "mesh": mesh}));
     doc["scenes"][0]["nodes"]
         .as_array_mut()
         .unwrap()
         .push(json!(node));
+}
+
+/// Veach's multiple importance sampling scene (Veach 1997, fig. 9.8) in the Cornell box, its
+/// blocks removed and its light off: four white metal plates of GGX α = 0.005, 0.02, 0.05 and
+/// 0.1, each tilted to reflect a row of four square lights toward the camera. The lights have
+/// equal power and sides from 0.01 to 0.3: small bright ones on sharp plates are light
+/// sampling's weak case, large ones on rough plates BSDF sampling's.
+fn mis_plates() -> Value {
+    let mut doc = load_scene("cornell-box");
+    material(&mut doc, "light")["emissiveFactor"] = json!([0.0, 0.0, 0.0]);
+    let nodes: Vec<usize> = (0..doc["nodes"].as_array().unwrap().len())
+        .filter(|&i| {
+            !["tall block", "short block"].contains(&doc["nodes"][i]["name"].as_str().unwrap())
+        })
+        .collect();
+    doc["scenes"][0]["nodes"] = json!(nodes);
+    let camera = Vec3::new(0.0, 0.0, 3.9);
+    let lights = Vec3::new(0.0, 0.7, -0.8);
+    for (i, alpha) in [0.005f32, 0.02, 0.05, 0.1].into_iter().enumerate() {
+        let centre = Vec3::new(0.0, -0.75 + 0.3 * i as f32, 0.4 - 0.3 * i as f32);
+        let normal = ((camera - centre).normalize() + (lights - centre).normalize()).normalize();
+        let plate = json!({
+            "name": format!("plate {i}"),
+            "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
+                                     "metallicFactor": 1.0, "roughnessFactor": alpha.sqrt()}
+        });
+        add_quad(&mut doc, "plate", (centre, normal, (0.75, 0.1)), plate);
+    }
+    let colours = [
+        [1.0, 0.4, 0.4],
+        [0.4, 1.0, 0.4],
+        [0.4, 0.4, 1.0],
+        [1.0, 1.0, 0.6],
+    ];
+    for (i, (half, colour)) in [0.005f32, 0.015, 0.05, 0.15]
+        .into_iter()
+        .zip(colours)
+        .enumerate()
+    {
+        let centre = Vec3::new(-0.6 + 0.4 * i as f32, 0.7, -0.8);
+        let normal = (Vec3::new(0.0, -0.4, 0.3) - centre).normalize();
+        let lamp = json!({
+            "name": format!("lamp {i}"), "emissiveFactor": colour,
+            "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0],
+                                     "metallicFactor": 0.0, "roughnessFactor": 1.0},
+            "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 0.2 / (half * half)},
+                           "KHR_materials_specular": {"specularFactor": 0.0}}
+        });
+        add_quad(&mut doc, "lamp", (centre, normal, (half, half)), lamp);
+    }
     doc
 }
 
@@ -685,6 +740,8 @@ fn vcm_render_agrees_with_mitsuba() {
         Case::pt("punctual-lights", punctual_lights()),
         Case::pt("punctual-lights-bpt", punctual_lights()).with("bpt", None),
         Case::pt("spot", spot()),
+        Case::pt("mis-plates", mis_plates()),
+        Case::pt("mis-plates-bpt", mis_plates()).with("bpt", None),
         Case::pt("scaled-water", scaled_water()),
         Case::pt("mirrored", mirrored()),
         Case::pt("one-sided-panel", panel(false)),
