@@ -25,6 +25,18 @@ fn wall_material() -> Material {
     }
 }
 
+/// Solid (or `thin_walled`) glass of `roughness` and `ior`.
+fn glass(roughness: f32, ior: f32, thin_walled: bool) -> Material {
+    Material {
+        metallic: 0.0,
+        roughness,
+        transmission: 1.0,
+        ior,
+        thin_walled,
+        ..Material::default()
+    }
+}
+
 /// A mirror (Schlick F0 = 1: reflects everything) of perceptual roughness `roughness`.
 fn mirror(roughness: f32) -> Material {
     Material {
@@ -88,15 +100,7 @@ fn setup(seed: u64) -> Setup {
 fn glass_of_ior_1_0001_and_3_keeps_the_furnace_value() {
     for ior in [1.0001, 3.0] {
         let mut parts = furnace(center_view());
-        let glass = Material {
-            metallic: 0.0,
-            roughness: 0.0,
-            transmission: 1.0,
-            ior,
-            thin_walled: false,
-            ..Material::default()
-        };
-        add_sphere(&mut parts, 0.35, glass);
+        add_sphere(&mut parts, 0.35, glass(0.0, ior, false));
         let label = format!("glass of IOR {ior}");
         let frames = 0..100;
         assert_furnace_value(
@@ -117,15 +121,7 @@ fn glass_of_ior_1_0001_and_3_keeps_the_furnace_value() {
 fn polished_glass_keeps_the_furnace_value() {
     for thin_walled in [false, true] {
         let mut parts = furnace(center_view());
-        let glass = Material {
-            metallic: 0.0,
-            roughness: 0.01,
-            transmission: 1.0,
-            ior: 1.5,
-            thin_walled,
-            ..Material::default()
-        };
-        add_sphere(&mut parts, 0.35, glass);
+        add_sphere(&mut parts, 0.35, glass(0.01, 1.5, thin_walled));
         let label = format!("polished glass, thin-walled {thin_walled}");
         let algorithms = [
             None,

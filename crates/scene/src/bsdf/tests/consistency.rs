@@ -154,11 +154,11 @@ fn importance_mode_applies_the_shading_normal_correction() {
 
 #[test]
 fn only_zero_roughness_is_delta() {
+    let wo = direction(n_g(), 0.6, 0.0);
     for params in [conductor(0.0), glass(0.0, 1.5), thin_glass(0.0)] {
         let b = bsdf(&params);
         assert!(b.is_delta() && !b.has_non_delta());
         assert_eq!(b.classify(), LobeKind::Specular);
-        let wo = direction(n_g(), 0.6, 0.0);
         let s = b
             .sample(wo, 0.3, glam::Vec2::new(0.2, 0.7), TransportMode::Radiance)
             .unwrap();
@@ -175,7 +175,6 @@ fn only_zero_roughness_is_delta() {
 
     // Any roughness above 0 is GGX, polished ones too (a point light's highlight needs it);
     // below r = 0.01 the lobe is that of r = 0.01 (α = MIN_ALPHA).
-    let wo = direction(n_g(), 0.6, 0.0);
     let wi = direction(n_g(), 0.6, std::f32::consts::PI);
     for roughness in [0.001f32, 0.01, 0.02] {
         for params in [
