@@ -312,6 +312,15 @@ fn push_accessor(doc: &mut Value, bytes: &[u8], mut accessor: Value) -> usize {
     push(doc, "accessors", accessor)
 }
 
+/// Makes the scene's root nodes those of `doc`'s nodes whose name `keep` accepts (every node of
+/// the scenes used here is a root).
+fn keep_nodes(doc: &mut Value, keep: impl Fn(&str) -> bool) {
+    let nodes: Vec<usize> = (0..doc["nodes"].as_array().unwrap().len())
+        .filter(|&i| keep(doc["nodes"][i]["name"].as_str().unwrap_or("")))
+        .collect();
+    doc["scenes"][0]["nodes"] = json!(nodes);
+}
+
 /// Appends `value` to the array `doc[key]`; returns its index.
 fn push(doc: &mut Value, key: &str, value: Value) -> usize {
     let array = doc[key].as_array_mut().unwrap();
@@ -409,12 +418,9 @@ fn add_quad(doc: &mut Value, name: &str, placement: (Vec3, Vec3, (f32, f32)), ma
 fn mis_plates() -> Value {
     let mut doc = load_scene("cornell-box");
     material(&mut doc, "light")["emissiveFactor"] = json!([0.0, 0.0, 0.0]);
-    let nodes: Vec<usize> = (0..doc["nodes"].as_array().unwrap().len())
-        .filter(|&i| {
-            !["tall block", "short block"].contains(&doc["nodes"][i]["name"].as_str().unwrap())
-        })
-        .collect();
-    doc["scenes"][0]["nodes"] = json!(nodes);
+    keep_nodes(&mut doc, |name| {
+        !["tall block", "short block"].contains(&name)
+    });
     let camera = Vec3::new(0.0, 0.0, 3.9);
     let lights = Vec3::new(0.0, 0.7, -0.8);
     for (i, alpha) in [0.005f32, 0.02, 0.05, 0.1].into_iter().enumerate() {
@@ -570,10 +576,7 @@ fn open_sky(dir: &Path) -> Value {
 
     let mut doc = load_scene("cornell-box");
     let kept = ["floor", "tall block", "short block", "camera"];
-    let nodes: Vec<usize> = (0..doc["nodes"].as_array().unwrap().len())
-        .filter(|&i| kept.iter().any(|name| doc["nodes"][i]["name"] == *name))
-        .collect();
-    doc["scenes"][0]["nodes"] = json!(nodes);
+    keep_nodes(&mut doc, |name| kept.contains(&name));
     use_extension(&mut doc, "VCM_environment");
     doc["extensions"] = json!({"VCM_environment": {"image": "sky.exr"}});
     doc
