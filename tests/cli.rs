@@ -223,6 +223,84 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
     assert!(!Path::new("/nonexistent-folder").exists());
 }
 
+/// The Cornell box with a second camera, "Close" (index 1), placed by node "close-up"
+/// nearer the blocks; with `only_close` that camera replaces the file's own.
+fn cornell_box_with_close_up(only_close: bool) -> String {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.gltf"),
+    )
+    .unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let close = serde_json::json!({"type": "perspective", "name": "Close",
+        "perspective": {"yfov": 0.45, "znear": 0.01}});
+    doc["cameras"].as_array_mut().unwrap().push(close);
+    let node = serde_json::json!({"name": "close-up", "camera": 1,
+        "translation": [0.3, -0.2, 2.2], "rotation": [0.0, 0.0499792, 0.0, 0.9987503]});
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    if only_close {
+        let own = nodes.iter_mut().find(|n| n["camera"] == 0).unwrap();
+        *own = node;
+    } else {
+        nodes.push(node);
+        let last = nodes.len() - 1;
+        doc["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(last.into());
+    }
+    doc.to_string()
+}
+
+/// `--camera` renders from the file's camera of that index or name: the same image, bit for
+/// bit, as a file whose only camera it is; a camera that is not there is named in the error
+/// with those that are.
+#[test]
+fn another_camera_of_the_file_is_chosen_by_index_or_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |name: &str, only_close| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, cornell_box_with_close_up(only_close)).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let (two, one) = (scene("two.gltf", false), scene("one.gltf", true));
+    let render = |scene: &str, camera: Option<&str>, out: &str| {
+        let out = dir.path().join(out);
+        let mut args = vec![
+            "render", scene, "--spp", "2", "--width", "24", "--height", "24",
+        ];
+        args.extend(camera.map(|c| ["--camera", c]).into_iter().flatten());
+        args.extend(["-o", out.to_str().unwrap()]);
+        let output = vcm(&args);
+        assert!(output.status.success(), "{args:?}: {}", stderr(&output));
+        vcm::image_io::RgbImage::read_exr(&out).unwrap().pixels
+    };
+    let close = render(&one, None, "one.exr");
+    assert_ne!(
+        render(&two, None, "first.exr"),
+        close,
+        "the cameras see the same image"
+    );
+    for choice in ["1", "Close", "close-up"] {
+        assert_eq!(
+            render(&two, Some(choice), "chosen.exr"),
+            close,
+            "--camera {choice}"
+        );
+    }
+    let output = vcm(&["render", &two, "--camera", "2", "-o", "never.exr"]);
+    assert!(!output.status.success());
+    let message = stderr(&output);
+    assert!(
+        message.contains("two.gltf: no camera '2': the file's cameras are 0 (node 'camera'), 1 'Close' (node 'close-up')"),
+        "{message}"
+    );
+    assert!(
+        !Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("never.exr")
+            .exists()
+    );
+}
+
 /// The tile and queue schedulers with several samples per frame render the same image as one
 /// batch per pass with the same samples per frame: scheduling changes speed, not results. The
 /// VCM family's frames of several samples are its iterations side by side, so its image does

@@ -86,6 +86,41 @@ impl Camera {
     }
 }
 
+/// A perspective camera that a node of a glTF file places in the scene
+/// ([`Scene::cameras`](crate::Scene::cameras)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileCamera {
+    /// Index of the camera in the file's `cameras` array.
+    pub index: usize,
+    /// The camera's name in the file, if it has one.
+    pub name: Option<String>,
+    /// The name of the node that places it, if that node has one.
+    pub node: Option<String>,
+    /// The camera where the node places it.
+    pub camera: Camera,
+}
+
+impl FileCamera {
+    /// Whether `choice` is this camera's name or its node's name.
+    pub fn is_named(&self, choice: &str) -> bool {
+        self.name.as_deref() == Some(choice) || self.node.as_deref() == Some(choice)
+    }
+}
+
+impl std::fmt::Display for FileCamera {
+    /// The index, then the names the camera answers to: `1 'Top' (node 'TopCamera')`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.index)?;
+        if let Some(name) = &self.name {
+            write!(f, " '{name}'")?;
+        }
+        if let Some(node) = &self.node {
+            write!(f, " (node '{node}')")?;
+        }
+        Ok(())
+    }
+}
+
 /// A camera's mapping between an image's raster positions and directions, with the image
 /// plane's extent worked out once (a tangent) for all the rays of that image.
 #[derive(Clone, Copy, Debug, PartialEq)]

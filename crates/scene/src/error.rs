@@ -47,6 +47,16 @@ pub enum SceneError {
         /// What is wrong, in words.
         reason: String,
     },
+    /// The camera asked for is not among the file's cameras.
+    #[error("{path}: no camera '{choice}': {reason}")]
+    Camera {
+        /// The scene file.
+        path: PathBuf,
+        /// The index or name asked for.
+        choice: String,
+        /// The cameras there are, in words.
+        reason: String,
+    },
     /// Geometry data is unusable (non-finite positions, indices out of range ...).
     #[error("{path}: {mesh}: {reason}")]
     Geometry {

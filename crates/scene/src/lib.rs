@@ -41,7 +41,7 @@ pub mod shapes;
 pub mod testing;
 pub mod texture;
 
-pub use camera::{Camera, Projection};
+pub use camera::{Camera, FileCamera, Projection};
 pub use decision::Decision;
 pub use error::SceneError;
 pub use features::SceneFeatures;

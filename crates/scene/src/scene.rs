@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use crate::bsdf::{Bsdf, Lobes};
-use crate::camera::Camera;
+use crate::camera::{Camera, FileCamera};
 use crate::error::SceneError;
 use crate::features::SceneFeatures;
 use crate::light::{AreaLight, HitEmission, Light, LightSampler};
@@ -34,8 +34,13 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Power-proportional light selection.
     pub light_sampler: LightSampler,
-    /// The camera (from the file, or framing the scene).
+    /// The camera rendered from: the file's first camera ([`Scene::cameras`]), another one
+    /// chosen with [`Scene::use_camera`], or one framing the scene when the file has none.
     pub camera: Camera,
+    /// The perspective cameras that the file's nodes place, in the order the node hierarchy
+    /// is walked (depth first, children in order); empty for OBJ files and scenes built
+    /// with [`Scene::new`].
+    pub cameras: Vec<FileCamera>,
     /// What the scene contains, for integrators and pipelines to leave out what it does not need.
     pub features: SceneFeatures,
     /// The per-hit work shading does, chosen from `features`; set it to [`ShadingPlan::FULL`]
@@ -101,11 +106,41 @@ impl Scene {
             lights,
             light_sampler,
             camera,
+            cameras: Vec::new(),
             features,
             shading: ShadingPlan::for_features(&features),
             warnings,
             dropped_triangles: 0,
         }
+    }
+
+    /// Renders from the file's camera `choice`: a number is the index of a camera in the
+    /// file's `cameras` array, anything else the name of a camera or of the node that places
+    /// it. Where several nodes place the same camera, or several cameras share a name, the
+    /// first in [`Scene::cameras`] is taken. Fails, listing the cameras there are, when none
+    /// matches (orthographic and degenerate cameras are not among them: loading warned about
+    /// them).
+    pub fn use_camera(&mut self, choice: &str) -> Result<(), SceneError> {
+        let by_index = choice
+            .parse::<usize>()
+            .ok()
+            .and_then(|index| self.cameras.iter().find(|c| c.index == index));
+        let chosen = by_index.or_else(|| self.cameras.iter().find(|c| c.is_named(choice)));
+        if let Some(chosen) = chosen {
+            self.camera = chosen.camera;
+            return Ok(());
+        }
+        let reason = if self.cameras.is_empty() {
+            "the file places no perspective camera".to_string()
+        } else {
+            let list: Vec<String> = self.cameras.iter().map(ToString::to_string).collect();
+            format!("the file's cameras are {}", list.join(", "))
+        };
+        Err(SceneError::Camera {
+            path: self.path.clone(),
+            choice: choice.to_string(),
+            reason,
+        })
     }
 
     /// The material of triangle `triangle`.

@@ -105,6 +105,81 @@ fn the_first_camera_and_punctual_lights_are_read() {
     );
 }
 
+/// Nodes placing an orthographic camera (skipped with a warning), then "Front" at z = 3,
+/// "Side" (its node "SideNode") at x = 4 and "Front" again at z = 6, all unnamed ones aside.
+fn four_placed_cameras() -> Scene {
+    let nodes = r#"[{"children": [1, 2, 3, 4, 5]},
+        {"mesh": 0},
+        {"camera": 2, "translation": [0, 0, 9]},
+        {"camera": 0, "translation": [0, 0, 3]},
+        {"camera": 1, "name": "SideNode", "translation": [4, 0, 0],
+         "rotation": [0, 0.7071068, 0, 0.7071068]},
+        {"camera": 0, "translation": [0, 0, 6]}]"#;
+    let extra = r#", "cameras": [
+        {"type": "perspective", "name": "Front", "perspective": {"yfov": 0.5, "znear": 0.1}},
+        {"type": "perspective", "name": "Side", "perspective": {"yfov": 0.7, "znear": 0.1}},
+        {"type": "orthographic", "name": "Plan",
+         "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10}}]"#;
+    load(&document(nodes, MATTE, extra)).unwrap()
+}
+
+#[test]
+fn every_placed_perspective_camera_is_listed_and_the_first_is_used() {
+    let scene = four_placed_cameras();
+    let listed: Vec<String> = scene.cameras.iter().map(ToString::to_string).collect();
+    assert_eq!(
+        listed,
+        ["0 'Front'", "1 'Side' (node 'SideNode')", "0 'Front'"]
+    );
+    assert_eq!(scene.camera, scene.cameras[0].camera);
+    assert_eq!(scene.camera.position, Vec3::new(0.0, 0.0, 3.0));
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("orthographic")),
+        "{:?}",
+        scene.warnings
+    );
+}
+
+#[test]
+fn another_camera_is_chosen_by_index_or_name() {
+    for choice in ["1", "Side", "SideNode"] {
+        let mut scene = four_placed_cameras();
+        scene.use_camera(choice).unwrap();
+        assert_eq!(scene.camera.position, Vec3::new(4.0, 0.0, 0.0), "{choice}");
+        assert_eq!(scene.camera.yfov, 0.7);
+        // Turned 90° about +Y, the node's -Z is -X: the camera looks back at the origin.
+        assert!((scene.camera.forward - -Vec3::X).length() < 1e-6);
+    }
+    // A camera that two nodes place: the first placement.
+    let mut scene = four_placed_cameras();
+    scene.use_camera("Side").unwrap();
+    scene.use_camera("0").unwrap();
+    assert_eq!(scene.camera.position, Vec3::new(0.0, 0.0, 3.0));
+}
+
+#[test]
+fn a_camera_that_is_not_there_is_an_error_listing_those_that_are() {
+    // Index 2 is the orthographic camera, which is not supported; 3 does not exist.
+    for choice in ["2", "3", "Plan", "front"] {
+        let mut scene = four_placed_cameras();
+        let error = scene.use_camera(choice).unwrap_err().to_string();
+        assert_eq!(
+            error,
+            format!(
+                "memory.gltf: no camera '{choice}': the file's cameras are 0 'Front', \
+                 1 'Side' (node 'SideNode'), 0 'Front'"
+            )
+        );
+        assert_eq!(scene.camera.position, Vec3::new(0.0, 0.0, 3.0));
+    }
+    let mut no_cameras = load(&document(r#"[{"mesh": 0}]"#, MATTE, "")).unwrap();
+    let error = no_cameras.use_camera("0").unwrap_err().to_string();
+    assert_eq!(
+        error,
+        "memory.gltf: no camera '0': the file places no perspective camera"
+    );
+}
+
 #[test]
 fn material_extensions_map_to_the_material_model() {
     let materials = r#"[{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1],

@@ -8,7 +8,7 @@ use std::time::Instant;
 use eframe::egui;
 use vcm::image_io::RgbImage;
 use vcm_rs::integrators::image_size;
-use vcm_scene::Scene;
+use vcm_scene::{Camera, Scene};
 
 use crate::camera_controller::CameraController;
 use crate::image_out::tone_map;
@@ -24,6 +24,8 @@ use crate::stats::ErrorHistory;
 pub struct Startup {
     /// The first scene to open.
     pub scene: PathBuf,
+    /// The camera of the first scene to start from (`--camera`), if not its first.
+    pub camera: Option<String>,
     /// Render settings.
     pub settings: RenderSettings,
     /// `--width` and `--height`.
@@ -46,6 +48,9 @@ pub struct LoadedScene {
     pub serial: u64,
     /// The interactive camera.
     pub controller: CameraController,
+    /// Where *Reset camera* returns to: the scene's camera, or the file's camera chosen
+    /// since in the panel.
+    pub home: Camera,
     /// Full or preview resolution.
     pub resolution: ResolutionSwitch,
 }
@@ -128,14 +133,17 @@ impl ViewerApp {
             screenshot: startup.screenshot,
             adapter,
         };
-        app.open(ctx, &startup.scene);
+        app.open(ctx, &startup.scene, startup.camera);
         Ok(app)
     }
 
-    /// Starts loading `path`; the current scene keeps rendering until it has loaded.
-    pub fn open(&mut self, ctx: &egui::Context, path: &Path) {
+    /// Starts loading `path`, seen from its camera `camera` (`None`: the file's first); the
+    /// current scene keeps rendering until it has loaded.
+    pub fn open(&mut self, ctx: &egui::Context, path: &Path, camera: Option<String>) {
         let waker = ctx.clone();
-        self.loading = Some(SceneLoad::start(path, move || waker.request_repaint()));
+        self.loading = Some(SceneLoad::start(path, camera, move || {
+            waker.request_repaint()
+        }));
     }
 
     /// Takes a finished load: a new scene replaces the current one, an error is shown.
@@ -151,6 +159,7 @@ impl ViewerApp {
                 self.scenes_loaded += 1;
                 self.scene = Some(LoadedScene {
                     controller: CameraController::new(scene.camera, &scene.features.bounds),
+                    home: scene.camera,
                     resolution: ResolutionSwitch::new(full),
                     serial: self.scenes_loaded,
                     scene,
@@ -251,7 +260,7 @@ impl ViewerApp {
     fn take_dropped_file(&mut self, ctx: &egui::Context) {
         let dropped = ctx.input(|i| i.raw.dropped_files.first().map(|f| f.path().to_path_buf()));
         if let Some(path) = dropped {
-            self.open(ctx, &path);
+            self.open(ctx, &path, None);
         }
     }
 }

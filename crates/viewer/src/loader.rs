@@ -13,8 +13,14 @@ pub struct SceneLoad {
 }
 
 impl SceneLoad {
-    /// Starts loading `path`; `notify` is called when it is done (to wake the UI).
-    pub fn start(path: &Path, notify: impl FnOnce() + Send + 'static) -> SceneLoad {
+    /// Starts loading `path`, to be seen from its camera `camera` (an index or a name, see
+    /// [`Scene::use_camera`]; `None`: the file's first); `notify` is called when it is done
+    /// (to wake the UI).
+    pub fn start(
+        path: &Path,
+        camera: Option<String>,
+        notify: impl FnOnce() + Send + 'static,
+    ) -> SceneLoad {
         let (sender, result) = std::sync::mpsc::channel();
         let file = path.to_path_buf();
         // If the thread cannot start, the closure and its sender are dropped and `poll`
@@ -22,7 +28,14 @@ impl SceneLoad {
         let _ = std::thread::Builder::new()
             .name("scene loader".into())
             .spawn(move || {
-                let loaded = Scene::load(&file).map_err(|e| e.to_string());
+                let loaded = Scene::load(&file)
+                    .and_then(|mut scene| {
+                        if let Some(choice) = &camera {
+                            scene.use_camera(choice)?;
+                        }
+                        Ok(scene)
+                    })
+                    .map_err(|e| e.to_string());
                 let _ = sender.send(loaded);
                 notify();
             });
@@ -67,14 +80,26 @@ mod tests {
     #[test]
     fn loads_a_scene_in_the_background() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.gltf");
-        let scene = wait(&SceneLoad::start(&path, || {})).unwrap();
+        let scene = wait(&SceneLoad::start(&path, None, || {})).unwrap();
         assert!(scene.features.triangles > 0);
+    }
+
+    #[test]
+    fn a_camera_the_file_lacks_is_an_error_naming_it() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.gltf");
+        let scene = wait(&SceneLoad::start(&path, Some("0".into()), || {})).unwrap();
+        assert_eq!(scene.camera, scene.cameras[0].camera);
+        let error = wait(&SceneLoad::start(&path, Some("top".into()), || {})).unwrap_err();
+        assert!(
+            error.contains("cornell-box.gltf: no camera 'top'"),
+            "{error}"
+        );
     }
 
     #[test]
     fn a_missing_file_is_an_error_naming_it() {
         let path = Path::new("no-such-scene.gltf");
-        let error = wait(&SceneLoad::start(path, || {})).unwrap_err();
+        let error = wait(&SceneLoad::start(path, None, || {})).unwrap_err();
         assert!(error.contains("no-such-scene.gltf"), "{error}");
     }
 }

@@ -65,6 +65,7 @@ fn run(options: Options) -> Result<(), Failure> {
     };
     let startup = Startup {
         scene: options.scene.clone(),
+        camera: options.camera.clone(),
         settings: options.settings(),
         width: options.width,
         height: options.height,

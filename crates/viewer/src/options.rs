@@ -15,6 +15,10 @@ pub struct Options {
     /// The scene file (.gltf, .glb or .obj).
     #[arg(default_value = "scenes/cornell-box.gltf")]
     pub scene: PathBuf,
+    /// The scene's camera to start from: its index in the glTF `cameras` array, or its name
+    /// or its node's name (default: the first camera the file's nodes place).
+    #[arg(long, value_name = "INDEX|NAME")]
+    pub camera: Option<String>,
     /// The light transport algorithm to start with.
     #[arg(long, value_enum, default_value_t = Algorithm::Pt)]
     pub algo: Algorithm,
@@ -106,6 +110,9 @@ mod tests {
         assert_eq!(settings.schedule.spp_per_frame, Some(4));
         assert_eq!(options.exposure, 0.0);
         assert_eq!(parse(&["--exposure", "-1.5"]).unwrap().exposure, -1.5);
+        assert_eq!(options.camera, None);
+        let camera = parse(&["--camera", "Top"]).unwrap().camera;
+        assert_eq!(camera.as_deref(), Some("Top"));
     }
 
     #[test]

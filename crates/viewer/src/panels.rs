@@ -2,6 +2,8 @@
 //! relMSE plot. Widgets edit [`ViewerApp::settings`] directly; the session notices the change
 //! and restarts the accumulation.
 
+use std::sync::Arc;
+
 use clap::ValueEnum;
 use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
@@ -10,7 +12,7 @@ use vcm_rs::Backend;
 use vcm_rs::frames::Frames;
 use vcm_rs::integrators::{Algorithm, ScheduleOptions, SchedulerKind};
 
-use crate::app::ViewerApp;
+use crate::app::{LoadedScene, ViewerApp};
 use crate::camera_controller::CameraController;
 use crate::settings::{ALGORITHMS, RenderSettings};
 use crate::stats::LiveStats;
@@ -54,16 +56,21 @@ fn scene_section(app: &mut ViewerApp, ui: &mut egui::Ui) {
                 .add_filter("scenes", &["gltf", "glb", "obj"])
                 .pick_file();
             if let Some(path) = picked {
-                app.open(ui.ctx(), &path);
+                app.open(ui.ctx(), &path, None);
             }
         }
         if let Some(loaded) = &mut app.scene
             && ui.button("Reset camera").clicked()
         {
-            let scene = &loaded.scene;
-            loaded.controller = CameraController::new(scene.camera, &scene.features.bounds);
+            let bounds = &loaded.scene.features.bounds;
+            loaded.controller = CameraController::new(loaded.home, bounds);
         }
     });
+    if let Some(loaded) = &mut app.scene
+        && loaded.scene.cameras.len() > 1
+    {
+        camera_choice(loaded, ui);
+    }
     ui.small("or drop a .gltf, .glb or .obj file on the window");
     if let Some(loaded) = &app.scene
         && !loaded.scene.warnings.is_empty()
@@ -74,6 +81,26 @@ fn scene_section(app: &mut ViewerApp, ui: &mut egui::Ui) {
             }
         });
     }
+}
+
+/// The file's cameras, when it has several: choosing one moves the view there, and *Reset
+/// camera* then returns to it.
+fn camera_choice(loaded: &mut LoadedScene, ui: &mut egui::Ui) {
+    let scene = Arc::clone(&loaded.scene);
+    let current = scene.cameras.iter().position(|c| c.camera == loaded.home);
+    let text = current.map_or_else(|| "moved".to_string(), |i| scene.cameras[i].to_string());
+    egui::ComboBox::from_label("Camera")
+        .selected_text(text)
+        .show_ui(ui, |ui| {
+            for (i, file_camera) in scene.cameras.iter().enumerate() {
+                let label = file_camera.to_string();
+                if ui.selectable_label(current == Some(i), label).clicked() {
+                    loaded.home = file_camera.camera;
+                    let bounds = &scene.features.bounds;
+                    loaded.controller = CameraController::new(file_camera.camera, bounds);
+                }
+            }
+        });
 }
 
 fn render_section(settings: &mut RenderSettings, ui: &mut egui::Ui) {

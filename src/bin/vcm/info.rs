@@ -38,6 +38,13 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
         c.forward,
         c.yfov.to_degrees()
     );
+    if scene.cameras.len() > 1 {
+        let list: Vec<String> = scene.cameras.iter().map(ToString::to_string).collect();
+        say!(
+            "cameras (render one with --camera INDEX|NAME; the first by default): {}",
+            list.join(", ")
+        );
+    }
     let bvh = vcm_rs::cpu_traversal(&scene).context("building the CPU BVH")?;
     let triangles = scene.mesh.triangle_count().max(1);
     say!(

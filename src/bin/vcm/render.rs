@@ -22,6 +22,10 @@ use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 /// What `vcm render` and `vcm convergence` both need to set up a render.
 #[derive(clap::Args)]
 pub struct RenderSetup {
+    /// The file's camera to render from: its index in the glTF `cameras` array, or its name
+    /// or its node's name (default: the first camera the file's nodes place).
+    #[arg(long, value_name = "INDEX|NAME")]
+    pub camera: Option<String>,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..))]
     pub width: u32,
@@ -131,7 +135,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     set_threads(args.setup.threads)?;
     let budget = Budget::from_options(args.spp, args.time)?;
     check_outputs(&args.outputs(), &args.inputs())?;
-    let scene = load_scene(&args.scene)?;
+    let scene = load_scene(&args.scene, args.setup.camera.as_deref())?;
     let (width, height) = image_size(&scene, args.setup.width, args.setup.height);
     let reference = match &args.reference {
         Some(path) => Some(read_reference(path, (width, height))?),
@@ -233,11 +237,15 @@ pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Loads a scene and prints its warnings.
-pub fn load_scene(path: &Path) -> anyhow::Result<Arc<Scene>> {
-    let scene = Scene::load(path)?;
+/// Loads a scene, prints its warnings and renders it from the file's camera `camera`, if
+/// given.
+pub fn load_scene(path: &Path, camera: Option<&str>) -> anyhow::Result<Arc<Scene>> {
+    let mut scene = Scene::load(path)?;
     for warning in &scene.warnings {
         tell!("warning: {warning}");
+    }
+    if let Some(choice) = camera {
+        scene.use_camera(choice)?;
     }
     Ok(Arc::new(scene))
 }

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::camera::Camera;
+use crate::camera::{Camera, FileCamera};
 use crate::error::SceneError;
 use crate::light::{DirectionalLight, EnvironmentLight, EnvironmentMap, Light};
 use crate::material::{AlphaMode, Material};
@@ -45,7 +45,8 @@ pub(crate) struct SceneBuilder {
     /// The environment's radiance (and image), placed around the scene once its bounds are
     /// known.
     environment: Option<(Vec3, Option<Arc<EnvironmentMap>>)>,
-    pub camera: Option<Camera>,
+    /// The file's usable cameras, in the order the loader met them.
+    pub cameras: Vec<FileCamera>,
     warnings: Vec<String>,
     degenerate_triangles: usize,
 }
@@ -60,7 +61,7 @@ impl SceneBuilder {
             lights: Vec::new(),
             directional: Vec::new(),
             environment: None,
-            camera: None,
+            cameras: Vec::new(),
             warnings: Vec::new(),
             degenerate_triangles: 0,
         }
@@ -246,7 +247,10 @@ impl SceneBuilder {
                 scene_radius,
             }));
         }
-        let camera = self.camera.unwrap_or_else(|| Camera::framing(&bounds));
+        let camera = self
+            .cameras
+            .first()
+            .map_or_else(|| Camera::framing(&bounds), |c| c.camera);
         let mut scene = Scene::new(
             self.path,
             self.mesh,
@@ -257,6 +261,7 @@ impl SceneBuilder {
             self.warnings,
         );
         scene.dropped_triangles = self.degenerate_triangles;
+        scene.cameras = self.cameras;
         scene
     }
 }

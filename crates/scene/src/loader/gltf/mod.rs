@@ -13,7 +13,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 use gltf::khr_lights_punctual::Kind as LightKind;
 
-use crate::camera::Camera;
+use crate::camera::{Camera, FileCamera};
 use crate::error::SceneError;
 use crate::light::{Light, PointLight, SpotLight};
 use crate::loader::builder::SceneBuilder;
@@ -174,7 +174,7 @@ fn load_buffers(
         .collect()
 }
 
-/// Walks the node hierarchy, reading meshes, the first camera and punctual lights.
+/// Walks the node hierarchy, reading meshes, cameras and punctual lights.
 struct NodeReader<'a> {
     builder: &'a mut SceneBuilder,
     buffers: &'a [Vec<u8>],
@@ -202,7 +202,7 @@ impl NodeReader<'_> {
             self.read_mesh(&mesh, world)?;
         }
         if let Some(camera) = node.camera() {
-            self.read_camera(&camera, world);
+            self.read_camera(&camera, node.name(), world);
         }
         if let Some(light) = node.light() {
             self.read_light(&light, world)?;
@@ -245,14 +245,18 @@ impl NodeReader<'_> {
         Ok(())
     }
 
-    fn read_camera(&mut self, camera: &gltf::Camera, world: Mat4) {
-        if self.builder.camera.is_some() {
-            return;
-        }
+    fn read_camera(&mut self, camera: &gltf::Camera, node: Option<&str>, world: Mat4) {
         match camera.projection() {
             gltf::camera::Projection::Perspective(p) => {
-                self.builder.camera = Camera::from_transform(world, p.yfov(), p.aspect_ratio());
-                if self.builder.camera.is_none() {
+                let placed = Camera::from_transform(world, p.yfov(), p.aspect_ratio());
+                if let Some(placed) = placed {
+                    self.builder.cameras.push(FileCamera {
+                        index: camera.index(),
+                        name: camera.name().map(str::to_string),
+                        node: node.map(str::to_string),
+                        camera: placed,
+                    });
+                } else {
                     let message = format!(
                         "{}: camera {} has a degenerate transform or field of view; it is ignored",
                         self.builder.path().display(),
