@@ -135,9 +135,9 @@ def colour_texture(doc, base_dir, work_dir, info, name):
     wrap = {WRAP[sampler.get("wrapS", 10497)], WRAP[sampler.get("wrapT", 10497)]}
     if len(wrap) != 1:
         raise Unsupported(f"material {name!r}: different wrap modes in u and v")
-    filters = {sampler.get("magFilter") in NEAREST, sampler.get("minFilter") in NEAREST}
-    if len(filters) != 1:
-        raise Unsupported(f"material {name!r}: a sampler mixing nearest and linear filters")
+    # One filter per lookup, as the renderer chooses it: magnification decides, else
+    # minification, else bilinear.
+    decides = sampler.get("magFilter", sampler.get("minFilter"))
     uri = image.get("uri")
     if uri is None:
         raise Unsupported(f"material {name!r}: an image in a buffer view")
@@ -149,7 +149,7 @@ def colour_texture(doc, base_dir, work_dir, info, name):
     else:
         path = os.path.join(base_dir, urllib.parse.unquote(uri))
     return {"type": "bitmap", "filename": path, "raw": False,
-            "filter_type": "nearest" if filters.pop() else "bilinear",
+            "filter_type": "nearest" if decides in NEAREST else "bilinear",
             "wrap_mode": wrap.pop()}
 
 

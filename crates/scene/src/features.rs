@@ -104,13 +104,16 @@ impl MaterialClasses {
     fn add(&mut self, m: &Material, textures: &[Texture]) {
         let (metal_lo, metal_hi) = channel_range(textures, m.metallic_roughness_texture, 2);
         let (rough_lo, rough_hi) = channel_range(textures, m.metallic_roughness_texture, 1);
+        let (trans_lo, trans_hi) = channel_range(textures, m.transmission_texture, 0);
+        let (_, layer_hi) = channel_range(textures, m.specular_texture, 3);
         let metallic = (m.metallic * metal_lo, m.metallic * metal_hi);
         let roughness = (m.roughness * rough_lo, m.roughness * rough_hi);
         let dielectric_weight = 1.0 - metallic.0;
-        let transmission = dielectric_weight * m.transmission;
-        let diffuse = dielectric_weight * (1.0 - m.transmission);
+        let transmission = dielectric_weight * m.transmission * trans_hi;
+        let diffuse = dielectric_weight * (1.0 - m.transmission * trans_lo);
         // Specular-type lobes: the conductor, the dielectric interface, the coat over diffuse.
-        let has_specular_lobe = metallic.1 > 0.0 || transmission > 0.0 || m.specular > 0.0;
+        let has_specular_lobe =
+            metallic.1 > 0.0 || transmission > 0.0 || m.specular * layer_hi > 0.0;
         self.diffuse |= diffuse > 0.0;
         self.transmission |= transmission > 0.0;
         if has_specular_lobe {
@@ -147,8 +150,7 @@ impl SceneFeatures {
             .map(|(m, _)| m)
         {
             features.materials.add(material, textures);
-            features.textures |= material.base_color_texture.is_some()
-                || material.metallic_roughness_texture.is_some()
+            features.textures |= material.has_bsdf_textures()
                 || material.normal_texture.is_some()
                 || material.emissive_texture.is_some();
             features.alpha_masks |= matches!(material.alpha_mode, AlphaMode::Mask { .. });

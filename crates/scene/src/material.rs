@@ -44,10 +44,17 @@ pub struct Material {
     pub emissive_texture: Option<TextureRef>,
     /// `KHR_materials_specular.specularFactor` (default 1).
     pub specular: f32,
+    /// `KHR_materials_specular.specularTexture`: its alpha multiplies `specular`.
+    pub specular_texture: Option<TextureRef>,
     /// `KHR_materials_specular.specularColorFactor` (default white).
     pub specular_color: Vec3,
+    /// `KHR_materials_specular.specularColorTexture` (sRGB), multiplies `specular_color`.
+    pub specular_color_texture: Option<TextureRef>,
     /// `KHR_materials_transmission.transmissionFactor` (default 0).
     pub transmission: f32,
+    /// `KHR_materials_transmission.transmissionTexture`: its red channel multiplies
+    /// `transmission`.
+    pub transmission_texture: Option<TextureRef>,
     /// `KHR_materials_ior.ior` (default 1.5).
     pub ior: f32,
     /// True unless `KHR_materials_volume.thicknessFactor` > 0 (then the mesh bounds a solid).
@@ -77,8 +84,11 @@ impl Default for Material {
             emission: Vec3::ZERO,
             emissive_texture: None,
             specular: 1.0,
+            specular_texture: None,
             specular_color: Vec3::ONE,
+            specular_color_texture: None,
             transmission: 0.0,
+            transmission_texture: None,
             ior: 1.5,
             thin_walled: true,
             absorption: Vec3::ZERO,
@@ -140,24 +150,39 @@ impl Material {
     pub fn bsdf_params(&self, textures: &[Texture], uv: Vec2) -> BsdfParams {
         let base = self.base_color * lookup(textures, self.base_color_texture, uv);
         let mr = lookup(textures, self.metallic_roughness_texture, uv);
+        let specular = self.specular * lookup(textures, self.specular_texture, uv).w;
+        let specular_color =
+            self.specular_color * lookup(textures, self.specular_color_texture, uv).xyz();
+        let transmission = self.transmission * lookup(textures, self.transmission_texture, uv).x;
         BsdfParams {
             base_color: base.xyz(),
             metallic: (self.metallic * mr.z).clamp(0.0, 1.0),
             roughness: (self.roughness * mr.y).clamp(0.0, 1.0),
-            specular: self.specular.clamp(0.0, 1.0),
-            specular_color: self.specular_color.max(Vec3::ZERO),
-            transmission: self.transmission.clamp(0.0, 1.0),
+            specular: specular.clamp(0.0, 1.0),
+            specular_color: specular_color.max(Vec3::ZERO),
+            transmission: transmission.clamp(0.0, 1.0),
             ior: self.ior,
             thin_walled: self.thin_walled,
         }
     }
 
     /// The BSDF parameters when no texture changes them (the same at every `uv`), `None` for
-    /// a material with a base color or metallic-roughness texture.
+    /// a material with a texture that does.
     pub fn uniform_bsdf_params(&self) -> Option<BsdfParams> {
-        let textured =
-            self.base_color_texture.is_some() || self.metallic_roughness_texture.is_some();
-        (!textured).then(|| self.bsdf_params(&[], Vec2::ZERO))
+        (!self.has_bsdf_textures()).then(|| self.bsdf_params(&[], Vec2::ZERO))
+    }
+
+    /// Whether a texture changes the BSDF parameters from point to point.
+    pub fn has_bsdf_textures(&self) -> bool {
+        [
+            self.base_color_texture,
+            self.metallic_roughness_texture,
+            self.specular_texture,
+            self.specular_color_texture,
+            self.transmission_texture,
+        ]
+        .iter()
+        .any(Option::is_some)
     }
 
     /// Emitted radiance at `uv` (zero for non-emitters).

@@ -22,21 +22,29 @@ pub(super) struct TextureLoader<'a> {
     loaded: HashMap<(usize, bool), usize>,
 }
 
-/// The filter of a glTF sampler, for lookups without mipmaps: nearest texels where the
-/// filters it gives (magnification, and minification with its mipmap part dropped) are all
-/// nearest, bilinear where they are all linear or none is given, and `None` where they mix.
-fn filter(sampler: &gltf::texture::Sampler) -> Option<Filter> {
-    let mag = sampler.mag_filter().map(|f| f == MagFilter::Nearest);
-    let min = sampler.min_filter().map(|f| {
-        matches!(
-            f,
+/// The filter of a glTF sampler, for lookups without mipmaps: its magnification filter, or
+/// where it gives none its minification filter with the mipmap part dropped; bilinear where
+/// it gives neither.
+///
+/// One lookup per sample at the sample's point, many samples per pixel: where texels are
+/// smaller than a pixel, the pixel's samples average them whichever filter looks them up (the
+/// work a minification filter does for a rasterizer), and only where texels are larger does
+/// the filter show. That is the magnification filter's case, so it decides when both are
+/// given: a sampler of nearest magnification and linear mipmaps (pixel art) keeps its texels
+/// hard-edged up close.
+fn filter(sampler: &gltf::texture::Sampler) -> Filter {
+    let nearest = match (sampler.mag_filter(), sampler.min_filter()) {
+        (Some(mag), _) => mag == MagFilter::Nearest,
+        (None, Some(min)) => matches!(
+            min,
             MinFilter::Nearest | MinFilter::NearestMipmapNearest | MinFilter::NearestMipmapLinear
-        )
-    });
-    match (mag, min) {
-        (Some(a), Some(b)) if a != b => None,
-        (Some(true), _) | (_, Some(true)) => Some(Filter::Nearest),
-        _ => Some(Filter::Bilinear),
+        ),
+        (None, None) => false,
+    };
+    if nearest {
+        Filter::Nearest
+    } else {
+        Filter::Bilinear
     }
 }
 
@@ -132,12 +140,7 @@ impl<'a> TextureLoader<'a> {
         let sampler = texture.sampler();
         tex.wrap_u = wrap_mode(sampler.wrap_s());
         tex.wrap_v = wrap_mode(sampler.wrap_t());
-        tex.filter = filter(&sampler).unwrap_or_else(|| {
-            builder.warn_unsupported(
-                "a sampler mixing nearest and linear filters (textures are filtered bilinearly)",
-            );
-            Filter::Bilinear
-        });
+        tex.filter = filter(&sampler);
         let index = builder.textures.len();
         builder.textures.push(tex);
         self.loaded.insert(key, index);
@@ -207,21 +210,21 @@ pub(super) fn read_material(
             AlphaMode::Opaque
         }
     };
-    let (specular, specular_color) = match m.specular() {
-        Some(s) => {
-            if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
-                builder.warn_unsupported("KHR_materials_specular textures");
-            }
-            (s.specular_factor(), Vec3::from(s.specular_color_factor()))
-        }
-        None => (1.0, Vec3::ONE),
-    };
-    let transmission = m.transmission().map_or(0.0, |t| {
-        if t.transmission_texture().is_some() {
-            builder.warn_unsupported("KHR_materials_transmission textures");
-        }
-        t.transmission_factor()
+    let (specular, specular_color) = m.specular().map_or((1.0, Vec3::ONE), |s| {
+        (s.specular_factor(), Vec3::from(s.specular_color_factor()))
     });
+    let (specular_texture, specular_color_texture) = match m.specular() {
+        Some(s) => (
+            textures.load_info(builder, s.specular_texture(), linear)?,
+            textures.load_info(builder, s.specular_color_texture(), srgb)?,
+        ),
+        None => (None, None),
+    };
+    let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+    let transmission_texture = match m.transmission() {
+        Some(t) => textures.load_info(builder, t.transmission_texture(), linear)?,
+        None => None,
+    };
     let thin_walled = m.volume().is_none_or(|v| v.thickness_factor() <= 0.0);
     // The glTF specification ignores a thin-walled surface's volume properties.
     let absorption = match m.volume() {
@@ -258,8 +261,11 @@ pub(super) fn read_material(
         emission,
         emissive_texture,
         specular,
+        specular_texture,
         specular_color,
+        specular_color_texture,
         transmission,
+        transmission_texture,
         ior: m.ior().unwrap_or(1.5),
         thin_walled,
         absorption,
