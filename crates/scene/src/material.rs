@@ -172,6 +172,19 @@ impl Material {
         (!self.has_bsdf_textures()).then(|| self.bsdf_params(&[], Vec2::ZERO))
     }
 
+    /// Every texture slot, the base color's first.
+    pub fn textures_mut(&mut self) -> [&mut Option<TextureRef>; 7] {
+        [
+            &mut self.base_color_texture,
+            &mut self.metallic_roughness_texture,
+            &mut self.normal_texture,
+            &mut self.emissive_texture,
+            &mut self.specular_texture,
+            &mut self.specular_color_texture,
+            &mut self.transmission_texture,
+        ]
+    }
+
     /// Whether a texture changes the BSDF parameters from point to point.
     pub fn has_bsdf_textures(&self) -> bool {
         [

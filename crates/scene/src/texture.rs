@@ -222,7 +222,9 @@ impl Texture {
 pub struct TextureRef {
     /// Index into [`crate::Scene::textures`].
     pub index: usize,
-    /// Texture coordinate set (only set 0 is loaded; others are reported as unsupported).
+    /// The file's texture coordinate set (`TEXCOORD_n`). The glTF loader reads each primitive's
+    /// coordinates from the one set its material's textures use, so a lookup takes the
+    /// surface's coordinates whatever the number.
     pub tex_coord: u32,
     /// Applied to the surface's texture coordinates before the lookup
     /// (`KHR_texture_transform`; the identity without it).

@@ -356,6 +356,80 @@ fn specular_and_transmission_textures_multiply_their_factors() {
     assert!(classes.transmission && classes.diffuse && scene.features.textures);
 }
 
+/// A triangle whose TEXCOORD_0 is (0.25, 0.5) at every corner and TEXCOORD_1 (0.75, 0.5),
+/// textured with `columns.png` (black left, white right, sampled nearest) by `material`.
+fn two_uv_sets(dir: &Path, material: &str) -> Scene {
+    let floats: [f32; 21] = [
+        0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, // positions
+        0.25, 0.5, 0.25, 0.5, 0.25, 0.5, // TEXCOORD_0
+        0.75, 0.5, 0.75, 0.5, 0.75, 0.5, // TEXCOORD_1
+    ];
+    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let data = base64::engine::general_purpose::STANDARD.encode(bytes);
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+        "nodes": [{{"mesh": 0}}], "materials": [{material}],
+        "buffers": [{{"byteLength": 84, "uri": "data:application/octet-stream;base64,{data}"}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": 36}},
+            {{"buffer": 0, "byteOffset": 36, "byteLength": 24}},
+            {{"buffer": 0, "byteOffset": 60, "byteLength": 24}}],
+        "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0,0,0], "max": [1,1,0]}},
+            {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}},
+            {{"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC2"}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1,
+            "TEXCOORD_1": 2}}, "material": 0}}]}}],
+        "images": [{{"uri": "columns.png"}}], "samplers": [{{"magFilter": 9728}}],
+        "textures": [{{"source": 0, "sampler": 0}}],
+        "extensionsUsed": ["KHR_texture_transform"]}}"#
+    );
+    load_gltf_from_bytes(&dir.join("scene.gltf"), json.as_bytes()).unwrap()
+}
+
+/// A material whose textures use TEXCOORD_1 (`texCoord`, or the texture transform's
+/// override) looks them up there; one whose textures mix sets keeps those on the base
+/// color's set and says so.
+#[test]
+fn textures_on_the_second_texture_coordinate_set_look_up_there() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut columns = image::RgbaImage::from_pixel(2, 1, image::Rgba([0, 0, 0, 255]));
+    columns.put_pixel(1, 0, image::Rgba([255, 255, 255, 255]));
+    columns.save(dir.path().join("columns.png")).unwrap();
+    let base_color = |scene: &Scene| {
+        let point = scene.surface_point(0, 0.3, 0.3);
+        scene.materials[0]
+            .bsdf_params(&scene.textures, point.uv)
+            .base_color
+            .x
+    };
+    let set_0 = r#"{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}"#;
+    let set_1 = r#"{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}}}"#;
+    let transformed = r#"{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+        "extensions": {"KHR_texture_transform": {"texCoord": 1}}}}}"#;
+    for (material, white) in [(set_0, false), (set_1, true), (transformed, true)] {
+        let scene = two_uv_sets(dir.path(), material);
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        assert_eq!(
+            base_color(&scene),
+            if white { 1.0 } else { 0.0 },
+            "{material}"
+        );
+    }
+    let mixed = r#"{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}},
+        "emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0}}"#;
+    let scene = two_uv_sets(dir.path(), mixed);
+    assert_eq!(base_color(&scene), 1.0);
+    assert_eq!(scene.materials[0].emissive_texture, None);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("only those on set 1")),
+        "{:?}",
+        scene.warnings
+    );
+}
+
 /// Morph targets and skins would change the image; they are not supported, so each is
 /// reported once, naming the file.
 #[test]

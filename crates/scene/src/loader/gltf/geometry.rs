@@ -33,7 +33,7 @@ pub(super) fn read_primitive(
     name: String,
     world: Mat4,
     buffers: &[Vec<u8>],
-    material: u32,
+    (material, texture_coordinates): (u32, u32),
 ) -> Result<Option<Primitive>, String> {
     if !matches!(
         primitive.mode(),
@@ -50,7 +50,7 @@ pub(super) fn read_primitive(
         (Semantic::Normals, Dimensions::Vec3, &float[..]),
         (Semantic::Tangents, Dimensions::Vec4, &float[..]),
         (
-            Semantic::TexCoords(0),
+            Semantic::TexCoords(texture_coordinates),
             Dimensions::Vec2,
             &[DataType::F32, DataType::U8, DataType::U16][..],
         ),
@@ -101,7 +101,7 @@ pub(super) fn read_primitive(
         .collect()
     });
     let uvs = reader
-        .read_tex_coords(0)
+        .read_tex_coords(texture_coordinates)
         .map(|it| it.into_f32().map(Vec2::from).collect());
     let colors = reader
         .read_colors(0)

@@ -88,8 +88,7 @@ impl<'a> TextureLoader<'a> {
     }
 
     /// A reference to `texture` (loaded once per encoding) through UV set `tex_coord` with
-    /// the `KHR_texture_transform` object `transform`, if any; warns about unsupported UV
-    /// sets, whose textures are left out.
+    /// the `KHR_texture_transform` object `transform`, if any (its `texCoord` overrides).
     fn load(
         &mut self,
         builder: &mut SceneBuilder,
@@ -101,13 +100,6 @@ impl<'a> TextureLoader<'a> {
         let transform =
             TextureTransform::read(transform).map_err(|e| SceneError::gltf(builder.path(), e))?;
         let tex_coord = transform.tex_coord.unwrap_or(tex_coord);
-        if tex_coord != 0 {
-            builder.warn(format!(
-                "{}: texture coordinate set {tex_coord} is not supported; the texture is ignored",
-                builder.path().display()
-            ));
-            return Ok(None);
-        }
         Ok(Some(TextureRef {
             index: self.texture_index(builder, texture, encoding)?,
             tex_coord,
@@ -169,12 +161,40 @@ impl<'a> TextureLoader<'a> {
     }
 }
 
-/// Converts one glTF material (loading its textures).
+/// The texture coordinate set that the primitives of `material` are read with: the one its
+/// textures use. Where they use several, the base color texture's (or, without one, the first
+/// texture's) counts and the textures on other sets are dropped, with a warning.
+fn texture_coordinate_set(builder: &mut SceneBuilder, material: &mut Material) -> u32 {
+    let mut slots = material.textures_mut();
+    let Some(set) = slots.iter().find_map(|t| t.map(|t| t.tex_coord)) else {
+        return 0;
+    };
+    let mut dropped = false;
+    for slot in &mut slots {
+        if slot.is_some_and(|t| t.tex_coord != set) {
+            **slot = None;
+            dropped = true;
+        }
+    }
+    if dropped {
+        let message = format!(
+            "{}: material '{}' takes textures from several texture coordinate sets; only \
+             those on set {set} are used",
+            builder.path().display(),
+            material.name
+        );
+        builder.warn(message);
+    }
+    set
+}
+
+/// Converts one glTF material (loading its textures), with the texture coordinate set its
+/// primitives are to be read with.
 pub(super) fn read_material(
     builder: &mut SceneBuilder,
     textures: &mut TextureLoader,
     m: &gltf::Material,
-) -> Result<Material, SceneError> {
+) -> Result<(Material, u32), SceneError> {
     let pbr = m.pbr_metallic_roughness();
     let srgb = ColorEncoding::Srgb;
     let linear = ColorEncoding::Linear;
@@ -249,7 +269,7 @@ pub(super) fn read_material(
         _ => Vec3::ZERO,
     };
     let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
-    let material = Material {
+    let mut material = Material {
         name: m.name().unwrap_or("unnamed").to_string(),
         base_color: Vec4::from(pbr.base_color_factor()),
         base_color_texture,
@@ -272,7 +292,8 @@ pub(super) fn read_material(
         alpha_mode,
         double_sided: m.double_sided(),
     };
-    validate(builder, material)
+    let set = texture_coordinate_set(builder, &mut material);
+    Ok((validate(builder, material)?, set))
 }
 
 /// Beer–Lambert absorption coefficient of `KHR_materials_volume`: light keeps the fraction

@@ -57,13 +57,16 @@ pub(super) fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene, SceneE
     let buffers = load_buffers(path, base, document, blob.as_deref())?;
 
     let mut textures = TextureLoader::new(base, &buffers);
+    let mut texture_coordinate_sets = Vec::new();
     for material in document.materials() {
-        let m = read_material(&mut builder, &mut textures, &material)?;
+        let (m, set) = read_material(&mut builder, &mut textures, &material)?;
         builder.materials.push(m);
+        texture_coordinate_sets.push(set);
     }
     // Primitives without a material use the glTF default material, appended last.
     let default_material = builder.materials.len() as u32;
     builder.materials.push(Material::default());
+    texture_coordinate_sets.push(0);
 
     let roots: Vec<gltf::Node> = match document
         .default_scene()
@@ -75,6 +78,7 @@ pub(super) fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene, SceneE
     let mut reader = NodeReader {
         builder: &mut builder,
         buffers: &buffers,
+        texture_coordinate_sets: &texture_coordinate_sets,
         default_material,
         max_depth: document.nodes().count(),
     };
@@ -178,6 +182,8 @@ fn load_buffers(
 struct NodeReader<'a> {
     builder: &'a mut SceneBuilder,
     buffers: &'a [Vec<u8>],
+    /// Per material, the texture coordinate set its primitives are read with.
+    texture_coordinate_sets: &'a [u32],
     default_material: u32,
     /// A tree cannot be deeper than its node count; deeper means a cycle.
     max_depth: usize,
@@ -227,9 +233,15 @@ impl NodeReader<'_> {
                 .material()
                 .index()
                 .map_or(self.default_material, |i| i as u32);
-            let read =
-                geometry::read_primitive(&primitive, name.clone(), world, self.buffers, material)
-                    .map_err(|reason| SceneError::geometry(self.builder.path(), &name, reason))?;
+            let set = self.texture_coordinate_sets[material as usize];
+            let read = geometry::read_primitive(
+                &primitive,
+                name.clone(),
+                world,
+                self.buffers,
+                (material, set),
+            )
+            .map_err(|reason| SceneError::geometry(self.builder.path(), &name, reason))?;
             match read {
                 Some(p) => self.builder.add_primitive(p)?,
                 None => {
