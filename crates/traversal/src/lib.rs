@@ -22,6 +22,6 @@ mod traversal;
 pub use alpha::AlphaTest;
 pub use batch::{HitBatch, NO_HIT, RayBatch};
 pub use build::BuildPreset;
-pub use cpu::{CpuBvh, CpuBvhOptions, CpuKernel};
+pub use cpu::{CpuBvh, CpuBvhOptions, CpuKernel, INTERLEAVE_ABOVE_BYTES, Interleave};
 pub use error::BuildError;
 pub use traversal::{CompletedTraversal, PendingTraversal, Traversal, TraversalJob};

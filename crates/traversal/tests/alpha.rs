@@ -6,7 +6,9 @@ use std::sync::Arc;
 
 use common::{Rng, RngExt};
 use glam::{Vec3, vec3};
-use vcm_traversal::{AlphaTest, CpuBvh, CpuBvhOptions, HitBatch, NO_HIT, RayBatch, Traversal};
+use vcm_traversal::{
+    AlphaTest, CpuBvh, CpuBvhOptions, HitBatch, Interleave, NO_HIT, RayBatch, Traversal,
+};
 
 /// Triangles with even ids are masked and opaque only where `u < 0.5`.
 struct HalfCutout;
@@ -40,9 +42,18 @@ fn u_at(x: f32) -> f32 {
 
 #[test]
 fn masked_triangles_let_rays_through_where_transparent() {
-    let tris = layers();
-    let bvh =
-        CpuBvh::with_alpha_test(&tris, CpuBvhOptions::default(), Arc::new(HalfCutout)).unwrap();
+    for interleave in [Interleave::Off, Interleave::On] {
+        let options = CpuBvhOptions {
+            interleave,
+            ..CpuBvhOptions::default()
+        };
+        let bvh = CpuBvh::with_alpha_test(&layers(), options, Arc::new(HalfCutout)).unwrap();
+        check_half_cutout(&bvh);
+    }
+}
+
+/// Layer 0 (masked) stops rays where u < 0.5, layer 1 (unmasked) the others.
+fn check_half_cutout(bvh: &CpuBvh) {
     let mut rng = Rng::new(20, 0);
     let mut rays = RayBatch::default();
     for _ in 0..1000 {

@@ -6,8 +6,8 @@ use common::{Rng, RngExt, triangle_soup};
 use glam::{Vec3, vec3};
 use vcm_traversal::contract::TRIANGLE_AT_Z1;
 use vcm_traversal::{
-    BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, NO_HIT, RayBatch, Traversal,
-    TraversalJob,
+    BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, Interleave, NO_HIT, RayBatch,
+    Traversal, TraversalJob,
 };
 
 fn random_rays(rng: &mut Rng, count: usize) -> RayBatch {
@@ -112,11 +112,12 @@ fn results_do_not_depend_on_chunk_size_or_kernel() {
     let mut rng = Rng::new(31, 0);
     let tris = triangle_soup(&mut rng, 2000, 1.0);
     let rays = random_rays(&mut rng, 1001);
-    let trace = |chunk_size, kernel| {
+    let trace = |chunk_size, kernel, interleave| {
         let options = CpuBvhOptions {
             preset: BuildPreset::Fast,
             chunk_size,
             kernel,
+            interleave,
         };
         let bvh = CpuBvh::new(&tris, options).unwrap();
         let mut hits = HitBatch::default();
@@ -125,12 +126,15 @@ fn results_do_not_depend_on_chunk_size_or_kernel() {
         bvh.occluded(&rays, &mut occluded);
         (hits, occluded)
     };
-    let reference = trace(1, CpuKernel::Portable);
+    let reference = trace(1, CpuKernel::Portable, Interleave::Off);
     assert!(reference.0.prim.iter().any(|&p| p != NO_HIT));
     for chunk_size in [0, 7, 256, 5000] {
         for kernel in [CpuKernel::Auto, CpuKernel::Portable] {
-            let result = trace(chunk_size, kernel);
-            assert_eq!(result, reference, "chunk size {chunk_size}, {kernel:?}");
+            for interleave in [Interleave::Off, Interleave::On] {
+                let result = trace(chunk_size, kernel, interleave);
+                let case = format!("chunk size {chunk_size}, {kernel:?}, {interleave:?}");
+                assert_eq!(result, reference, "{case}");
+            }
         }
     }
 }

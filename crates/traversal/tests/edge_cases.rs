@@ -8,7 +8,7 @@ use common::{Rng, RngExt};
 use glam::{Vec3, vec3};
 use vcm_traversal::contract::{self, TRIANGLE_AT_Z1, assert_no_leaks, cuboid, uv_sphere};
 use vcm_traversal::{
-    BuildError, BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, RayBatch, Traversal,
+    BuildError, BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, Interleave, RayBatch, Traversal,
 };
 
 fn build(tris: &[[Vec3; 3]]) -> Box<dyn Traversal> {
@@ -17,6 +17,18 @@ fn build(tris: &[[Vec3; 3]]) -> Box<dyn Traversal> {
 
 #[test]
 fn cpu_backend_meets_the_traversal_contract() {
+    contract::check_contract(&build);
+}
+
+#[test]
+fn cpu_backend_meets_the_traversal_contract_with_rays_in_turn() {
+    let options = CpuBvhOptions {
+        interleave: Interleave::On,
+        ..CpuBvhOptions::default()
+    };
+    let build = |tris: &[[Vec3; 3]]| -> Box<dyn Traversal> {
+        Box::new(CpuBvh::new(tris, options).unwrap())
+    };
     contract::check_contract(&build);
 }
 

@@ -5,7 +5,9 @@ mod common;
 use common::{Rng, RngExt, assert_matches_reference, height_field, triangle_soup};
 use glam::Vec3;
 use vcm_traversal::contract::uv_sphere;
-use vcm_traversal::{BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, RayBatch, Traversal};
+use vcm_traversal::{
+    BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, Interleave, RayBatch, Traversal,
+};
 
 /// Random rays: origins in the meshes' bounding box, random directions and lengths, a
 /// quarter with a bounded `[tmin, tmax)`.
@@ -32,7 +34,7 @@ fn random_mesh(rng: &mut Rng) -> Vec<[Vec3; 3]> {
     tris
 }
 
-fn check_preset(preset: BuildPreset, kernel: CpuKernel, seed: u64) {
+fn check_preset(preset: BuildPreset, kernel: CpuKernel, interleave: Interleave, seed: u64) {
     let mut rng = Rng::new(seed, 0);
     let tris = random_mesh(&mut rng);
     let rays = random_rays(&mut rng, 3000);
@@ -40,6 +42,7 @@ fn check_preset(preset: BuildPreset, kernel: CpuKernel, seed: u64) {
         preset,
         chunk_size: 64,
         kernel,
+        interleave,
     };
     let bvh = CpuBvh::new(&tris, options).unwrap();
     let mut hits = HitBatch::default();
@@ -66,21 +69,28 @@ fn check_preset(preset: BuildPreset, kernel: CpuKernel, seed: u64) {
     vcm_traversal::contract::assert_occlusion_matches_hits(&hits, &occluded);
 }
 
-/// One test per build preset and kernel, each on its own seed.
+/// One test per build preset, kernel and interleaving, each on its own seed.
 macro_rules! preset_tests {
-    ($($name:ident: $preset:ident, $kernel:ident, $seed:literal;)*) => {$(
+    ($($name:ident: $preset:ident, $kernel:ident, $interleave:ident, $seed:literal;)*) => {$(
         #[test]
         fn $name() {
-            check_preset(BuildPreset::$preset, CpuKernel::$kernel, $seed);
+            check_preset(
+                BuildPreset::$preset,
+                CpuKernel::$kernel,
+                Interleave::$interleave,
+                $seed,
+            );
         }
     )*};
 }
 
 preset_tests! {
-    fastest_preset_matches_reference: Fastest, Auto, 1;
-    medium_preset_matches_reference: Medium, Auto, 2;
-    spatial_split_preset_matches_reference: Slow, Auto, 3;
-    portable_kernel_matches_reference: Medium, Portable, 5;
+    fastest_preset_matches_reference: Fastest, Auto, Auto, 1;
+    medium_preset_matches_reference: Medium, Auto, Auto, 2;
+    spatial_split_preset_matches_reference: Slow, Auto, Auto, 3;
+    portable_kernel_matches_reference: Medium, Portable, Auto, 5;
+    rays_in_turn_match_reference: Medium, Auto, On, 6;
+    portable_rays_in_turn_match_reference: Slow, Portable, On, 7;
 }
 
 #[test]

@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use super::filter::HitFilter;
 use super::geometry::LeafGeometry;
-use super::kernel::{TraversalState, any_hit, closest_hit};
+use super::kernel::{AnyHit, ClosestHit, Found, LANES_LARGE, Search, Walk, search, search_in_turn};
 use super::node::{NodeTest, Portable};
 use super::ray::PreparedRay;
 use super::triangle::TriangleTest;
@@ -45,6 +45,9 @@ pub(crate) struct Kernel<'a, F> {
     pub simd: Simd,
     /// Rays per rayon task.
     pub chunk_size: usize,
+    /// Whether a thread takes several rays in turn (for hierarchies larger than the
+    /// caches) or one at a time.
+    pub interleaved: bool,
 }
 
 /// One chunk of a [`HitBatch`].
@@ -98,6 +101,33 @@ impl<F: HitFilter> Kernel<'_, F> {
             });
     }
 
+    /// Runs the search for `T` for the chunk's `count` rays from `start`, in turn when
+    /// interleaved, handing each result to `done`.
+    #[inline(always)]
+    fn search_chunk<T: Default, N: NodeTest + TriangleTest>(
+        &self,
+        node_test: N,
+        (rays, start, count): (&RayBatch, usize, usize),
+        mut done: impl FnMut(usize, Option<Found<T>>),
+    ) where
+        Found<T>: Search,
+    {
+        let (geometry, filter) = (self.geometry, &self.filter);
+        if self.interleaved {
+            let rays = (count, |j| prepare(rays, start + j));
+            search_in_turn::<T, N, F, LANES_LARGE>(geometry, node_test, filter, rays, done);
+        } else {
+            let walk = &mut Walk::new(geometry);
+            for j in 0..count {
+                let ray = prepare(rays, start + j);
+                done(
+                    j,
+                    ray.map(|ray| search(geometry, node_test, filter, walk, &ray)),
+                );
+            }
+        }
+    }
+
     #[inline(always)]
     fn closest_chunk<N: NodeTest + TriangleTest>(
         &self,
@@ -106,18 +136,16 @@ impl<F: HitFilter> Kernel<'_, F> {
         start: usize,
         out: HitsMut<'_>,
     ) {
-        let state = &mut TraversalState::new(self.geometry);
-        for j in 0..out.t.len() {
-            let hit = prepare(rays, start + j)
-                .and_then(|ray| closest_hit(self.geometry, node_test, &self.filter, state, &ray));
-            (out.t[j], out.prim[j], out.u[j], out.v[j]) = match hit {
+        let chunk = (rays, start, out.t.len());
+        self.search_chunk(node_test, chunk, |j, search: Option<ClosestHit>| {
+            (out.t[j], out.prim[j], out.u[j], out.v[j]) = match search.and_then(|s| s.hit) {
                 Some((leaf, candidate)) => {
                     let (u, v) = candidate.barycentrics();
                     (candidate.t, self.geometry.ids[leaf], u, v)
                 }
                 None => (f32::INFINITY, NO_HIT, 0.0, 0.0),
             };
-        }
+        });
     }
 
     #[inline(always)]
@@ -128,11 +156,10 @@ impl<F: HitFilter> Kernel<'_, F> {
         start: usize,
         out: &mut [bool],
     ) {
-        let state = &mut TraversalState::new(self.geometry);
-        for (j, occluded) in out.iter_mut().enumerate() {
-            *occluded = prepare(rays, start + j)
-                .is_some_and(|ray| any_hit(self.geometry, node_test, &self.filter, state, &ray));
-        }
+        let chunk = (rays, start, out.len());
+        self.search_chunk(node_test, chunk, |j, search: Option<AnyHit>| {
+            out[j] = search.is_some_and(|s| s.hit);
+        });
     }
 
     #[cfg(target_arch = "x86_64")]

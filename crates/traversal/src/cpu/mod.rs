@@ -19,7 +19,7 @@ use glam::Vec3;
 use self::batch::{Kernel, Simd};
 use self::filter::{HitFilter, Masked, Opaque};
 use self::geometry::LeafGeometry;
-pub use self::options::{CpuBvhOptions, CpuKernel};
+pub use self::options::{CpuBvhOptions, CpuKernel, INTERLEAVE_ABOVE_BYTES, Interleave};
 use crate::alpha::AlphaTest;
 use crate::batch::{HitBatch, RayBatch};
 use crate::error::BuildError;
@@ -43,6 +43,7 @@ pub struct CpuBvh {
     alpha: Option<AlphaState>,
     simd: Simd,
     chunk_size: usize,
+    interleaved: bool,
     build_time: Duration,
 }
 
@@ -54,6 +55,11 @@ impl CpuBvh {
     pub fn new(triangles: &[[Vec3; 3]], options: CpuBvhOptions) -> Result<Self, BuildError> {
         let start = Instant::now();
         let geometry = LeafGeometry::build(triangles, options.preset)?;
+        let interleaved = match options.interleave {
+            Interleave::Auto => geometry.memory_bytes() > INTERLEAVE_ABOVE_BYTES,
+            Interleave::Off => false,
+            Interleave::On => true,
+        };
         Ok(Self {
             geometry,
             alpha: None,
@@ -62,6 +68,7 @@ impl CpuBvh {
                 CpuKernel::Portable => Simd::Portable,
             },
             chunk_size: options.chunk_size.max(1),
+            interleaved,
             build_time: start.elapsed(),
         })
     }
@@ -103,6 +110,7 @@ impl CpuBvh {
             filter,
             simd: self.simd,
             chunk_size: self.chunk_size,
+            interleaved: self.interleaved,
         }
     }
 
@@ -123,6 +131,7 @@ impl fmt::Debug for CpuBvh {
             .field("alpha_test", &self.alpha.is_some())
             .field("simd", &self.simd)
             .field("chunk_size", &self.chunk_size)
+            .field("interleaved", &self.interleaved)
             .field("build_time", &self.build_time)
             .finish()
     }

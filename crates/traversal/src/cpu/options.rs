@@ -11,7 +11,31 @@ pub struct CpuBvhOptions {
     pub chunk_size: usize,
     /// Which SIMD implementation of the node and triangle tests to run.
     pub kernel: CpuKernel,
+    /// Whether a thread traces several rays in turn or one at a time.
+    pub interleave: Interleave,
 }
+
+/// How many rays a thread traces at once. Taking several in turn, each step of a ray
+/// prefetches the node or triangles its next step reads, so that on a hierarchy too large
+/// for the caches one ray's cache misses overlap the others' work; where everything stays
+/// in cache it only costs the switching. All modes report the same hits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Interleave {
+    /// Several rays in turn where the traversal data (nodes, triangles, ids) outgrows
+    /// [`INTERLEAVE_ABOVE_BYTES`], one at a time below.
+    #[default]
+    Auto,
+    /// One ray at a time.
+    Off,
+    /// Several rays in turn.
+    On,
+}
+
+/// Traversal data above which [`Interleave::Auto`] takes several rays in turn: a core's L2
+/// cache on current x86 CPUs (1 MiB on this project's machines). On the 1.0 M-triangle
+/// scene (48 MB) eight rays in turn made the path tracer 1.12× faster; on the Cornell box
+/// (2 kB) they cost 2–4%.
+pub const INTERLEAVE_ABOVE_BYTES: usize = 1 << 20;
 
 /// Node- and triangle-test implementations of the CPU backend. Both node tests are
 /// conservative and both triangle tests compute the same watertight test with the same
@@ -36,6 +60,7 @@ impl Default for CpuBvhOptions {
             preset: BuildPreset::default(),
             chunk_size: 256,
             kernel: CpuKernel::Auto,
+            interleave: Interleave::Auto,
         }
     }
 }
