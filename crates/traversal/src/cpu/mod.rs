@@ -1,5 +1,6 @@
-//! The CPU backend: an obvhs compressed wide BVH (CWBVH) traversed one ray at a time on
-//! rayon, with a watertight triangle test.
+//! The CPU backend: an obvhs compressed wide BVH (CWBVH) traversed on rayon, one ray at a
+//! time per thread or, on hierarchies larger than the caches, several in turn, with a
+//! watertight triangle test.
 
 mod batch;
 mod filter;
@@ -36,7 +37,7 @@ struct AlphaState {
 /// Triangles are copied into BVH leaf order (nine coordinate planes, 36 bytes each) so
 /// leaves index them directly; an id map turns leaf positions back into the caller's ids.
 /// Batches are split into chunks traced in parallel on the current rayon pool, one ray at a
-/// time, with 8-wide AVX2 node tests and the triangles of a node's hit leaves tested 8 at a
+/// time or several in turn ([`Interleave`]), with 8-wide AVX2 node tests and the triangles of a node's hit leaves tested 8 at a
 /// time where the CPU has AVX2.
 pub struct CpuBvh {
     geometry: LeafGeometry,

@@ -230,20 +230,21 @@ pub(super) fn read_material(
             AlphaMode::Opaque
         }
     };
-    let (specular, specular_color) = m.specular().map_or((1.0, Vec3::ONE), |s| {
-        (s.specular_factor(), Vec3::from(s.specular_color_factor()))
-    });
-    let (specular_texture, specular_color_texture) = match m.specular() {
+    let (specular, specular_texture, specular_color, specular_color_texture) = match m.specular() {
         Some(s) => (
+            s.specular_factor(),
             textures.load_info(builder, s.specular_texture(), linear)?,
+            Vec3::from(s.specular_color_factor()),
             textures.load_info(builder, s.specular_color_texture(), srgb)?,
         ),
-        None => (None, None),
+        None => (1.0, None, Vec3::ONE, None),
     };
-    let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
-    let transmission_texture = match m.transmission() {
-        Some(t) => textures.load_info(builder, t.transmission_texture(), linear)?,
-        None => None,
+    let (transmission, transmission_texture) = match m.transmission() {
+        Some(t) => (
+            t.transmission_factor(),
+            textures.load_info(builder, t.transmission_texture(), linear)?,
+        ),
+        None => (0.0, None),
     };
     let thin_walled = m.volume().is_none_or(|v| v.thickness_factor() <= 0.0);
     // The glTF specification ignores a thin-walled surface's volume properties.
