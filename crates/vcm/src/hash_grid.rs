@@ -13,9 +13,11 @@
 //!
 //! A query's cost is its cache misses: the grid is far larger than the caches, and the
 //! cells around a point hash to unrelated places. So each entry keeps the point's position
-//! beside its index (one miss per bucket, not two), a query reads all its bucket ranges
-//! before scanning any (the misses overlap), and cells the sphere does not reach are
-//! skipped.
+//! beside its index (one miss per bucket, not two), cells the sphere does not reach are
+//! skipped, and a query's cells are found from the point alone ([`HashGrid::cells`]), so
+//! that a caller can request where their buckets begin, then their entries, each a while
+//! before it reads them ([`HashGrid::prefetch_bucket_starts`],
+//! [`HashGrid::prefetch_entries`], then [`HashGrid::query_cells`]).
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -37,6 +39,23 @@ pub struct HashGrid {
     starts: Vec<u32>,
     /// The points in bucket order, each with its index.
     entries: Vec<Entry>,
+}
+
+/// The buckets a query reads ([`HashGrid::cells`]): at most 8, each once.
+#[derive(Clone, Copy, Debug)]
+pub struct GridCells([u32; 8]);
+
+impl GridCells {
+    /// An unused slot.
+    const NONE: u32 = u32::MAX;
+
+    /// The buckets, in cell order.
+    fn buckets(&self) -> impl Iterator<Item = usize> + '_ {
+        self.0
+            .iter()
+            .filter(|&&b| b != Self::NONE)
+            .map(|&b| b as usize)
+    }
 }
 
 /// A point of the grid: its position and its index in the caller's list (16 bytes, so an
@@ -118,8 +137,13 @@ impl HashGrid {
 
     /// Calls `visit` with the index of every point within the radius of `query` (distance
     /// ≤ r), each once, in an order that depends only on the points.
-    pub fn query(&self, query: Vec3, mut visit: impl FnMut(usize)) {
-        for range in self.bucket_ranges(query).into_iter().flatten() {
+    pub fn query(&self, query: Vec3, visit: impl FnMut(usize)) {
+        self.query_cells(&self.cells(query), query, visit);
+    }
+
+    /// [`query`](Self::query) in the cells [`cells`](Self::cells) found for `query`.
+    pub fn query_cells(&self, cells: &GridCells, query: Vec3, mut visit: impl FnMut(usize)) {
+        for range in cells.buckets().map(|b| self.bucket_range(b)) {
             for entry in &self.entries[range] {
                 if entry.position.distance_squared(query) <= self.radius_sq {
                     visit(entry.index as usize);
@@ -128,25 +152,39 @@ impl HashGrid {
         }
     }
 
-    /// Starts loading the grid entries a [`query`](Self::query) at `query` would read.
-    pub fn prefetch(&self, query: Vec3) {
-        for range in self.bucket_ranges(query).into_iter().flatten() {
+    /// Starts loading where the buckets of `cells` begin: the first of two look-ahead steps
+    /// before a query.
+    pub fn prefetch_bucket_starts(&self, cells: &GridCells) {
+        for b in cells.buckets() {
+            crate::prefetch::prefetch(&self.starts[b]);
+        }
+    }
+
+    /// Starts loading the first entries of the buckets of `cells`: the second look-ahead
+    /// step, which reads where the buckets begin.
+    pub fn prefetch_entries(&self, cells: &GridCells) {
+        for range in cells.buckets().map(|b| self.bucket_range(b)) {
             if let Some(first) = self.entries.get(range.start) {
                 crate::prefetch::prefetch(first);
             }
         }
     }
 
-    /// The entry ranges of the buckets of the (at most 8) cells that points within the
-    /// radius of `query` can lie in, each bucket once.
-    fn bucket_ranges(&self, query: Vec3) -> [Option<std::ops::Range<usize>>; 8] {
-        let mut ranges = [const { None }; 8];
+    /// The entries of bucket `b`.
+    fn bucket_range(&self, b: usize) -> std::ops::Range<usize> {
+        self.starts[b] as usize..self.starts[b + 1] as usize
+    }
+
+    /// The buckets of the (at most 8) cells that points within the radius of `query` can
+    /// lie in, each bucket once. Reads nothing but the grid's bounds.
+    pub fn cells(&self, query: Vec3) -> GridCells {
+        let mut buckets = [GridCells::NONE; 8];
         let r = self.radius_sq.sqrt();
         if self.entries.is_empty()
             || query.cmplt(self.min - r).any()
             || query.cmpgt(self.max + r).any()
         {
-            return ranges;
+            return GridCells(buckets);
         }
         let scaled = (query - self.min) * self.inv_cell_size;
         let cell = scaled.floor();
@@ -159,7 +197,6 @@ impl HashGrid {
         let reach_sq = 0.25 * (1.0 + 1e-4);
         let cell = cell.as_i64vec3();
         let step = I64Vec3::select(side, I64Vec3::ONE, I64Vec3::NEG_ONE);
-        let mut buckets = [u32::MAX; 8];
         for (slot, corner) in (0..8_i64).enumerate() {
             let across = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
             let distance_sq: f32 = (0..3)
@@ -172,14 +209,11 @@ impl HashGrid {
             let offset = I64Vec3::from_array(across);
             let bucket = self.bucket(cell + offset * step);
             // Two neighbouring cells can share a bucket; visit it once.
-            if buckets.contains(&bucket) {
-                continue;
+            if !buckets.contains(&bucket) {
+                buckets[slot] = bucket;
             }
-            buckets[slot] = bucket;
-            let b = bucket as usize;
-            ranges[slot] = Some(self.starts[b] as usize..self.starts[b + 1] as usize);
         }
-        ranges
+        GridCells(buckets)
     }
 
     /// Bytes of the bucket and entry arrays.
@@ -213,9 +247,13 @@ mod tests {
     }
 
     /// The grid's query at `query` finds exactly the points within `radius`, by brute force.
+    /// With the look-ahead steps first too ([`HashGrid::query_cells`]), in the same order.
     fn assert_finds_exactly(grid: &HashGrid, points: &[Vec3], radius: f32, query: Vec3) {
         let mut found = Vec::new();
         grid.query(query, |i| found.push(i));
+        let mut found_ahead = Vec::new();
+        query_ahead(grid, query, |i| found_ahead.push(i));
+        assert_eq!(found_ahead, found);
         found.sort_unstable();
         let expected: Vec<usize> = (0..points.len())
             .filter(|&i| points[i].distance_squared(query) <= radius * radius)
@@ -299,18 +337,26 @@ mod tests {
         assert_eq!(order(1), order(4));
     }
 
+    /// The look-ahead steps of a query, then the query in its cells.
+    fn query_ahead(grid: &HashGrid, query: Vec3, visit: impl FnMut(usize)) {
+        let cells = grid.cells(query);
+        grid.prefetch_bucket_starts(&cells);
+        grid.prefetch_entries(&cells);
+        grid.query_cells(&cells, query, visit);
+    }
+
     #[test]
     fn empty_and_far_queries_find_nothing() {
         let grid = HashGrid::build(&[], 0.1);
         grid.query(Vec3::ZERO, |_| panic!("no points"));
-        grid.prefetch(Vec3::ZERO);
+        query_ahead(&grid, Vec3::ZERO, |_| panic!("no points"));
         let points = [Vec3::ZERO];
         let grid = HashGrid::build(&points, 0.1);
         grid.query(Vec3::splat(5.0), |_| panic!("too far"));
-        grid.prefetch(Vec3::splat(5.0));
-        grid.prefetch(Vec3::splat(0.05));
+        query_ahead(&grid, Vec3::splat(5.0), |_| panic!("too far"));
+        assert_eq!(grid.cells(Vec3::splat(5.0)).buckets().count(), 0);
         let mut hits = 0;
-        grid.query(Vec3::splat(0.05), |_| hits += 1);
+        query_ahead(&grid, Vec3::splat(0.05), |_| hits += 1);
         assert_eq!(hits, 1);
     }
 }

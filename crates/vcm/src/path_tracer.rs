@@ -231,6 +231,7 @@ impl Wavefront for PtWavefront<'_> {
             hits,
             vertex_sampler,
             |_, hit| SurfaceHit::at(scene, hit),
+            None::<fn(&_, &mut _, _)>,
             |path, hit| shade(&ctx, path, hit),
         );
         let shadows = self.paths.iter().filter_map(|p| p.shadow.as_ref());

@@ -19,6 +19,18 @@ pub(crate) fn fill_extension_rays(
 /// Paths shaded together: what their shading can do ahead is done for all of them first.
 const SHADE_CHUNK: usize = 64;
 
+/// How many paths the first [`Ahead`] step runs ahead of the second.
+const AHEAD_LAG: usize = 8;
+
+/// The two look-ahead steps a prepared hit goes through before it is shaded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Ahead {
+    /// Right after the chunk's preparations.
+    First,
+    /// [`AHEAD_LAG`] paths after the first step.
+    Second,
+}
+
 /// Calls `shade` for every path with its closest hit (`hits[i]` for path `i`), in parallel,
 /// and for a path that hit something, what `prepare` computed from that hit ahead.
 ///
@@ -27,12 +39,16 @@ const SHADE_CHUNK: usize = 64;
 /// sampler to the numbers of the vertex it has reached and returns it. Then `prepare` runs
 /// for every hit path of the chunk in a loop of its own (the surface point, and loads that
 /// take long to arrive): one path's shading is a long chain of dependent steps, while these
-/// first steps of different paths are independent, so the CPU overlaps them.
+/// first steps of different paths are independent, so the CPU overlaps them. `ahead`, if
+/// given, then takes each prepared hit through two more steps ([`Ahead`]) in a loop of its
+/// own, the second [`AHEAD_LAG`] paths behind the first: for chains of loads, each step
+/// reading what the step before it requested, which has arrived by then.
 pub(crate) fn shade_in_parallel<P: Send, T>(
     paths: &mut [P],
     hits: &HitBatch,
     vertex_sampler: impl Fn(&mut P) -> &mut SobolSampler + Sync,
     prepare: impl Fn(&P, Hit) -> T + Sync,
+    ahead: Option<impl Fn(&P, &mut T, Ahead) + Sync>,
     shade: impl Fn(&mut P, Option<(Hit, &T)>) + Sync,
 ) {
     paths
@@ -54,6 +70,20 @@ pub(crate) fn shade_in_parallel<P: Send, T>(
                 if let Some(hit) = Hit::from_batch(hits, first + i) {
                     chunk_hits[i] = Some(hit);
                     prepared[i] = Some(prepare(path, hit));
+                }
+            }
+            if let Some(ahead) = &ahead {
+                // Path k takes its first step, path k − AHEAD_LAG (if any) its second.
+                for k in 0..chunk.len() + AHEAD_LAG {
+                    let steps = [
+                        (k, Ahead::First),
+                        (k.wrapping_sub(AHEAD_LAG), Ahead::Second),
+                    ];
+                    for (i, step) in steps {
+                        if let Some(Some(prepared)) = prepared.get_mut(i) {
+                            ahead(&chunk[i], prepared, step);
+                        }
+                    }
                 }
             }
             for ((path, hit), ahead) in chunk.iter_mut().zip(chunk_hits).zip(&prepared) {

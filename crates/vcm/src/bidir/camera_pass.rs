@@ -18,7 +18,7 @@ use super::mis::{
 };
 use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
-use crate::hash_grid::HashGrid;
+use crate::hash_grid::{GridCells, HashGrid};
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
 use crate::medium::Medium;
@@ -27,7 +27,7 @@ use crate::prefetch::prefetch;
 use crate::roulette::Roulette;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
-use crate::wave::{fill_extension_rays, shade_in_parallel};
+use crate::wave::{Ahead, fill_extension_rays, shade_in_parallel};
 
 /// Shadow rays a camera path state holds without a heap allocation: the light sample and
 /// one connection, the default (`--connections 1`).
@@ -148,13 +148,31 @@ impl Wavefront for CameraWavefront<'_> {
     /// in path order.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
         let iterations = self.iterations;
-        shade_in_parallel(
-            &mut self.paths,
-            hits,
-            vertex_sampler,
-            |path, hit| prepare(&iterations[path.sample as usize], path, hit),
-            |path, hit| shade(&iterations[path.sample as usize], path, hit),
-        );
+        let ctx = |path: &CameraPathState| &iterations[path.sample as usize];
+        // Without merging a vertex carries only its surface point ahead: the grid's state
+        // would make every prepared vertex twice the size.
+        if iterations[0].plan.merges {
+            shade_in_parallel(
+                &mut self.paths,
+                hits,
+                vertex_sampler,
+                |path, hit| MergingHit::prepare(ctx(path), path, hit),
+                Some(|path: &_, hit: &mut MergingHit, step| hit.look_ahead(ctx(path), step)),
+                |path, hit| {
+                    let hit = hit.map(|(hit, ahead)| (hit, &ahead.surface, Some(&ahead.found)));
+                    shade(ctx(path), path, hit)
+                },
+            );
+        } else {
+            shade_in_parallel(
+                &mut self.paths,
+                hits,
+                vertex_sampler,
+                |path, hit| prepare(ctx(path), path, hit),
+                None::<fn(&_, &mut _, _)>,
+                |path, hit| shade(ctx(path), path, hit.map(|(hit, s)| (hit, s, None))),
+            );
+        }
         let shadows = self.paths.iter().flat_map(|p| &p.shadows);
         ShadowRay::fill_batch(shadow_rays, shadows);
     }
@@ -226,30 +244,74 @@ fn vertex_sampler(path: &mut CameraPathState) -> &mut SobolSampler {
 
 /// What a camera vertex computes before its chunk of paths is shaded
 /// ([`shade_in_parallel`]): the surface point, and what it will read starts loading: where
-/// it connects to the cache, the picked light vertices; where it merges, the grid entries
-/// around it ([`merge`] then prefetches the vertices they name). These lie all over memory
-/// and take a while to arrive; the chunk's other paths are shaded meanwhile.
+/// it connects to the cache, the picked light vertices. These lie all over memory and take
+/// a while to arrive; the chunk's other paths are prepared and shaded meanwhile.
 fn prepare(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> SurfaceHit {
-    let vertices = ctx.cache.vertices();
     if ctx.plan.connects {
+        let vertices = ctx.cache.vertices();
         let picks = CachePicks::next(&path.walk.rng, ctx);
         picks.indices().for_each(|i| prefetch(&vertices[i]));
     }
-    let surface = SurfaceHit::at(ctx.scene, hit);
-    if ctx.plan.merges {
-        ctx.grid.prefetch(surface.point.position);
+    SurfaceHit::at(ctx.scene, hit)
+}
+
+/// The light vertices within the merge radius of a camera vertex, in the grid's order.
+type Neighbours = SmallVec<[u32; 16]>;
+
+/// A merging camera vertex prepared ahead: its surface point, the grid cells around it and
+/// the light vertices found in them, filled in three steps, each reading what the one
+/// before requested: where the cells' buckets begin, their entries, the vertices they name.
+struct MergingHit {
+    surface: SurfaceHit,
+    cells: GridCells,
+    found: Neighbours,
+}
+
+impl MergingHit {
+    /// [`prepare`], and a request for where the buckets of the cells around the point begin.
+    fn prepare(ctx: &CameraContext, path: &CameraPathState, hit: Hit) -> MergingHit {
+        let surface = prepare(ctx, path, hit);
+        let cells = ctx.grid.cells(surface.point.position);
+        ctx.grid.prefetch_bucket_starts(&cells);
+        MergingHit {
+            surface,
+            cells,
+            found: Neighbours::new(),
+        }
     }
-    surface
+
+    /// First the cells' grid entries, then the query in them and a request for each light
+    /// vertex found. Independent from vertex to vertex, the queries' cache misses overlap
+    /// here, where inside each vertex's shading they would wait one after another.
+    fn look_ahead(&mut self, ctx: &CameraContext, step: Ahead) {
+        match step {
+            Ahead::First => ctx.grid.prefetch_entries(&self.cells),
+            Ahead::Second => {
+                let vertices = ctx.cache.vertices();
+                let found = &mut self.found;
+                ctx.grid
+                    .query_cells(&self.cells, self.surface.point.position, |i| {
+                        prefetch(&vertices[i]);
+                        found.push(i as u32);
+                    });
+            }
+        }
+    }
 }
 
 /// Shades the vertex where a camera path hit the scene (`None`: it escaped and ends).
-fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<(Hit, &SurfaceHit)>) {
+/// `hit` holds the surface point and, where merging, the light vertices within the radius.
+fn shade(
+    ctx: &CameraContext,
+    path: &mut CameraPathState,
+    hit: Option<(Hit, &SurfaceHit, Option<&Neighbours>)>,
+) {
     let max_segments = ctx.max_segments();
     if path.walk.segments > max_segments {
         path.alive = false;
         return;
     }
-    let Some((hit, surface)) = hit else {
+    let Some((hit, surface, neighbours)) = hit else {
         path.walk.cross(f32::INFINITY);
         path.radiance += path.walk.throughput * escaped(ctx, path);
         path.alive = false;
@@ -284,7 +346,8 @@ fn shade(ctx: &CameraContext, path: &mut CameraPathState, hit: Option<(Hit, &Sur
             connect_to_cache(ctx, path, surface, &seen, &picks);
         }
         if ctx.plan.merges {
-            path.radiance += path.walk.throughput * merge(ctx, path, surface, &seen);
+            let found = neighbours.expect("looked ahead where merging");
+            path.radiance += path.walk.throughput * merge(ctx, path, (surface, found), &seen);
             // Photon mapping proper stops at the first diffuse or glossy vertex.
             if algorithm == Algorithm::Ppm {
                 path.alive = false;
@@ -504,20 +567,15 @@ fn connect(
 fn merge(
     ctx: &CameraContext,
     path: &CameraPathState,
-    surface: &SurfaceHit,
+    (surface, found): (&SurfaceHit, &Neighbours),
     seen: &FixedOutgoing,
 ) -> Vec3 {
     let vertices = ctx.cache.vertices();
     let max_segments = ctx.max_segments();
     let ppm = ctx.settings.algorithm == Algorithm::Ppm;
     let mut sum = Vec3::ZERO;
-    // The vertices within the radius, all requested before the first is read.
-    let mut found = SmallVec::<[u32; 16]>::new();
-    ctx.grid.query(surface.point.position, |i| {
-        prefetch(&vertices[i]);
-        found.push(i as u32);
-    });
-    found.into_iter().for_each(|i| {
+    // The vertices within the radius, found and requested by `look_ahead`.
+    found.iter().for_each(|&i| {
         let vertex = &vertices[i as usize];
         if path.walk.segments.saturating_add(vertex.path_length) > max_segments {
             return;

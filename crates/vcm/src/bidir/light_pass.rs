@@ -287,6 +287,7 @@ impl Wavefront for LightWavefront<'_> {
             hits,
             vertex_sampler,
             |_, hit| SurfaceHit::at(scene, hit),
+            None::<fn(&_, &mut _, _)>,
             |path, hit| shade(&iterations[path.sample as usize], path, hit, splat),
         );
         for path in &mut self.paths {
