@@ -33,7 +33,7 @@ layer, spot lights with a soft edge, alpha blending) stops the script with a mes
 Usage:
     python3 -m pip install -r tools/requirements.txt
     python3 tools/mitsuba_reference.py scenes/cornell-box.gltf ref.exr \
-        --width 256 --height 256 --spp 1024 [--seed 0] [--max-depth -1]
+        --width 256 --height 256 --spp 1024 [--seed 0] [--max-depth -1] [--rr-depth 5]
 """
 
 import argparse
@@ -44,6 +44,7 @@ import os
 import struct
 import sys
 import tempfile
+import time
 import urllib.parse
 
 import mitsuba as mi
@@ -356,13 +357,13 @@ def transform_normals(m, n):
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
-def scene_dict(path, width, height, max_depth, spp, seed, work_dir):
+def scene_dict(path, width, height, max_depth, spp, seed, work_dir, rr_depth=5):
     base_dir = os.path.dirname(os.path.abspath(path))
     with open(path) as f:
         doc = json.load(f)
     buffers = load_buffers(doc, base_dir)
     scene = {"type": "scene",
-             "integrator": {"type": "path", "max_depth": max_depth}}
+             "integrator": {"type": "path", "max_depth": max_depth, "rr_depth": rr_depth}}
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
     camera = None
     lights = doc.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights", [])
@@ -488,18 +489,27 @@ def main():
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--max-depth", type=int, default=-1,
                         help="segments, as `vcm render --max-depth`; -1: unlimited")
+    parser.add_argument("--rr-depth", type=int, default=5,
+                        help="depth where Russian roulette starts (Mitsuba's default 5; "
+                        "vcm-rs starts after 3 segments)")
     args = parser.parse_args()
 
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory() as work_dir:
         try:
             scene = scene_dict(args.scene, args.width, args.height, args.max_depth,
-                               args.spp, args.seed, work_dir)
+                               args.spp, args.seed, work_dir, args.rr_depth)
         except Unsupported as error:
             sys.exit(f"{args.scene}: not converted to Mitsuba: {error}")
         except (OSError, ValueError, KeyError, IndexError) as error:
             sys.exit(f"{args.scene}: cannot read it: {error!r}")
-        image = mi.render(mi.load_dict(scene), spp=args.spp, seed=args.seed)
+        scene = mi.load_dict(scene)
+        start = time.perf_counter()
+        image = mi.render(scene, spp=args.spp, seed=args.seed)
+        seconds = time.perf_counter() - start
+        samples = args.width * args.height * args.spp
+        print(f"rendered {args.spp} spp at {args.width}x{args.height} in {seconds:.2f} s: "
+              f"{samples / seconds / 1e6:.2f} M samples/s", file=sys.stderr)
         mi.util.write_bitmap(args.output, image)
 
 
