@@ -357,7 +357,7 @@ def transform_normals(m, n):
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
-def scene_dict(path, width, height, max_depth, spp, seed, work_dir, rr_depth=5):
+def scene_dict(path, width, height, max_depth, rr_depth, spp, seed, work_dir):
     base_dir = os.path.dirname(os.path.abspath(path))
     with open(path) as f:
         doc = json.load(f)
@@ -498,7 +498,7 @@ def main():
     with tempfile.TemporaryDirectory() as work_dir:
         try:
             scene = scene_dict(args.scene, args.width, args.height, args.max_depth,
-                               args.spp, args.seed, work_dir, args.rr_depth)
+                               args.rr_depth, args.spp, args.seed, work_dir)
         except Unsupported as error:
             sys.exit(f"{args.scene}: not converted to Mitsuba: {error}")
         except (OSError, ValueError, KeyError, IndexError) as error:
