@@ -33,7 +33,13 @@ layer, spot lights with a soft edge, alpha blending) stops the script with a mes
 Usage:
     python3 -m pip install -r tools/requirements.txt
     python3 tools/mitsuba_reference.py scenes/cornell-box.gltf ref.exr \
-        --width 256 --height 256 --spp 1024 [--seed 0] [--max-depth -1] [--rr-depth 5]
+        --width 256 --height 256 --spp 1024 [--seed 0] [--max-depth -1] [--rr-depth 5] \
+        [--variant scalar_rgb]
+
+`--variant llvm_ad_rgb` renders with Mitsuba's vectorized LLVM back end instead of the
+scalar one (the cross-check's): it needs a libLLVM that Dr.Jit can compile with, e.g.
+Debian's `apt-get install libllvm19` and `DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so`
+(libLLVM 15 stops with "Cannot select ... fminimum").
 """
 
 import argparse
@@ -47,6 +53,7 @@ import tempfile
 import time
 import urllib.parse
 
+import drjit as dr
 import mitsuba as mi
 import numpy as np
 
@@ -492,9 +499,12 @@ def main():
     parser.add_argument("--rr-depth", type=int, default=5,
                         help="depth where Russian roulette starts (Mitsuba's default 5; "
                         "vcm-rs starts after 3 segments)")
+    parser.add_argument("--variant", choices=["scalar_rgb", "llvm_ad_rgb"],
+                        default="scalar_rgb",
+                        help="Mitsuba back end: scalar, or vectorized through LLVM")
     args = parser.parse_args()
 
-    mi.set_variant("scalar_rgb")
+    mi.set_variant(args.variant)
     with tempfile.TemporaryDirectory() as work_dir:
         try:
             scene = scene_dict(args.scene, args.width, args.height, args.max_depth,
@@ -506,6 +516,9 @@ def main():
         scene = mi.load_dict(scene)
         start = time.perf_counter()
         image = mi.render(scene, spp=args.spp, seed=args.seed)
+        # The LLVM back end records the render and runs it when its result is needed.
+        dr.eval(image)
+        dr.sync_thread()
         seconds = time.perf_counter() - start
         samples = args.width * args.height * args.spp
         print(f"rendered {args.spp} spp at {args.width}x{args.height} in {seconds:.2f} s: "
