@@ -3,10 +3,13 @@
 # renders a training set, and the final build lays out and inlines the code by what those
 # renders ran. Images are bit for bit those of the plain release build; only the speed
 # differs (README, Performance). Code the training does not reach is laid out as cold, so
-# the training covers every integrator and every scene of `scenes/`, and the third-party
-# models of `../shared/scenes/` (textures, normal maps, OBJ) where they are present.
+# the training covers every integrator on every scene of `scenes/` (PT and VCM only on the
+# large one), and PT and VCM on the third-party models of `../shared/scenes/` (textures,
+# normal maps, OBJ) where they are present.
 #
 # Usage: tools/pgo-build.sh            (from anywhere; about twice a release build's time)
+# A RUSTFLAGS of your own (e.g. "-C target-cpu=x86-64-v3" for a binary to copy elsewhere)
+# replaces the default "-C target-cpu=native" in both builds.
 # Result: target/pgo/optimized/release/vcm (under $CARGO_TARGET_DIR/pgo if that is set).
 # Needs LLVM's llvm-profdata for the toolchain's LLVM: `rustup component add llvm-tools`.
 set -euo pipefail
@@ -24,8 +27,9 @@ out=${CARGO_TARGET_DIR:-$root/target}/pgo
 profiles=$out/profiles
 rm -rf "$profiles"
 mkdir -p "$profiles"
-# RUSTFLAGS replaces the rustflags of .cargo/config.toml, so the target CPU is named again.
-cpu_flags="-C target-cpu=native"
+# RUSTFLAGS replaces the rustflags of .cargo/config.toml, so its target CPU is named again
+# unless the caller's RUSTFLAGS name their own.
+cpu_flags=${RUSTFLAGS:--C target-cpu=native}
 
 echo "1/3 instrumented build" >&2
 RUSTFLAGS="$cpu_flags -C profile-generate=$profiles" \
