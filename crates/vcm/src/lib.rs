@@ -49,6 +49,8 @@ pub mod hash_grid;
 mod huge_pages;
 pub mod image_io;
 mod integrator;
+mod lambert_lanes;
+mod lanes;
 pub mod light_vertex_cache;
 mod medium;
 pub mod metrics;

@@ -13,6 +13,7 @@ use vcm_traversal::{HitBatch, RayBatch, Traversal};
 use crate::error::RenderError;
 use crate::film::Film;
 use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
+use crate::lambert_lanes::{LambertLanes, LambertShading};
 use crate::path_state::{PathState, ShadowRay};
 use crate::shade::{ShadeContext, shade, vertex_sampler};
 use crate::surface_hit::SurfaceHit;
@@ -55,6 +56,8 @@ pub struct PathTracer {
     scene: Arc<Scene>,
     traversal: Arc<dyn Traversal>,
     settings: PtSettings,
+    /// Shading in SIMD lanes at plain Lambert vertices, or why the scene allows none.
+    lambert_lanes: Result<LambertLanes, &'static str>,
     schedule: Schedule,
     last_schedule_stats: SchedulerStats,
 }
@@ -70,6 +73,7 @@ impl PathTracer {
     ) -> Result<PathTracer, RenderError> {
         check_image_size(settings.width, settings.height)?;
         Ok(PathTracer {
+            lambert_lanes: LambertLanes::for_scene(&scene),
             scene,
             traversal,
             settings,
@@ -103,6 +107,7 @@ impl Integrator for PathTracer {
         let new_wavefront = || PtWavefront {
             scene: &self.scene,
             settings: &self.settings,
+            lambert_lanes: self.lambert_lanes.as_ref().ok(),
             first_sample,
             samples,
             paths: Vec::new(),
@@ -148,10 +153,18 @@ impl Integrator for PathTracer {
 
     fn decisions(&self) -> Vec<Decision> {
         let reason = "path tracing neither connects nor merges";
+        let lanes = "plain Lambert vertices in SIMD lanes";
         vec![
             Decision::left_out("light paths", reason),
             Decision::left_out("light vertex cache", reason),
             Decision::left_out("merging and hash grid", reason),
+            match &self.lambert_lanes {
+                Ok(_) => Decision::runs(
+                    lanes,
+                    "some material is plain Lambert and every light is a constant area light",
+                ),
+                Err(why) => Decision::left_out(lanes, *why),
+            },
         ]
     }
 
@@ -165,6 +178,7 @@ impl Integrator for PathTracer {
 struct PtWavefront<'a> {
     scene: &'a Scene,
     settings: &'a PtSettings,
+    lambert_lanes: Option<&'a LambertLanes>,
     first_sample: u32,
     samples: u32,
     paths: Vec<PathState>,
@@ -226,10 +240,16 @@ impl Wavefront for PtWavefront<'_> {
             max_segments: self.settings.max_depth.unwrap_or(u32::MAX),
         };
         let scene = self.scene;
+        let lanes = LambertShading {
+            tables: self.lambert_lanes,
+            scene,
+            max_segments: ctx.max_segments,
+        };
         shade_in_parallel(
             &mut self.paths,
             hits,
             vertex_sampler,
+            &lanes,
             |_, hit| SurfaceHit::at(scene, hit),
             None::<fn(&_, &mut _, _)>,
             |path, hit| shade(&ctx, path, hit),

@@ -9,6 +9,8 @@
 
 use glam::Vec3;
 
+use crate::lanes::{F32s, Vec3s};
+
 /// Unit roundoff of `f32`: half the distance from 1 to the next float, 2⁻²⁴.
 const MACHINE_EPSILON: f32 = f32::EPSILON * 0.5;
 
@@ -46,10 +48,28 @@ pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n_g: Vec3, w: Vec3) -> Vec3 {
     }))
 }
 
+/// [`offset_ray_origin`] in each lane: the same operations, bit for bit.
+#[inline(always)]
+pub(crate) fn offset_ray_origins(p: Vec3s, p_error: Vec3s, n_g: Vec3s, w: Vec3s) -> Vec3s {
+    let d = n_g.abs().dot(p_error);
+    let offset = w
+        .dot(n_g)
+        .lt(F32s::splat(0.0))
+        .select3(n_g.scale(-d), n_g.scale(d));
+    let moved = p + offset;
+    let step = |x: F32s, o: F32s| F32s::from_fn(|lane| step_toward(x.0[lane], o.0[lane]));
+    Vec3s {
+        x: step(moved.x, offset.x),
+        y: step(moved.y, offset.y),
+        z: step(moved.z, offset.z),
+    }
+}
+
 /// `x` moved to the next float above it when `o` > 0, below it when `o` < 0, and left as it
 /// is when `o` is zero or NaN or `x` is not finite: `next_up` / `next_down` without branches
 /// on the signs, which are as likely one way as the other here. Finite floats read as
 /// sign-magnitude integers are ordered like the numbers they stand for, ±0 both being 0.
+#[inline(always)]
 fn step_toward(x: f32, o: f32) -> f32 {
     let step = i32::from(o > 0.0) - i32::from(o < 0.0);
     let bits = x.to_bits() as i32;

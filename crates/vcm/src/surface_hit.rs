@@ -8,7 +8,7 @@ use vcm_traversal::HitBatch;
 use crate::ray_offset::{barycentric_error, offset_ray_origin};
 
 /// A closest hit of a ray.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Hit {
     /// Triangle index.
     pub triangle: u32,

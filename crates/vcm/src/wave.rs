@@ -6,6 +6,7 @@ use rayon::prelude::*;
 use vcm_scene::sampling::SobolSampler;
 use vcm_traversal::{HitBatch, RayBatch};
 
+use crate::lanes::LANES;
 use crate::surface_hit::Hit;
 
 /// Refills `rays` with one unbounded ray per (origin, direction) segment, in order.
@@ -31,6 +32,29 @@ pub(crate) enum Ahead {
     Second,
 }
 
+/// Vertices shaded several at a time in SIMD lanes, instead of one by one.
+pub(crate) trait LaneShading<P>: Sync {
+    /// Whether the vertex `path` reached at `hit` is shaded in lanes.
+    fn takes(&self, path: &P, hit: Hit) -> bool;
+
+    /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`] of
+    /// them, each taken by [`LaneShading::takes`]).
+    fn shade(&self, paths: &mut [P], group: &[(usize, Hit)]);
+}
+
+/// Takes no vertex: every path is shaded on its own.
+pub(crate) struct NoLanes;
+
+impl<P> LaneShading<P> for NoLanes {
+    fn takes(&self, _: &P, _: Hit) -> bool {
+        false
+    }
+
+    fn shade(&self, _: &mut [P], group: &[(usize, Hit)]) {
+        debug_assert!(group.is_empty(), "no vertex was taken");
+    }
+}
+
 /// Calls `shade` for every path with its closest hit (`hits[i]` for path `i`), in parallel,
 /// and for a path that hit something, what `prepare` computed from that hit ahead.
 ///
@@ -43,10 +67,14 @@ pub(crate) enum Ahead {
 /// given, then takes each prepared hit through two more steps ([`Ahead`]) in a loop of its
 /// own, the second [`AHEAD_LAG`] paths behind the first: for chains of loads, each step
 /// reading what the step before it requested, which has arrived by then.
+///
+/// The vertices `lanes` takes are shaded by it instead, [`LANES`] at a time, once the
+/// others of the chunk are done.
 pub(crate) fn shade_in_parallel<P: Send, T>(
     paths: &mut [P],
     hits: &HitBatch,
     vertex_sampler: impl Fn(&mut P) -> &mut SobolSampler + Sync,
+    lanes: &impl LaneShading<P>,
     prepare: impl Fn(&P, Hit) -> T + Sync,
     ahead: Option<impl Fn(&P, &mut T, Ahead) + Sync>,
     shade: impl Fn(&mut P, Option<(Hit, &T)>) + Sync,
@@ -66,8 +94,17 @@ pub(crate) fn shade_in_parallel<P: Send, T>(
             // through a closure call and a copy of its result.
             let mut chunk_hits = [None; SHADE_CHUNK];
             let mut prepared: [Option<T>; SHADE_CHUNK] = [const { None }; SHADE_CHUNK];
+            let mut in_lanes = [false; SHADE_CHUNK];
+            let mut lane_group = [(0, Hit::default()); SHADE_CHUNK];
+            let mut lane_count = 0;
             for (i, path) in chunk.iter().enumerate() {
                 if let Some(hit) = Hit::from_batch(hits, first + i) {
+                    if lanes.takes(path, hit) {
+                        in_lanes[i] = true;
+                        lane_group[lane_count] = (i, hit);
+                        lane_count += 1;
+                        continue;
+                    }
                     chunk_hits[i] = Some(hit);
                     prepared[i] = Some(prepare(path, hit));
                 }
@@ -86,8 +123,16 @@ pub(crate) fn shade_in_parallel<P: Send, T>(
                     }
                 }
             }
-            for ((path, hit), ahead) in chunk.iter_mut().zip(chunk_hits).zip(&prepared) {
+            let alone = chunk
+                .iter_mut()
+                .zip(chunk_hits)
+                .zip(&prepared)
+                .zip(in_lanes);
+            for (((path, hit), ahead), _) in alone.filter(|(_, in_lanes)| !in_lanes) {
                 shade(path, hit.zip(ahead.as_ref()));
+            }
+            for group in lane_group[..lane_count].chunks(LANES) {
+                lanes.shade(chunk, group);
             }
         });
 }

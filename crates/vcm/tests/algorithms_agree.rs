@@ -14,7 +14,6 @@ use glam::Vec3;
 use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
 use vcm_scene::Scene;
 use vcm_scene::light::{Light, PointLight};
-use vcm_scene::mesh::Mesh;
 
 /// The image is compared in REGIONS × REGIONS blocks.
 const REGIONS: usize = 4;
@@ -92,25 +91,6 @@ fn photon_mapping_approaches_path_tracing_as_the_radius_shrinks() {
     );
 }
 
-/// The scene `name` with every vertex normal leaning about 31° off its triangle's normal,
-/// each vertex its own way (a fixed pseudo-random direction): smooth-shaded geometry whose
-/// shading normals differ from the geometric ones everywhere.
-fn with_leaning_normals(name: &str) -> Scene {
-    let loaded = common::scene_file(name);
-    let mut mesh = loaded.mesh.clone();
-    for t in 0..mesh.triangle_count() {
-        let n = mesh.geometric_normal(t);
-        for &i in &mesh.triangles[t] {
-            let k = i as f32;
-            let jitter = Vec3::new((k * 12.9898).sin(), (k * 78.233).sin(), (k * 37.719).sin());
-            let aside = (jitter - n * n.dot(jitter)).normalize_or_zero();
-            mesh.normals[i as usize] = (n + aside * 0.6).normalize();
-        }
-    }
-    // The Cornell scenes have no punctual lights: the area lights are made again.
-    rebuilt(loaded, mesh, Vec::new())
-}
-
 /// The merge radius, as a fraction of the scene's radius, of the comparisons with every
 /// technique on: the 2% at which PPM's and BPM's blur is below the noise (at 5% merging blurs
 /// the light's edge on the Cornell box's ceiling: z of 5 to 8 there for VCM, PPM and BPM).
@@ -125,13 +105,13 @@ const MERGE_RADIUS: f32 = 0.02;
 /// weighing by f alone (before this test), PPM and BPM were off by z of 17 and 22.
 #[test]
 fn every_algorithm_agrees_where_shading_normals_lean() {
-    let lambertian = with_leaning_normals("cornell-box.gltf");
+    let lambertian = common::with_leaning_normals("cornell-box.gltf");
     let mut materials = lambertian.materials.clone();
     for m in materials.iter_mut().filter(|m| !m.is_emissive()) {
         (m.specular, m.roughness) = (1.0, 0.25);
     }
     let mesh = lambertian.mesh.clone();
-    let layered = rebuilt(
+    let layered = common::rebuilt(
         Scene {
             materials,
             ..lambertian.clone()
@@ -177,28 +157,6 @@ fn assert_every_technique_agrees(scene: &Scene, algorithms: &[Algorithm], label:
     }
 }
 
-/// `loaded` assembled again with `mesh` and `punctual_lights` (its area lights made anew from
-/// the emissive triangles).
-fn rebuilt(loaded: Scene, mesh: Mesh, punctual_lights: Vec<Light>) -> Scene {
-    let Scene {
-        path,
-        materials,
-        textures,
-        camera,
-        ..
-    } = loaded;
-    let warnings = Vec::new();
-    Scene::new(
-        path,
-        mesh,
-        materials,
-        textures,
-        punctual_lights,
-        camera,
-        warnings,
-    )
-}
-
 /// A third-party model of `../shared/scenes/khronos-samples/` lit by a point light above its
 /// front right and a dim sky.
 fn lit_khronos_model(file: &str) -> Scene {
@@ -214,7 +172,7 @@ fn lit_khronos_model(file: &str) -> Scene {
         intensity: Vec3::splat(3.0 * radius * radius),
     });
     let mesh = loaded.mesh.clone();
-    rebuilt(loaded, mesh, vec![bulb, sky])
+    common::rebuilt(loaded, mesh, vec![bulb, sky])
 }
 
 /// Real models, with what the Cornell scenes lack: base colour, metallic-roughness, normal

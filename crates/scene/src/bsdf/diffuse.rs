@@ -42,6 +42,11 @@ impl CompensatedDiffuse {
         }
     }
 
+    /// f = ρ/π when no layer reflects above the lobe (plain Lambert).
+    pub fn lambert(&self) -> Option<Vec3> {
+        self.layer.is_none().then_some(self.scale)
+    }
+
     /// 1 − E(μ) of the layer.
     fn layer_transmission(&self, mu: f32) -> Vec3 {
         self.layer.as_ref().map_or(Vec3::ONE, |layer| {

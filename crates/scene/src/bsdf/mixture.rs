@@ -147,6 +147,22 @@ impl Mixture {
         self.ior
     }
 
+    /// f of a mixture that is one plain Lambert lobe (no layer above it, no other lobe):
+    /// the value [`Mixture::eval`] divides by |cos θi| for every pair of directions in the
+    /// upper hemisphere, where its lobe is selected with probability 1.
+    pub fn lambert(&self) -> Option<Vec3> {
+        match self {
+            Mixture {
+                specular: None,
+                diffuse: Some(diffuse),
+                dielectric: None,
+                thin: None,
+                ..
+            } => diffuse.lambert(),
+            _ => None,
+        }
+    }
+
     fn lobes(&self) -> [Option<&dyn Lobe>; LOBES] {
         [
             self.specular.as_ref().map(|l| l as &dyn Lobe),
@@ -348,5 +364,45 @@ mod tests {
             layered.selection(head_on, 1.5),
             layered.selection(grazing, 1.5)
         );
+    }
+
+    /// Only a lone plain Lambert lobe reports its f, and it is the f its evaluation gives.
+    #[test]
+    fn only_plain_lambert_reports_its_f() {
+        let plain = BsdfParams {
+            base_color: Vec3::new(0.8, 0.5, 0.2),
+            metallic: 0.0,
+            roughness: 1.0,
+            specular: 0.0,
+            ..BsdfParams::default()
+        };
+        let lambert = Mixture::new(&plain);
+        let f = lambert.lambert().expect("a plain Lambert lobe");
+        let (wo, wi) = (
+            Vec3::new(0.3, 0.1, 0.9).normalize(),
+            Vec3::new(-0.5, 0.2, 0.6),
+        );
+        let wi = wi.normalize();
+        let selection = lambert.selection(wo, 1.5);
+        let (f_cos, pdf) = lambert.eval(&selection, wo, wi, 1.5, TransportMode::Radiance);
+        assert_eq!(f_cos, f * wi.z);
+        assert_eq!(pdf, wi.z * std::f32::consts::FRAC_1_PI);
+        let others = [
+            BsdfParams {
+                specular: 0.5,
+                ..plain
+            },
+            BsdfParams {
+                metallic: 1.0,
+                ..plain
+            },
+            BsdfParams {
+                transmission: 0.5,
+                ..plain
+            },
+        ];
+        for params in others {
+            assert_eq!(Mixture::new(&params).lambert(), None, "{params:?}");
+        }
     }
 }

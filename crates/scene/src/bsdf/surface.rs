@@ -33,6 +33,14 @@ impl Lobes {
     pub fn new(params: &BsdfParams) -> Lobes {
         Lobes(Mixture::new(params))
     }
+
+    /// f (= albedo/π, RGB, sr⁻¹) where the lobes are one plain Lambert lobe: no reflecting
+    /// layer above it, no conductor, no transmission. A [`Bsdf`] placed from such lobes
+    /// evaluates f·|cos θi| with pdf |cos θi|/π for every consistent pair of directions on
+    /// the same side, and samples the cosine-weighted hemisphere.
+    pub fn lambert(&self) -> Option<Vec3> {
+        self.0.lambert()
+    }
 }
 
 /// Which side of the surface a direction is on, and what follows from it.

@@ -118,6 +118,33 @@ impl SobolSampler {
         }
     }
 
+    /// The next `N` pairs of dimensions, the values `N` calls of
+    /// [`uniform2`](Sampler::uniform2) would return ([`uniform`](Sampler::uniform) takes the
+    /// first number of a pair), without drawing them: from those computed ahead by
+    /// [`prefetch`](Self::prefetch) where they were, else computed now. For code that draws
+    /// the numbers of several samplers at once and then says how many each used
+    /// ([`skip`](Self::skip)).
+    #[inline(always)]
+    pub fn peek<const N: usize>(&self) -> [Vec2; N] {
+        std::array::from_fn(|k| {
+            let pair = self.pair.wrapping_add(k as u32);
+            let ahead = &self.ahead;
+            let offset = pair.wrapping_sub(ahead.first);
+            if offset < ahead.len {
+                ahead.values[offset as usize]
+            } else {
+                let (x, y) = pair_numbers(self.index_rev, pair_seed(self.seed, pair));
+                Vec2::new(x, y)
+            }
+        })
+    }
+
+    /// Moves past the next `pairs` pairs of dimensions, as that many draws would.
+    #[inline(always)]
+    pub fn skip(&mut self, pairs: u32) {
+        self.pair += pairs;
+    }
+
     /// The next pair of dimensions if it was computed ahead, moving on past it.
     #[inline(always)]
     fn next_pair_ahead(&mut self) -> Option<Vec2> {
@@ -457,6 +484,27 @@ mod tests {
         ahead.start_step(2, PREFETCH_PAIRS as u32);
         for _ in 0..3 {
             assert_eq!(plain.uniform2(), ahead.uniform2());
+        }
+    }
+
+    /// `peek` returns what the draws would, from prefetched pairs and beyond them, and
+    /// `skip` moves on as the draws do.
+    #[test]
+    fn peeking_sees_the_draws_and_skipping_makes_them() {
+        for prefetch in [false, true] {
+            let mut sampler = SobolSampler::new(&[9, 4], 21);
+            sampler.start_step(1, 4);
+            if prefetch {
+                SobolSampler::prefetch([&mut sampler]);
+            }
+            let mut drawn = sampler.clone();
+            let peeked: [Vec2; 7] = sampler.peek();
+            assert_eq!(peeked[0].x, drawn.uniform());
+            for pair in &peeked[1..] {
+                assert_eq!(*pair, drawn.uniform2(), "prefetched: {prefetch}");
+            }
+            sampler.skip(7);
+            assert_eq!(sampler.uniform2(), drawn.uniform2());
         }
     }
 }

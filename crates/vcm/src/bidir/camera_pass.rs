@@ -27,7 +27,7 @@ use crate::prefetch::prefetch;
 use crate::roulette::Roulette;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
-use crate::wave::{Ahead, fill_extension_rays, shade_in_parallel};
+use crate::wave::{Ahead, NoLanes, fill_extension_rays, shade_in_parallel};
 
 /// Shadow rays a camera path state holds without a heap allocation: the light sample and
 /// one connection, the default (`--connections 1`).
@@ -156,6 +156,7 @@ impl Wavefront for CameraWavefront<'_> {
                 &mut self.paths,
                 hits,
                 vertex_sampler,
+                &NoLanes,
                 |path, hit| MergingHit::prepare(ctx(path), path, hit),
                 Some(|path: &_, hit: &mut MergingHit, step| hit.look_ahead(ctx(path), step)),
                 |path, hit| {
@@ -168,6 +169,7 @@ impl Wavefront for CameraWavefront<'_> {
                 &mut self.paths,
                 hits,
                 vertex_sampler,
+                &NoLanes,
                 |path, hit| prepare(ctx(path), path, hit),
                 None::<fn(&_, &mut _, _)>,
                 |path, hit| shade(ctx(path), path, hit.map(|(hit, s)| (hit, s, None))),

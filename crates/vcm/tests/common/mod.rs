@@ -369,3 +369,44 @@ pub fn push_floor(positions: &mut Vec<Vec3>, triangles: &mut Vec<[u32; 3]>, half
         .map(|(x, y)| Vec3::new(x * half, y * half, 0.0));
     push_quad(positions, triangles, corners);
 }
+
+/// The scene `name` with every vertex normal leaning about 31° off its triangle's normal,
+/// each vertex its own way (a fixed pseudo-random direction): smooth-shaded geometry whose
+/// shading normals differ from the geometric ones everywhere.
+pub fn with_leaning_normals(name: &str) -> Scene {
+    let loaded = scene_file(name);
+    let mut mesh = loaded.mesh.clone();
+    for t in 0..mesh.triangle_count() {
+        let n = mesh.geometric_normal(t);
+        for &i in &mesh.triangles[t] {
+            let k = i as f32;
+            let jitter = Vec3::new((k * 12.9898).sin(), (k * 78.233).sin(), (k * 37.719).sin());
+            let aside = (jitter - n * n.dot(jitter)).normalize_or_zero();
+            mesh.normals[i as usize] = (n + aside * 0.6).normalize();
+        }
+    }
+    // The Cornell scenes have no punctual lights: the area lights are made again.
+    rebuilt(loaded, mesh, Vec::new())
+}
+
+/// `loaded` assembled again with `mesh` and `punctual_lights` (its area lights made anew from
+/// the emissive triangles).
+pub fn rebuilt(loaded: Scene, mesh: Mesh, punctual_lights: Vec<Light>) -> Scene {
+    let Scene {
+        path,
+        materials,
+        textures,
+        camera,
+        ..
+    } = loaded;
+    let warnings = Vec::new();
+    Scene::new(
+        path,
+        mesh,
+        materials,
+        textures,
+        punctual_lights,
+        camera,
+        warnings,
+    )
+}
