@@ -9,6 +9,8 @@
 pub struct Distribution1D {
     /// `cdf[i]` = sum of the weights before entry `i`; `cdf[len]` = total.
     cdf: Vec<f64>,
+    /// Probability of each entry, (cdf[i + 1] − cdf[i]) / total, computed once.
+    pmf: Vec<f32>,
 }
 
 impl Distribution1D {
@@ -24,7 +26,11 @@ impl Distribution1D {
             }
             cdf.push(sum);
         }
-        (sum > 0.0).then_some(Distribution1D { cdf })
+        let pmf = cdf
+            .windows(2)
+            .map(|w| ((w[1] - w[0]) / sum) as f32)
+            .collect();
+        (sum > 0.0).then_some(Distribution1D { cdf, pmf })
     }
 
     /// Number of entries (including zero-weight ones).
@@ -45,10 +51,7 @@ impl Distribution1D {
     /// Probability of selecting entry `i` (0 for zero weights and out-of-range indices).
     #[inline]
     pub fn pmf(&self, i: usize) -> f32 {
-        if i >= self.len() {
-            return 0.0;
-        }
-        ((self.cdf[i + 1] - self.cdf[i]) / self.total()) as f32
+        self.pmf.get(i).copied().unwrap_or(0.0)
     }
 
     /// Selects an entry with `u` in [0, 1) (clamped into it) and returns it with its
@@ -56,14 +59,27 @@ impl Distribution1D {
     /// entry whose cumulative sum exceeds `u · total`.
     #[inline]
     pub fn sample(&self, u: f32) -> (usize, f32) {
-        let (i, pmf, _) = self.sample_remapped(u);
-        (i, pmf)
+        let (i, _) = self.find(u);
+        (i, self.pmf(i))
     }
 
     /// [`sample`](Self::sample), also returning where `u` fell within the entry's share, a
     /// fresh uniform number in [0, 1) (for choosing a point inside the entry).
     #[inline]
     pub fn sample_remapped(&self, u: f32) -> (usize, f32, f32) {
+        let (i, target) = self.find(u);
+        let (start, end) = (self.cdf[i], self.cdf[i + 1]);
+        let remapped = if end > start {
+            ((target - start) / (end - start)).max(0.0) as f32
+        } else {
+            0.0
+        };
+        (i, self.pmf(i), remapped.min(1.0 - f32::EPSILON / 2.0))
+    }
+
+    /// The entry `u` selects and the point `u · total` it selects it by.
+    #[inline]
+    fn find(&self, u: f32) -> (usize, f64) {
         let target = (u as f64).clamp(0.0, 1.0) * self.total();
         // First i with cdf[i + 1] > target; partition_point over cdf[1..].
         let i = self.cdf[1..].partition_point(|&c| c <= target);
@@ -77,13 +93,7 @@ impl Distribution1D {
                 .find(|&j| self.cdf[j + 1] > self.cdf[j])
                 .unwrap_or(0)
         };
-        let (start, end) = (self.cdf[i], self.cdf[i + 1]);
-        let remapped = if end > start {
-            ((target - start) / (end - start)).max(0.0) as f32
-        } else {
-            0.0
-        };
-        (i, self.pmf(i), remapped.min(1.0 - f32::EPSILON / 2.0))
+        (i, target)
     }
 }
 
