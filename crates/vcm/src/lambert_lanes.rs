@@ -16,14 +16,16 @@
 
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use vcm_scene::Scene;
 use vcm_scene::bsdf::GRAZING_COS;
 use vcm_scene::light::Light;
+use vcm_scene::sampling::SobolSampler;
 
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
 use crate::ray_offset::{barycentric_error, gamma, offset_ray_origins};
+use crate::shade::vertex_sampler;
 use crate::shadow::segment_to;
 use crate::surface_hit::Hit;
 use crate::wave::LaneShading;
@@ -129,10 +131,19 @@ impl LambertLanes {
     fn shade(&self, scene: &Scene, paths: &mut [PathState], group: &[(usize, Hit)]) {
         debug_assert!(!group.is_empty() && group.len() <= LANES);
         let active = Mask::first(group.len());
-        let mut inputs = Inputs::default();
+        for &(i, _) in group {
+            vertex_sampler(&mut paths[i]);
+        }
         // Lanes past the group repeat its last path; their results are dropped.
+        let at = |lane: usize| group[lane.min(group.len() - 1)];
+        let samplers = std::array::from_fn(|lane| &paths[at(lane).0].rng);
+        let numbers: [[[f32; LANES]; 2]; 5] = SobolSampler::peek_lanes(samplers);
+        let mut inputs = Inputs {
+            numbers: numbers.map(|pair| pair.map(F32s)),
+            ..Inputs::default()
+        };
         for lane in 0..LANES {
-            let (i, hit) = group[lane.min(group.len() - 1)];
+            let (i, hit) = at(lane);
             inputs.gather(self, scene, lane, &paths[i], hit);
         }
         let vertex = Vertex::new(&inputs, active);
@@ -193,7 +204,7 @@ struct Inputs {
 }
 
 impl Inputs {
-    /// Reads lane `lane`'s inputs for the path `paths[i]` at `hit`, each once.
+    /// Reads lane `lane`'s inputs for `path` at `hit`, each once, after its numbers.
     #[inline(always)]
     fn gather(
         &mut self,
@@ -216,13 +227,9 @@ impl Inputs {
         self.double_sided[lane] = material.double_sided;
         self.direction.set(lane, path.direction);
         self.throughput.set(lane, path.throughput);
-        let numbers: [Vec2; 5] = path.rng.peek();
-        for (pair, number) in self.numbers.iter_mut().zip(numbers) {
-            (pair[0].0[lane], pair[1].0[lane]) = (number.x, number.y);
-        }
         let (light, pmf) = scene
             .light_sampler
-            .sample(numbers[0].x)
+            .sample(self.numbers[0][0].0[lane])
             .expect("the scene has a light to sample");
         let light = &tables.lights[light];
         self.pick_pmf.0[lane] = pmf;

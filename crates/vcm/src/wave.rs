@@ -38,7 +38,8 @@ pub(crate) trait LaneShading<P>: Sync {
     fn takes(&self, path: &P, hit: Hit) -> bool;
 
     /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`] of
-    /// them, each taken by [`LaneShading::takes`]).
+    /// them, each taken by [`LaneShading::takes`]), whose samplers are where the last
+    /// vertex left them.
     fn shade(&self, paths: &mut [P], group: &[(usize, Hit)]);
 }
 
@@ -69,7 +70,7 @@ impl<P> LaneShading<P> for NoLanes {
 /// reading what the step before it requested, which has arrived by then.
 ///
 /// The vertices `lanes` takes are shaded by it instead, [`LANES`] at a time, once the
-/// others of the chunk are done.
+/// others of the chunk are done; it moves their samplers and computes their numbers itself.
 pub(crate) fn shade_in_parallel<P: Send, T>(
     paths: &mut [P],
     hits: &HitBatch,
@@ -84,16 +85,9 @@ pub(crate) fn shade_in_parallel<P: Send, T>(
         .enumerate()
         .for_each(|(chunk_index, chunk)| {
             let first = chunk_index * SHADE_CHUNK;
-            let hit_paths = chunk.iter_mut().enumerate();
-            SobolSampler::prefetch(
-                hit_paths
-                    .filter(|(i, _)| hits.is_hit(first + i))
-                    .map(|(_, path)| vertex_sampler(path)),
-            );
-            // Filled in place by a plain loop: built with `array::from_fn`, each element went
+            // Filled in place by plain loops: built with `array::from_fn`, each element went
             // through a closure call and a copy of its result.
             let mut chunk_hits = [None; SHADE_CHUNK];
-            let mut prepared: [Option<T>; SHADE_CHUNK] = [const { None }; SHADE_CHUNK];
             let mut in_lanes = [false; SHADE_CHUNK];
             let mut lane_group = [(0, Hit::default()); SHADE_CHUNK];
             let mut lane_count = 0;
@@ -103,11 +97,20 @@ pub(crate) fn shade_in_parallel<P: Send, T>(
                         in_lanes[i] = true;
                         lane_group[lane_count] = (i, hit);
                         lane_count += 1;
-                        continue;
+                    } else {
+                        chunk_hits[i] = Some(hit);
                     }
-                    chunk_hits[i] = Some(hit);
-                    prepared[i] = Some(prepare(path, hit));
                 }
+            }
+            let alone_hits = chunk.iter_mut().zip(&chunk_hits);
+            SobolSampler::prefetch(
+                alone_hits
+                    .filter(|(_, hit)| hit.is_some())
+                    .map(|(path, _)| vertex_sampler(path)),
+            );
+            let mut prepared: [Option<T>; SHADE_CHUNK] = [const { None }; SHADE_CHUNK];
+            for ((path, hit), prepared) in chunk.iter().zip(chunk_hits).zip(&mut prepared) {
+                *prepared = hit.map(|hit| prepare(path, hit));
             }
             if let Some(ahead) = &ahead {
                 // Path k takes its first step, path k − AHEAD_LAG (if any) its second.

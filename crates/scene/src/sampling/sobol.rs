@@ -118,25 +118,19 @@ impl SobolSampler {
         }
     }
 
-    /// The next `N` pairs of dimensions, the values `N` calls of
-    /// [`uniform2`](Sampler::uniform2) would return ([`uniform`](Sampler::uniform) takes the
-    /// first number of a pair), without drawing them: from those computed ahead by
-    /// [`prefetch`](Self::prefetch) where they were, else computed now. For code that draws
-    /// the numbers of several samplers at once and then says how many each used
-    /// ([`skip`](Self::skip)).
+    /// The next `N` pairs of dimensions of each of `samplers`, as `[pair][dimension][lane]`,
+    /// computed together in SIMD lanes: the values `N` calls of each sampler's
+    /// [`uniform2`](Sampler::uniform2) would return ([`uniform`](Sampler::uniform) takes
+    /// the first number of a pair), without drawing them. For code that shades several paths
+    /// at once and then says how many numbers each used ([`skip`](Self::skip)).
     #[inline(always)]
-    pub fn peek<const N: usize>(&self) -> [Vec2; N] {
-        std::array::from_fn(|k| {
-            let pair = self.pair.wrapping_add(k as u32);
-            let ahead = &self.ahead;
-            let offset = pair.wrapping_sub(ahead.first);
-            if offset < ahead.len {
-                ahead.values[offset as usize]
-            } else {
-                let (x, y) = pair_numbers(self.index_rev, pair_seed(self.seed, pair));
-                Vec2::new(x, y)
-            }
-        })
+    pub fn peek_lanes<const N: usize, const L: usize>(
+        samplers: [&SobolSampler; L],
+    ) -> [[[f32; L]; 2]; N] {
+        let seed = samplers.map(|s| s.seed);
+        let index_rev = samplers.map(|s| s.index_rev);
+        let first = samplers.map(|s| s.pair);
+        pairs_in_lanes(seed, index_rev, first, N)
     }
 
     /// Moves past the next `pairs` pairs of dimensions, as that many draws would.
@@ -180,13 +174,7 @@ fn prefetch_lanes(group: &mut [Option<&mut SobolSampler>]) {
         }
     }
     let len = len.min(PREFETCH_PAIRS);
-    let mut values = [[[0.0f32; LANES]; 2]; PREFETCH_PAIRS];
-    for (k, [x, y]) in values.iter_mut().enumerate().take(len) {
-        for lane in 0..LANES {
-            let pair = first[lane].wrapping_add(k as u32);
-            (x[lane], y[lane]) = pair_numbers(index_rev[lane], pair_seed(seed[lane], pair));
-        }
-    }
+    let values: [[[f32; LANES]; 2]; PREFETCH_PAIRS] = pairs_in_lanes(seed, index_rev, first, len);
     for (lane, slot) in group.iter_mut().enumerate() {
         if let Some(sampler) = slot.take() {
             sampler.ahead = PairsAhead {
@@ -196,6 +184,26 @@ fn prefetch_lanes(group: &mut [Option<&mut SobolSampler>]) {
             };
         }
     }
+}
+
+/// Pairs `first[lane] .. first[lane] + len` (`len` ≤ `N`; the rest left zero) of the samples
+/// with seeds `seed` and reversed indices `index_rev`, as `[pair][dimension][lane]`, lane
+/// by lane in loops the compiler vectorizes.
+#[inline(always)]
+fn pairs_in_lanes<const N: usize, const L: usize>(
+    seed: [u32; L],
+    index_rev: [u32; L],
+    first: [u32; L],
+    len: usize,
+) -> [[[f32; L]; 2]; N] {
+    let mut values = [[[0.0f32; L]; 2]; N];
+    for (k, [x, y]) in values.iter_mut().enumerate().take(len) {
+        for lane in 0..L {
+            let pair = first[lane].wrapping_add(k as u32);
+            (x[lane], y[lane]) = pair_numbers(index_rev[lane], pair_seed(seed[lane], pair));
+        }
+    }
+    values
 }
 
 impl Sampler for SobolSampler {
@@ -487,24 +495,25 @@ mod tests {
         }
     }
 
-    /// `peek` returns what the draws would, from prefetched pairs and beyond them, and
-    /// `skip` moves on as the draws do.
+    /// `peek_lanes` returns what each sampler's draws would, from prefetched pairs and beyond
+    /// them, and `skip` moves on as the draws do.
     #[test]
-    fn peeking_sees_the_draws_and_skipping_makes_them() {
-        for prefetch in [false, true] {
-            let mut sampler = SobolSampler::new(&[9, 4], 21);
-            sampler.start_step(1, 4);
-            if prefetch {
-                SobolSampler::prefetch([&mut sampler]);
-            }
+    fn peeking_in_lanes_sees_the_draws_and_skipping_makes_them() {
+        let mut samplers: [SobolSampler; 3] =
+            std::array::from_fn(|i| SobolSampler::new(&[9, i as u64], 21 + i as u64));
+        for (i, sampler) in samplers.iter_mut().enumerate() {
+            sampler.start_step(1 + i as u32, 4);
+        }
+        SobolSampler::prefetch(samplers[1..].iter_mut());
+        let peeked: [[[f32; 3]; 2]; 7] = SobolSampler::peek_lanes(samplers.each_ref());
+        for (lane, sampler) in samplers.iter_mut().enumerate() {
             let mut drawn = sampler.clone();
-            let peeked: [Vec2; 7] = sampler.peek();
-            assert_eq!(peeked[0].x, drawn.uniform());
+            assert_eq!(peeked[0][0][lane], drawn.uniform(), "lane {lane}");
             for pair in &peeked[1..] {
-                assert_eq!(*pair, drawn.uniform2(), "prefetched: {prefetch}");
+                assert_eq!(Vec2::new(pair[0][lane], pair[1][lane]), drawn.uniform2());
             }
             sampler.skip(7);
-            assert_eq!(sampler.uniform2(), drawn.uniform2());
+            assert_eq!(sampler.uniform2(), drawn.uniform2(), "lane {lane}");
         }
     }
 }
