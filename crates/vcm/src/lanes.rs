@@ -33,6 +33,42 @@ pub(crate) struct Vec3s {
     pub z: F32s,
 }
 
+/// The arithmetic formulas written once for one path (`f32`) and for [`LANES`] paths
+/// ([`F32s`]) need: each operation is the `f32` one, lane by lane.
+pub(crate) trait Real:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    /// `x` (in every lane).
+    fn splat(x: f32) -> Self;
+
+    /// [`f32::abs`] (in every lane).
+    fn abs(self) -> Self;
+}
+
+impl Real for f32 {
+    #[inline(always)]
+    fn splat(x: f32) -> f32 {
+        x
+    }
+
+    #[inline(always)]
+    fn abs(self) -> f32 {
+        f32::abs(self)
+    }
+}
+
+impl Real for F32s {
+    #[inline(always)]
+    fn splat(x: f32) -> F32s {
+        F32s::splat(x)
+    }
+
+    #[inline(always)]
+    fn abs(self) -> F32s {
+        F32s::abs(self)
+    }
+}
+
 #[inline(always)]
 fn map<T: Copy, U: Copy + Default>(a: [T; LANES], f: impl Fn(T) -> U) -> [U; LANES] {
     let mut out = [U::default(); LANES];
@@ -168,6 +204,12 @@ impl Mask {
     #[inline(always)]
     pub fn first(count: usize) -> Mask {
         Mask::from_bools(std::array::from_fn(|lane| lane < count))
+    }
+
+    /// Each lane's truth value.
+    #[inline(always)]
+    pub fn bools(self) -> [bool; LANES] {
+        map(self.0, |m| m != 0)
     }
 
     /// Whether lane `lane` is set.

@@ -49,7 +49,7 @@ pub mod hash_grid;
 mod huge_pages;
 pub mod image_io;
 mod integrator;
-mod lambert_lanes;
+mod lambert;
 mod lanes;
 pub mod light_vertex_cache;
 mod medium;

@@ -13,7 +13,8 @@ use vcm_traversal::{HitBatch, RayBatch, Traversal};
 use crate::error::RenderError;
 use crate::film::Film;
 use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
-use crate::lambert_lanes::{LambertLanes, LambertShading};
+use crate::lambert::path_tracing::LambertShading;
+use crate::lambert::{LANES_PART, LANES_RUN, LambertLanes};
 use crate::path_state::{PathState, ShadowRay};
 use crate::shade::{ShadeContext, shade, vertex_sampler};
 use crate::surface_hit::SurfaceHit;
@@ -153,17 +154,13 @@ impl Integrator for PathTracer {
 
     fn decisions(&self) -> Vec<Decision> {
         let reason = "path tracing neither connects nor merges";
-        let lanes = "plain Lambert vertices in SIMD lanes";
         vec![
             Decision::left_out("light paths", reason),
             Decision::left_out("light vertex cache", reason),
             Decision::left_out("merging and hash grid", reason),
             match &self.lambert_lanes {
-                Ok(_) => Decision::runs(
-                    lanes,
-                    "some material is plain Lambert and every light is a constant area light",
-                ),
-                Err(why) => Decision::left_out(lanes, *why),
+                Ok(_) => Decision::runs(LANES_PART, LANES_RUN),
+                Err(why) => Decision::left_out(LANES_PART, *why),
             },
         ]
     }

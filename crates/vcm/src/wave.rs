@@ -37,6 +37,11 @@ pub(crate) trait LaneShading<P>: Sync {
     /// Whether the vertex `path` reached at `hit` is shaded in lanes.
     fn takes(&self, path: &P, hit: Hit) -> bool;
 
+    /// Starts loading what shading a vertex it takes will read from far away in memory,
+    /// when its chunk is classified (before the chunk's other paths are shaded): nothing,
+    /// unless the integrator has such reads.
+    fn prepare(&self, _path: &mut P, _hit: Hit) {}
+
     /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`] of
     /// them, each taken by [`LaneShading::takes`]), whose samplers are where the last
     /// vertex left them.
@@ -91,9 +96,10 @@ pub(crate) fn shade_in_parallel<P: Send, T>(
             let mut in_lanes = [false; SHADE_CHUNK];
             let mut lane_group = [(0, Hit::default()); SHADE_CHUNK];
             let mut lane_count = 0;
-            for (i, path) in chunk.iter().enumerate() {
+            for (i, path) in chunk.iter_mut().enumerate() {
                 if let Some(hit) = Hit::from_batch(hits, first + i) {
                     if lanes.takes(path, hit) {
+                        lanes.prepare(path, hit);
                         in_lanes[i] = true;
                         lane_group[lane_count] = (i, hit);
                         lane_count += 1;

@@ -1,70 +1,125 @@
-//! The path tracer shades vertices on plain Lambertian surfaces under area lights in SIMD
-//! lanes; every other vertex goes through the general BSDF. The lanes perform the general
-//! vertex's operations in the same order, so a render gives the same film with them and
-//! without them ([`ShadingPlan::lambert_lanes`] off), bit for bit: on the Cornell scenes,
-//! with leaning shading normals, with a path length limit, and on a scene of one-sided and
-//! double-sided surfaces seen from both sides under two lights of different power, beside
-//! glossy and emitting ones.
+//! Every integrator shades vertices on plain Lambertian surfaces under area lights in SIMD
+//! lanes where it can (the path tracer's vertices, the VCM family's light vertices, and its
+//! camera vertices where nothing merges); every other vertex goes through the general BSDF.
+//! The lanes perform the general vertex's operations in the same order, so a render gives
+//! the same film with them and without them ([`ShadingPlan::lambert_lanes`] off), bit for
+//! bit: on the Cornell scenes, with leaning shading normals, with path length limits,
+//! several samples per frame and several connections per camera vertex, and on a scene of
+//! one-sided and double-sided surfaces seen from both sides under two lights of different
+//! power, beside glossy and emitting ones.
 
 mod common;
 
+use common::EVERY_ALGORITHM;
 use glam::{Vec3, Vec4};
-use vcm::{Film, Integrator, PtSettings};
-use vcm_scene::{Material, Scene};
+use vcm::{Algorithm, Film, Integrator, PtSettings, Schedule, VcmSettings};
+use vcm_scene::{Material, Scene, ShadingPlan};
 
 const SIZE: u32 = 40;
 const FRAMES: u32 = 3;
 const LANES_PART: &str = "plain Lambert vertices in SIMD lanes";
 
-/// The mean film of `FRAMES` frames of the path tracer, and whether it shaded in lanes.
-fn render(scene: Scene, settings: PtSettings) -> (Vec<Vec3>, bool) {
-    let mut tracer = common::path_tracer(scene, settings);
-    let decisions = tracer.decisions();
+/// How an integrator renders besides its algorithm.
+#[derive(Clone, Copy)]
+struct Options {
+    max_depth: Option<u32>,
+    samples_per_frame: u32,
+    connections: u32,
+}
+
+const DEFAULT: Options = Options {
+    max_depth: None,
+    samples_per_frame: 1,
+    connections: 1,
+};
+
+/// The path tracer (`None`) or `algorithm` over `scene`, merging within 5% of the scene's
+/// radius.
+fn integrator(scene: Scene, algorithm: Option<Algorithm>, options: Options) -> Box<dyn Integrator> {
+    let Options {
+        max_depth,
+        samples_per_frame,
+        connections,
+    } = options;
+    let mut integrator: Box<dyn Integrator> = match algorithm {
+        None => Box::new(common::path_tracer(
+            scene,
+            PtSettings {
+                seed: 3,
+                max_depth,
+                ..common::pt_settings(SIZE, SIZE)
+            },
+        )),
+        Some(algorithm) => Box::new(common::vcm(
+            scene,
+            VcmSettings {
+                seed: 3,
+                max_depth,
+                connections,
+                radius_fraction: 0.05,
+                ..common::vcm_settings(algorithm, SIZE, SIZE)
+            },
+        )),
+    };
+    let schedule = Schedule {
+        samples_per_frame,
+        ..Schedule::default()
+    };
+    integrator.set_schedule(schedule).unwrap();
+    integrator
+}
+
+/// The mean film of `FRAMES` frames, and whether the integrator shaded in lanes.
+fn render(mut integrator: Box<dyn Integrator>) -> (Vec<Vec3>, bool) {
+    let decisions = integrator.decisions();
     let lanes = decisions.iter().find(|d| d.part == LANES_PART);
-    let in_lanes = lanes.expect("the path tracer decides on lanes").runs;
+    let in_lanes = lanes.expect("the integrator decides on lanes").runs;
     let mut film = Film::new(SIZE, SIZE);
+    let samples = integrator.samples_per_frame();
     for frame in 0..FRAMES {
-        tracer.render_frame(&mut film, frame);
+        integrator.render_frame(&mut film, frame * samples);
     }
     (film.mean(), in_lanes)
 }
 
-/// Renders `scene` with and without lanes and asserts the films are the same, bit for bit.
-fn assert_lanes_change_nothing(name: &str, scene: Scene, settings: PtSettings) {
+/// Renders `scene` with every algorithm, with and without lanes, and asserts the films are
+/// the same, bit for bit.
+fn assert_lanes_change_nothing(
+    name: &str,
+    scene: &Scene,
+    algorithms: &[Option<Algorithm>],
+    options: Options,
+) {
     let without = Scene {
-        shading: vcm_scene::ShadingPlan {
+        shading: ShadingPlan {
             lambert_lanes: false,
             ..scene.shading
         },
         ..scene.clone()
     };
-    let (with_lanes, ran) = render(scene, settings);
-    let (general, ran_without) = render(without, settings);
-    assert!(
-        ran && !ran_without,
-        "{name}: lanes ran {ran}, {ran_without}"
-    );
-    assert!(
-        with_lanes.iter().any(|p| p.max_element() > 0.0),
-        "{name}: black"
-    );
-    let bits = |film: &[Vec3]| -> Vec<[u32; 3]> {
-        film.iter()
-            .map(|p| p.to_array().map(f32::to_bits))
-            .collect()
-    };
-    let differing = bits(&with_lanes)
-        .iter()
-        .zip(bits(&general))
-        .filter(|(a, b)| **a != *b)
-        .count();
-    assert_eq!(differing, 0, "{name}: pixels differ");
-}
-
-fn settings() -> PtSettings {
-    PtSettings {
-        seed: 3,
-        ..common::pt_settings(SIZE, SIZE)
+    for &algorithm in algorithms {
+        let (with_lanes, ran) = render(integrator(scene.clone(), algorithm, options));
+        let (general, ran_without) = render(integrator(without.clone(), algorithm, options));
+        let label = format!("{name}, {algorithm:?}");
+        assert!(
+            ran && !ran_without,
+            "{label}: lanes ran {ran}, {ran_without}"
+        );
+        assert!(
+            with_lanes.iter().any(|p| p.max_element() > 0.0),
+            "{label}: black"
+        );
+        let bits = |film: &[Vec3]| -> Vec<[u32; 3]> {
+            film.iter()
+                .map(|p| p.to_array().map(f32::to_bits))
+                .collect()
+        };
+        let differing = bits(&with_lanes)
+            .iter()
+            .zip(bits(&general))
+            .filter(|(a, b)| **a != *b)
+            .count();
+        assert_eq!(differing, 0, "{label}: pixels differ");
     }
 }
 
@@ -76,21 +131,41 @@ fn the_cornell_scenes_render_the_same_in_lanes() {
         "cornell-specular.gltf",
         "cornell-water.gltf",
     ] {
-        assert_lanes_change_nothing(name, common::scene_file(name), settings());
+        let scene = common::scene_file(name);
+        assert_lanes_change_nothing(name, &scene, &EVERY_ALGORITHM, DEFAULT);
     }
 }
 
 #[test]
-fn leaning_shading_normals_and_a_length_limit_render_the_same_in_lanes() {
+fn leaning_shading_normals_and_length_limits_render_the_same_in_lanes() {
     let leaning = common::with_leaning_normals("cornell-box.gltf");
-    assert_lanes_change_nothing("leaning normals", leaning, settings());
-    for max_depth in [1, 2, 4] {
-        let limited = PtSettings {
+    assert_lanes_change_nothing("leaning normals", &leaning, &EVERY_ALGORITHM, DEFAULT);
+    let connecting = [None, Some(Algorithm::Bpt), Some(Algorithm::Vcm)];
+    let scene = common::scene_file("cornell-box.gltf");
+    for max_depth in [1, 2, 3, 4] {
+        let limited = Options {
             max_depth: Some(max_depth),
-            ..settings()
+            ..DEFAULT
         };
-        let scene = common::scene_file("cornell-box.gltf");
-        assert_lanes_change_nothing(&format!("max depth {max_depth}"), scene, limited);
+        let name = format!("max depth {max_depth}");
+        assert_lanes_change_nothing(&name, &scene, &connecting, limited);
+    }
+}
+
+/// Paths of several iterations share lane groups (each its own cache), and camera vertices
+/// connect to several light vertices each.
+#[test]
+fn several_samples_per_frame_and_connections_render_the_same_in_lanes() {
+    let scene = common::scene_file("cornell-box.gltf");
+    let connecting = [Some(Algorithm::Bpt), Some(Algorithm::Vcm)];
+    for (samples_per_frame, connections) in [(3, 1), (1, 3), (2, 2)] {
+        let options = Options {
+            samples_per_frame,
+            connections,
+            ..DEFAULT
+        };
+        let name = format!("{samples_per_frame} samples per frame, {connections} connections");
+        assert_lanes_change_nothing(&name, &scene, &connecting, options);
     }
 }
 
@@ -181,25 +256,27 @@ fn sides() -> Scene {
 
 #[test]
 fn one_and_two_sided_surfaces_under_two_lights_render_the_same_in_lanes() {
-    assert_lanes_change_nothing("sides", sides(), settings());
+    assert_lanes_change_nothing("sides", &sides(), &EVERY_ALGORITHM, DEFAULT);
 }
 
 /// A light other than a constant area light keeps every vertex on the general BSDF.
 #[test]
 fn a_point_light_leaves_the_lanes_out() {
-    let mut scene = common::scene_file("cornell-box.gltf");
+    let scene = common::scene_file("cornell-box.gltf");
     let bulb = vcm_scene::light::Light::Point(vcm_scene::light::PointLight {
         position: Vec3::new(0.0, 1.0, 0.0),
         intensity: Vec3::ONE,
     });
-    scene = common::rebuilt(scene.clone(), scene.mesh.clone(), vec![bulb]);
-    let tracer = common::path_tracer(scene, settings());
-    let decisions = tracer.decisions();
-    let lanes = decisions.iter().find(|d| d.part == LANES_PART).unwrap();
-    assert!(!lanes.runs);
-    assert!(
-        lanes.reason.contains("constant, uncut area light"),
-        "{}",
-        lanes.reason
-    );
+    let scene = common::rebuilt(scene.clone(), scene.mesh.clone(), vec![bulb]);
+    for algorithm in [None, Some(Algorithm::Vcm)] {
+        let integrator = integrator(scene.clone(), algorithm, DEFAULT);
+        let decisions = integrator.decisions();
+        let lanes = decisions.iter().find(|d| d.part == LANES_PART).unwrap();
+        assert!(!lanes.runs);
+        assert!(
+            lanes.reason.contains("constant, uncut area light"),
+            "{}",
+            lanes.reason
+        );
+    }
 }

@@ -29,6 +29,8 @@ use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::wave::{Ahead, NoLanes, fill_extension_rays, shade_in_parallel};
 
+mod lanes;
+
 /// Shadow rays a camera path state holds without a heap allocation: the light sample and
 /// one connection, the default (`--connections 1`).
 const INLINE_SHADOW_RAYS: usize = 2;
@@ -169,7 +171,7 @@ impl Wavefront for CameraWavefront<'_> {
                 &mut self.paths,
                 hits,
                 vertex_sampler,
-                &NoLanes,
+                &lanes::CameraLanes::new(iterations),
                 |path, hit| prepare(ctx(path), path, hit),
                 None::<fn(&_, &mut _, _)>,
                 |path, hit| shade(ctx(path), path, hit.map(|(hit, s)| (hit, s, None))),

@@ -21,7 +21,9 @@ use crate::path_state::ShadowRay;
 use crate::roulette::Roulette;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
-use crate::wave::{NoLanes, fill_extension_rays, shade_in_parallel};
+use crate::wave::{fill_extension_rays, shade_in_parallel};
+
+mod lanes;
 
 /// Pairs of sample dimensions a light vertex draws (a lobe, a direction and Russian
 /// roulette), as many as the emission draws (a light, a point and a direction).
@@ -286,7 +288,7 @@ impl Wavefront for LightWavefront<'_> {
             &mut self.paths,
             hits,
             vertex_sampler,
-            &NoLanes,
+            &lanes::LightLanes { iterations, splat },
             |_, hit| SurfaceHit::at(scene, hit),
             None::<fn(&_, &mut _, _)>,
             |path, hit| shade(&iterations[path.sample as usize], path, hit, splat),

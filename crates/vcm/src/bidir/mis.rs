@@ -26,25 +26,29 @@
 //!   subpath's starting d_VM the emission hit is kept while connections are dropped
 //!   ([`MisFactors::hit`], [`MisFactors::connections`]).
 
+#[cfg(doc)]
+use crate::lanes::F32s;
+use crate::lanes::Real;
+
 /// Per-frame constants of the weights: which technique families exist and how many samples
-/// each takes.
+/// each takes (`T`: one frame's, or [`F32s`] of the frames of a lane group's paths).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct MisFactors {
+pub(crate) struct MisFactors<T = f32> {
     /// η_VCM = π r² N_p when merging is used, else 0: the weight of a merge relative to a
     /// connection or an emission hit.
-    pub merge: f32,
+    pub merge: T,
     /// 1 / η_VCM when connections are used (and merging too), else 0: the weight of a
     /// connection relative to a merge.
-    pub connect: f32,
+    pub connect: T,
     /// 1 / η_VCM when merging is used, else 0: the weight of an emission hit relative to a
     /// merge (it starts a light subpath's d_VM).
-    pub hit: f32,
+    pub hit: T,
     /// 1 when connections (light samples, connections to light vertices, light tracing
     /// splats) are used, else 0: whether d_VCM, which stands for them, enters d_VC and the
     /// weight of an emission hit.
-    pub connections: f32,
+    pub connections: T,
     /// N_p, the number of light paths per frame (the sample count of light tracing splats).
-    pub light_paths: f32,
+    pub light_paths: T,
 }
 
 impl MisFactors {
@@ -66,15 +70,16 @@ impl MisFactors {
     }
 }
 
-/// The recursive MIS quantities a subpath carries to its next vertex (thesis Fig. 4.4).
+/// The recursive MIS quantities a subpath carries to its next vertex (thesis Fig. 4.4), of
+/// one subpath (`T = f32`) or of a lane group's ([`F32s`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct SubpathMis {
+pub(crate) struct SubpathMis<T = f32> {
     /// d_VCM: the reverse density of the vertex's own sampling, relative to the forward one.
-    pub d_vcm: f32,
+    pub d_vcm: T,
     /// d_VC: the partial weight sum of the connection techniques along the subpath.
-    pub d_vc: f32,
+    pub d_vc: T,
     /// d_VM: the partial weight sum of the merging techniques along the subpath.
-    pub d_vm: f32,
+    pub d_vm: T,
 }
 
 impl SubpathMis {
@@ -114,18 +119,20 @@ impl SubpathMis {
             d_vm: d_vc * factors.hit,
         }
     }
+}
 
+impl<T: Real> SubpathMis<T> {
     /// Completes the quantities on arriving at the next vertex: the squared segment length
     /// (`None` for the first segment of a light at infinity, whose pdfs are in solid angle)
     /// and the cosine at the new vertex.
-    pub fn arrive(&mut self, distance_sq: Option<f32>, cos_in: f32) {
+    pub fn arrive(&mut self, distance_sq: Option<T>, cos_in: T) {
         if let Some(d2) = distance_sq {
-            self.d_vcm *= d2;
+            self.d_vcm = self.d_vcm * d2;
         }
-        let inv_cos = 1.0 / cos_in.abs();
-        self.d_vcm *= inv_cos;
-        self.d_vc *= inv_cos;
-        self.d_vm *= inv_cos;
+        let inv_cos = T::splat(1.0) / cos_in.abs();
+        self.d_vcm = self.d_vcm * inv_cos;
+        self.d_vc = self.d_vc * inv_cos;
+        self.d_vm = self.d_vm * inv_cos;
     }
 
     /// Updates the quantities for a scattering at the current vertex (eqs. 34–36, 53–55):
@@ -133,23 +140,23 @@ impl SubpathMis {
     /// of the sampled direction and of the reverse one.
     pub fn scatter(
         &mut self,
-        cos_out: f32,
-        pdf_fwd: f32,
-        pdf_rev: f32,
+        cos_out: T,
+        pdf_fwd: T,
+        pdf_rev: T,
         specular: bool,
-        factors: &MisFactors,
+        factors: &MisFactors<T>,
     ) {
         let ratio = cos_out.abs() / pdf_fwd;
         if specular {
-            self.d_vcm = 0.0;
-            self.d_vc *= ratio * pdf_rev;
-            self.d_vm *= ratio * pdf_rev;
+            self.d_vcm = T::splat(0.0);
+            self.d_vc = self.d_vc * (ratio * pdf_rev);
+            self.d_vm = self.d_vm * (ratio * pdf_rev);
         } else {
             let d_vc =
                 ratio * (self.d_vc * pdf_rev + self.d_vcm * factors.connections + factors.merge);
-            let d_vm = ratio * (self.d_vm * pdf_rev + self.d_vcm * factors.connect + 1.0);
+            let d_vm = ratio * (self.d_vm * pdf_rev + self.d_vcm * factors.connect + T::splat(1.0));
             *self = SubpathMis {
-                d_vcm: 1.0 / pdf_fwd,
+                d_vcm: T::splat(1.0) / pdf_fwd,
                 d_vc,
                 d_vm,
             };
@@ -172,73 +179,73 @@ pub(crate) fn emission_hit_weight(
 
 /// The pdfs of a light sample (next event estimation) that its weight needs.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct LightSamplePdfs {
+pub(crate) struct LightSamplePdfs<T = f32> {
     /// Solid-angle pdf of the sample at the receiver, with the light's selection probability.
-    pub direct_pdf_w: f32,
+    pub direct_pdf_w: T,
     /// Pdf of emitting the same segment from the light, with the selection probability.
-    pub emission_pdf_w: f32,
+    pub emission_pdf_w: T,
     /// Emission cosine at the light (1 for point-like and distant lights).
-    pub cos_at_light: f32,
+    pub cos_at_light: T,
     /// Cosine at the receiver toward the light (geometric normal).
-    pub cos_at_receiver: f32,
+    pub cos_at_receiver: T,
     /// BSDF pdf of sampling the light direction (0 for delta lights, which no BSDF sample hits).
-    pub bsdf_fwd_pdf_w: f32,
+    pub bsdf_fwd_pdf_w: T,
     /// BSDF pdf of sampling the camera direction from the light direction.
-    pub bsdf_rev_pdf_w: f32,
+    pub bsdf_rev_pdf_w: T,
 }
 
 /// Weight of a light sample taken at a camera vertex (eqs. 44–45).
-pub(crate) fn light_sample_weight(
-    camera: &SubpathMis,
-    pdfs: &LightSamplePdfs,
-    factors: &MisFactors,
-) -> f32 {
+pub(crate) fn light_sample_weight<T: Real>(
+    camera: &SubpathMis<T>,
+    pdfs: &LightSamplePdfs<T>,
+    factors: &MisFactors<T>,
+) -> T {
     let w_light = pdfs.bsdf_fwd_pdf_w / pdfs.direct_pdf_w;
     let w_camera = (pdfs.emission_pdf_w * pdfs.cos_at_receiver
         / (pdfs.direct_pdf_w * pdfs.cos_at_light))
         * (factors.merge + camera.d_vcm + camera.d_vc * pdfs.bsdf_rev_pdf_w);
-    1.0 / (w_light + 1.0 + w_camera)
+    T::splat(1.0) / (w_light + T::splat(1.0) + w_camera)
 }
 
 /// Weight of a light vertex connected to the camera (a light tracing splat, eqs. 46–47):
 /// `camera_pdf_a` is the area pdf of the camera sampling the light vertex, `bsdf_rev_pdf_w`
 /// the light vertex's BSDF pdf of sampling its incoming direction from the camera direction.
-pub(crate) fn camera_connection_weight(
-    light: &SubpathMis,
-    camera_pdf_a: f32,
-    bsdf_rev_pdf_w: f32,
-    factors: &MisFactors,
-) -> f32 {
+pub(crate) fn camera_connection_weight<T: Real>(
+    light: &SubpathMis<T>,
+    camera_pdf_a: T,
+    bsdf_rev_pdf_w: T,
+    factors: &MisFactors<T>,
+) -> T {
     let w_light = (camera_pdf_a / factors.light_paths)
         * (factors.merge + light.d_vcm + light.d_vc * bsdf_rev_pdf_w);
-    1.0 / (w_light + 1.0)
+    T::splat(1.0) / (w_light + T::splat(1.0))
 }
 
 /// The pdfs at both ends of a connection between a camera vertex and a light vertex.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct ConnectionPdfs {
+pub(crate) struct ConnectionPdfs<T = f32> {
     /// Area pdf of the camera vertex's BSDF sampling the light vertex.
-    pub camera_fwd_pdf_a: f32,
+    pub camera_fwd_pdf_a: T,
     /// The camera vertex's BSDF pdf of sampling its incoming direction from the connection.
-    pub camera_rev_pdf_w: f32,
+    pub camera_rev_pdf_w: T,
     /// Area pdf of the light vertex's BSDF sampling the camera vertex.
-    pub light_fwd_pdf_a: f32,
+    pub light_fwd_pdf_a: T,
     /// The light vertex's BSDF pdf of sampling its incoming direction from the connection.
-    pub light_rev_pdf_w: f32,
+    pub light_rev_pdf_w: T,
 }
 
 /// Weight of a connection between a camera vertex and a light vertex (eqs. 40–41).
-pub(crate) fn connection_weight(
-    camera: &SubpathMis,
-    light: &SubpathMis,
-    pdfs: &ConnectionPdfs,
-    factors: &MisFactors,
-) -> f32 {
+pub(crate) fn connection_weight<T: Real>(
+    camera: &SubpathMis<T>,
+    light: &SubpathMis<T>,
+    pdfs: &ConnectionPdfs<T>,
+    factors: &MisFactors<T>,
+) -> T {
     let w_light =
         pdfs.camera_fwd_pdf_a * (factors.merge + light.d_vcm + light.d_vc * pdfs.light_rev_pdf_w);
     let w_camera =
         pdfs.light_fwd_pdf_a * (factors.merge + camera.d_vcm + camera.d_vc * pdfs.camera_rev_pdf_w);
-    1.0 / (w_light + 1.0 + w_camera)
+    T::splat(1.0) / (w_light + T::splat(1.0) + w_camera)
 }
 
 /// Weight of merging a camera vertex with a light vertex (eqs. 38–39): `camera_fwd_pdf_w` is

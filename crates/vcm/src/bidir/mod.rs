@@ -45,6 +45,7 @@ use crate::error::RenderError;
 use crate::film::Film;
 use crate::hash_grid::HashGrid;
 use crate::integrator::{FrameStats, Integrator, Schedule};
+use crate::lambert::{LANES_PART, LANES_RUN, LambertLanes};
 use crate::light_vertex_cache::LightVertexCache;
 use light_pass::ResultBuffers;
 use mis::MisFactors;
@@ -172,6 +173,8 @@ pub(crate) struct FrameContext<'a> {
     pub factors: MisFactors,
     /// The parts of the frame that run.
     pub plan: &'a BidirPlan,
+    /// Shading in SIMD lanes at plain Lambert vertices, where the scene allows it.
+    pub lanes: Option<&'a LambertLanes>,
 }
 
 impl FrameContext<'_> {
@@ -199,6 +202,8 @@ pub struct Vcm {
     grids: Vec<HashGrid>,
     /// The light pass workers' result lists, reused from frame to frame.
     light_buffers: ResultBuffers,
+    /// Shading in SIMD lanes at plain Lambert vertices, or why the scene allows none.
+    lambert_lanes: Result<LambertLanes, &'static str>,
 }
 
 impl Vcm {
@@ -231,6 +236,7 @@ impl Vcm {
         let plan = BidirPlan::new(settings.algorithm, &scene.features, settings.prune);
         let mut vcm = Vcm {
             projection: scene.camera.projection(width, height),
+            lambert_lanes: LambertLanes::for_scene(&scene),
             scene,
             traversal,
             settings,
@@ -304,6 +310,7 @@ impl Vcm {
                         light_paths,
                     ),
                     plan: &self.plan,
+                    lanes: self.lambert_lanes.as_ref().ok(),
                 }
             })
             .collect()
@@ -322,6 +329,7 @@ impl Vcm {
             radius: 1.0,
             factors: MisFactors::new(false, false, 1.0, 1.0),
             plan: &self.plan,
+            lanes: self.lambert_lanes.as_ref().ok(),
         };
         let scheduler = self.schedule.scheduler;
         let vertices = light_pass::count_vertices(ctx, scheduler, PREPROCESS_LIGHT_PATHS);
@@ -410,8 +418,14 @@ impl Integrator for Vcm {
 
     /// Light paths, the light vertex cache, light tracing splats, merging and the hash grid.
     fn decisions(&self) -> Vec<Decision> {
-        self.plan
-            .decisions(self.settings.algorithm, &self.scene.features)
+        let mut decisions = self
+            .plan
+            .decisions(self.settings.algorithm, &self.scene.features);
+        decisions.push(match &self.lambert_lanes {
+            Ok(_) => Decision::runs(LANES_PART, LANES_RUN),
+            Err(why) => Decision::left_out(LANES_PART, *why),
+        });
+        decisions
     }
 
     /// Both passes run under `schedule.scheduler`; `schedule.samples_per_frame` iterations

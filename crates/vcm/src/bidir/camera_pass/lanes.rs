@@ -1,0 +1,372 @@
+//! The camera vertex ([`super::shade`]) on plain Lambert surfaces where nothing merges, in
+//! lanes ([`crate::lambert`]): the light sample and the connections to cached light
+//! vertices, each weighted by VCM's MIS ([`crate::bidir::mis`]), and the continuation with
+//! the MIS quantities' update and Russian roulette.
+
+use glam::Vec3;
+use vcm_scene::bsdf::TransportMode;
+use vcm_scene::sampling::SobolSampler;
+
+use super::{CachePicks, CameraContext, CameraPathState, vertex_sampler};
+use crate::bidir::Algorithm;
+use crate::bidir::mis::{
+    ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight, light_sample_weight,
+};
+use crate::lambert::LambertLanes;
+use crate::lambert::light_sample::{LightInputs, illuminate};
+use crate::lambert::surface::{SurfaceInputs, Vertex};
+use crate::lanes::{F32s, LANES, Mask, Vec3s};
+use crate::light_vertex_cache::LightVertex;
+use crate::path_state::ShadowRay;
+use crate::prefetch::prefetch;
+use crate::shadow::segment_to;
+use crate::surface_hit::{Hit, SurfaceHit};
+use crate::wave::LaneShading;
+
+/// The vertex's numbers, a pair each: the cache picks' stream, light pick (first number),
+/// point on the light, lobe (unused: there is one), direction, Russian roulette (first
+/// number).
+const PAIRS: usize = 6;
+
+/// The camera pass's vertices in lanes, where the frame and the scene allow them.
+pub(super) struct CameraLanes<'a> {
+    iterations: &'a [CameraContext<'a>],
+    tables: Option<&'a LambertLanes>,
+}
+
+impl<'a> CameraLanes<'a> {
+    /// The lanes of a camera pass over `iterations`: where the scene allows them and the
+    /// algorithm connects without merging (light tracing's camera paths only find emission).
+    pub fn new(iterations: &'a [CameraContext<'a>]) -> CameraLanes<'a> {
+        let ctx = &iterations[0];
+        let plan = ctx.plan;
+        let algorithm = ctx.settings.algorithm;
+        let applies = plan.connects && !plan.merges && algorithm != Algorithm::LightTracing;
+        CameraLanes {
+            iterations,
+            tables: ctx.lanes.filter(|_| applies),
+        }
+    }
+}
+
+impl LaneShading<CameraPathState> for CameraLanes<'_> {
+    /// A plain Lambert surface that does not emit, with room left for another segment.
+    #[inline]
+    fn takes(&self, path: &CameraPathState, hit: Hit) -> bool {
+        self.tables.is_some_and(|tables| {
+            let ctx = &self.iterations[path.sample as usize];
+            path.walk.segments < ctx.max_segments() && tables.takes_surface(ctx.scene, hit)
+        })
+    }
+
+    /// The light vertices the vertex connects to start loading (as [`super::prepare`]).
+    fn prepare(&self, path: &mut CameraPathState, _: Hit) {
+        let ctx = &self.iterations[path.sample as usize];
+        let picks = CachePicks::next(vertex_sampler(path), ctx);
+        let vertices = ctx.cache.vertices();
+        picks.indices().for_each(|i| prefetch(&vertices[i]));
+    }
+
+    fn shade(&self, paths: &mut [CameraPathState], group: &[(usize, Hit)]) {
+        if let Some(tables) = self.tables {
+            shade(tables, self.iterations, paths, group);
+        }
+    }
+}
+
+/// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`]), as
+/// [`super::shade`] would.
+fn shade(
+    tables: &LambertLanes,
+    iterations: &[CameraContext],
+    paths: &mut [CameraPathState],
+    group: &[(usize, Hit)],
+) {
+    debug_assert!(!group.is_empty() && group.len() <= LANES);
+    for &(i, _) in group {
+        vertex_sampler(&mut paths[i]);
+    }
+    // Lanes past the group repeat its last path; their results are dropped.
+    let at = |lane: usize| group[lane.min(group.len() - 1)];
+    let ctx = |lane: usize| &iterations[paths[at(lane).0].sample as usize];
+    let scene = iterations[0].scene;
+    let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
+    let numbers: [[[f32; LANES]; 2]; PAIRS] = SobolSampler::peek_lanes(samplers);
+    let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
+    let (mut surface, mut light) = (SurfaceInputs::default(), LightInputs::default());
+    let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
+    let mut mis = SubpathMis::<F32s>::default();
+    let mut t = F32s::default();
+    for (lane, &u_pick) in numbers[1][0].iter().enumerate() {
+        let (i, hit) = at(lane);
+        let walk = &paths[i].walk;
+        surface.gather(tables, scene, lane, (hit.triangle, hit.u, hit.v));
+        light.gather(tables, scene, lane, u_pick);
+        direction.set(lane, walk.direction);
+        throughput.set(lane, walk.throughput);
+        (mis.d_vcm.0[lane], mis.d_vc.0[lane], mis.d_vm.0[lane]) =
+            (walk.mis.d_vcm, walk.mis.d_vc, walk.mis.d_vm);
+        t.0[lane] = hit.t;
+    }
+    let factors = factors_of(|lane| &ctx(lane).factors);
+    let vertex = Vertex::new(&surface, -direction, Mask::first(group.len()));
+    mis.arrive(Some(t * t), vertex.cos_geometric_out());
+    let sample = light_samples(
+        (&vertex, &surface, &light),
+        (throughput, &mis, &factors),
+        pair(2),
+    );
+    let picks: [CachePicks; LANES] =
+        std::array::from_fn(|lane| CachePicks::next(&paths[at(lane).0].walk.rng, ctx(lane)));
+    let most = picks.iter().map(|p| p.count).max().unwrap_or(0);
+    let connected: Vec<ShadowLanes> = (0..most as usize)
+        .filter_map(|k| {
+            let pick: [Pick; LANES] = std::array::from_fn(|lane| {
+                let ctx = ctx(lane);
+                let light = &ctx.cache.vertices()[picks[lane].indices().nth(k)?];
+                let segments = paths[at(lane).0].walk.segments;
+                let length = segments.saturating_add(light.path_length + 1);
+                (length <= ctx.max_segments()).then_some((ctx, light))
+            });
+            let any = pick.iter().any(Option::is_some);
+            let lanes = (tables, &vertex, &surface);
+            any.then(|| connections(lanes, &pick, (throughput, &mis, &factors)))
+        })
+        .collect();
+    let next = vertex.sample(surface.f, pair(4), TransportMode::Radiance, true);
+    let mut next_mis = mis;
+    let cos_out = vertex.cos_geometric(next.wi);
+    next_mis.scatter(cos_out, next.eval.pdf, next.eval.pdf_rev, false, &factors);
+    let next_throughput = throughput.mul(next.eval.f_cos.div(next.eval.pdf));
+    let origin = vertex.spawn(next.wi);
+    for (lane, &(i, _)) in group.iter().enumerate() {
+        let path = &mut paths[i];
+        if !vertex.alive.get(lane) {
+            path.alive = false;
+            continue;
+        }
+        // The picks' stream, then the light sample's two pairs and the continuation's two.
+        path.walk.rng.skip(PAIRS as u32 - 1);
+        path.shadows.extend(sample.ray(lane));
+        path.shadows
+            .extend(connected.iter().filter_map(|c| c.ray(lane)));
+        if !next.valid.get(lane) {
+            path.alive = false;
+            continue;
+        }
+        let walk = &mut path.walk;
+        walk.mis = SubpathMis {
+            d_vcm: next_mis.d_vcm.0[lane],
+            d_vc: next_mis.d_vc.0[lane],
+            d_vm: next_mis.d_vm.0[lane],
+        };
+        let mut throughput = next_throughput.lane(lane);
+        let roulette_number = numbers[5][0][lane];
+        let mut drawn = false;
+        let survives = walk.roulette.survives(walk.segments, &mut throughput, || {
+            drawn = true;
+            roulette_number
+        });
+        walk.rng.skip(u32::from(drawn));
+        walk.throughput = throughput;
+        path.alive = survives;
+        if survives {
+            walk.origin = origin.lane(lane);
+            walk.direction = next.wi.lane(lane);
+            walk.segments += 1;
+        }
+    }
+}
+
+/// Each lane's frame's factors.
+fn factors_of<'a>(factors: impl Fn(usize) -> &'a MisFactors) -> MisFactors<F32s> {
+    let lanes = |field: fn(&MisFactors) -> f32| F32s::from_fn(|lane| field(factors(lane)));
+    MisFactors {
+        merge: lanes(|f| f.merge),
+        connect: lanes(|f| f.connect),
+        hit: lanes(|f| f.hit),
+        connections: lanes(|f| f.connections),
+        light_paths: lanes(|f| f.light_paths),
+    }
+}
+
+/// A shadow ray per lane, where one is queued.
+struct ShadowLanes {
+    queued: Mask,
+    origin: Vec3s,
+    target: Vec3s,
+    contribution: Vec3s,
+}
+
+impl ShadowLanes {
+    /// Lane `lane`'s shadow ray, if it queued one.
+    fn ray(&self, lane: usize) -> Option<ShadowRay> {
+        self.queued.get(lane).then(|| {
+            let origin = self.origin.lane(lane);
+            let (direction, tmax) = segment_to(origin, self.target.lane(lane));
+            ShadowRay {
+                origin,
+                direction,
+                tmax,
+                contribution: self.contribution.lane(lane),
+            }
+        })
+    }
+}
+
+/// The light samples (`light_sample`), one per lane.
+#[inline(always)]
+fn light_samples(
+    (vertex, surface, light): (&Vertex, &SurfaceInputs, &LightInputs),
+    (throughput, mis, factors): (Vec3s, &SubpathMis<F32s>, &MisFactors<F32s>),
+    numbers: (F32s, F32s),
+) -> ShadowLanes {
+    let illumination = illuminate(light, vertex, numbers);
+    let direction = illumination.direction;
+    let eval = vertex.eval(surface.f, direction, TransportMode::Radiance, true);
+    let pdfs = LightSamplePdfs {
+        direct_pdf_w: illumination.direct_pdf_w * light.pick_pmf,
+        emission_pdf_w: illumination.emission_pdf_w * light.pick_pmf,
+        cos_at_light: illumination.cos_at_light,
+        cos_at_receiver: vertex.cos_geometric(direction),
+        bsdf_fwd_pdf_w: eval.pdf,
+        bsdf_rev_pdf_w: eval.pdf_rev,
+    };
+    let weight = light_sample_weight(mis, &pdfs, factors);
+    ShadowLanes {
+        queued: vertex.alive & illumination.lit & eval.valid & eval.f_cos.is_nonzero(),
+        origin: vertex.spawn(direction),
+        target: illumination.target,
+        contribution: throughput
+            .mul(light.emission)
+            .mul(eval.f_cos)
+            .scale(weight / pdfs.direct_pdf_w),
+    }
+}
+
+/// The light vertex a lane connects to, with its iteration.
+type Pick<'c> = Option<(&'c CameraContext<'c>, &'c LightVertex)>;
+
+/// One connection per lane to the cached light vertex `picks[lane]` (`connect`), for camera
+/// vertices with throughput `throughput` and MIS quantities `mis`. Light vertices on plain
+/// Lambert surfaces are evaluated in the lanes, the others by the general BSDF.
+#[inline(always)]
+fn connections(
+    (tables, vertex, surface): (&LambertLanes, &Vertex, &SurfaceInputs),
+    picks: &[Pick; LANES],
+    (throughput, mis, factors): (Vec3s, &SubpathMis<F32s>, &MisFactors<F32s>),
+) -> ShadowLanes {
+    let scene = picks
+        .iter()
+        .flatten()
+        .next()
+        .expect("a lane connects")
+        .0
+        .scene;
+    let (mut position, mut wo) = (Vec3s::default(), Vec3s::default());
+    let mut light_throughput = Vec3s::default();
+    let (mut light_mis, mut scale) = (SubpathMis::<F32s>::default(), F32s::default());
+    let (mut connects, mut lambert) = ([false; LANES], [false; LANES]);
+    // Lanes without a Lambert light vertex keep zero inputs: their lane values are replaced
+    // or dropped.
+    let mut light_surface = SurfaceInputs::default();
+    for (lane, pick) in picks.iter().enumerate() {
+        let Some((ctx, light)) = pick else {
+            continue;
+        };
+        connects[lane] = true;
+        position.set(lane, light.position);
+        wo.set(lane, light.wo);
+        light_throughput.set(lane, light.throughput);
+        (
+            light_mis.d_vcm.0[lane],
+            light_mis.d_vc.0[lane],
+            light_mis.d_vm.0[lane],
+        ) = (light.mis.d_vcm, light.mis.d_vc, light.mis.d_vm);
+        // c = (1 / N_c) · (N_v / N_p): each pick stands for N_v / N_c vertices of N_p paths.
+        let connections = ctx.settings.connections as f32;
+        scale.0[lane] = ctx.cache.len() as f32 / (connections * ctx.factors.light_paths);
+        if tables.material_of(scene, light.triangle).is_some() {
+            light_surface.gather(tables, scene, lane, (light.triangle, light.u, light.v));
+            lambert[lane] = true;
+        }
+    }
+    let zero = F32s::splat(0.0);
+    let to_light: Vec3s = position - vertex.position;
+    let distance_sq = to_light.length_squared();
+    let direction = to_light.div(distance_sq.sqrt());
+    let camera = vertex.eval(surface.f, direction, TransportMode::Radiance, true);
+    let camera_ok = vertex.alive
+        & Mask::from_bools(connects)
+        & !distance_sq.eq(zero)
+        & camera.valid
+        & camera.f_cos.is_nonzero();
+    let light_vertex = Vertex::new(&light_surface, wo, Mask::from_bools(lambert));
+    let mut light = light_vertex.eval(light_surface.f, -direction, TransportMode::Importance, true);
+    let mut light_ok = light_vertex.alive.bools();
+    for (ok, &valid) in light_ok.iter_mut().zip(&light.valid.bools()) {
+        *ok &= valid;
+    }
+    let mut light_cos = light_vertex.cos_geometric(direction);
+    let mut target = light_vertex.spawn(-direction);
+    for (lane, pick) in picks.iter().enumerate() {
+        if let Some((_, light_vertex)) = pick
+            && !lambert[lane]
+            && camera_ok.get(lane)
+        {
+            let side = general_light_side(scene, light_vertex, direction.lane(lane));
+            light.f_cos.set(lane, side.f_cos);
+            (light.pdf.0[lane], light.pdf_rev.0[lane]) = (side.pdf_fwd, side.pdf_rev);
+            light_cos.0[lane] = side.cos_geometric;
+            target.set(lane, side.target);
+            light_ok[lane] = true;
+        }
+    }
+    let pdfs = ConnectionPdfs {
+        camera_fwd_pdf_a: camera.pdf * light_cos / distance_sq,
+        camera_rev_pdf_w: camera.pdf_rev,
+        light_fwd_pdf_a: light.pdf * vertex.cos_geometric(direction) / distance_sq,
+        light_rev_pdf_w: light.pdf_rev,
+    };
+    let weight = connection_weight(mis, &light_mis, &pdfs, factors);
+    ShadowLanes {
+        queued: camera_ok & Mask::from_bools(light_ok) & light.f_cos.is_nonzero(),
+        origin: vertex.spawn(direction),
+        target,
+        contribution: throughput
+            .mul(light_throughput)
+            .mul(camera.f_cos)
+            .mul(light.f_cos)
+            .scale(weight * scale / distance_sq),
+    }
+}
+
+/// A light vertex's BSDF toward a connection along `direction` (from the camera vertex),
+/// by the general code: the light vertex's material is not plain Lambert.
+struct LightSide {
+    f_cos: Vec3,
+    pdf_fwd: f32,
+    pdf_rev: f32,
+    /// |cos| of `direction` with the light vertex's geometric normal.
+    cos_geometric: f32,
+    /// The shadow ray's end, offset off the light vertex's surface.
+    target: Vec3,
+}
+
+/// `connect`'s light side for `vertex`, seen along `direction`.
+fn general_light_side(
+    scene: &vcm_scene::Scene,
+    vertex: &LightVertex,
+    direction: Vec3,
+) -> LightSide {
+    let surface = SurfaceHit::new(scene, vertex.triangle, vertex.u, vertex.v);
+    let bsdf = scene.bsdf(&surface.point);
+    let eval = bsdf.eval(vertex.wo, -direction, TransportMode::Importance);
+    LightSide {
+        f_cos: eval.f_cos,
+        pdf_fwd: eval.pdf_fwd,
+        pdf_rev: eval.pdf_rev,
+        cos_geometric: surface.cos_geometric(direction),
+        target: surface.spawn(-direction),
+    }
+}

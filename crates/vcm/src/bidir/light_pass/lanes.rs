@@ -1,0 +1,242 @@
+//! The light vertex ([`super::shade`]) on plain Lambert surfaces, in lanes
+//! ([`crate::lambert`]): the vertex kept for the cache, its connection to the camera (a
+//! light tracing splat weighted by VCM's MIS), and the continuation in importance transport
+//! with the MIS quantities' update and Russian roulette.
+
+use glam::UVec2;
+use vcm_scene::bsdf::TransportMode;
+use vcm_scene::sampling::SobolSampler;
+
+use super::{LightPathState, Splat, vertex_sampler};
+use crate::bidir::mis::{MisFactors, SubpathMis, camera_connection_weight};
+use crate::bidir::{Algorithm, FrameContext, VcmSettings};
+use crate::lambert::LambertLanes;
+use crate::lambert::surface::{SurfaceInputs, Vertex};
+use crate::lanes::{F32s, LANES, Mask, Vec3s};
+use crate::light_vertex_cache::LightVertex;
+use crate::path_state::ShadowRay;
+use crate::shadow::segment_to;
+use crate::surface_hit::Hit;
+use crate::wave::LaneShading;
+
+/// The vertex's numbers, a pair each: lobe (unused: there is one), direction, Russian
+/// roulette (first number).
+const PAIRS: usize = 3;
+
+/// The light pass's vertices in lanes, where the scene allows them.
+pub(super) struct LightLanes<'a> {
+    pub iterations: &'a [FrameContext<'a>],
+    /// Whether vertices are connected to the camera.
+    pub splat: bool,
+}
+
+impl LaneShading<LightPathState> for LightLanes<'_> {
+    /// A plain Lambert surface that does not emit.
+    #[inline]
+    fn takes(&self, _: &LightPathState, hit: Hit) -> bool {
+        let ctx = &self.iterations[0];
+        ctx.lanes
+            .is_some_and(|tables| tables.takes_surface(ctx.scene, hit))
+    }
+
+    fn shade(&self, paths: &mut [LightPathState], group: &[(usize, Hit)]) {
+        if let Some(tables) = self.iterations[0].lanes {
+            shade(tables, self, paths, group);
+        }
+    }
+}
+
+/// Each lane's frame's factors.
+fn factors_of<'a>(factors: impl Fn(usize) -> &'a MisFactors) -> MisFactors<F32s> {
+    let lanes = |field: fn(&MisFactors) -> f32| F32s::from_fn(|lane| field(factors(lane)));
+    MisFactors {
+        merge: lanes(|f| f.merge),
+        connect: lanes(|f| f.connect),
+        hit: lanes(|f| f.hit),
+        connections: lanes(|f| f.connections),
+        light_paths: lanes(|f| f.light_paths),
+    }
+}
+
+/// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`]), as
+/// [`super::shade`] would.
+fn shade(
+    tables: &LambertLanes,
+    lanes: &LightLanes,
+    paths: &mut [LightPathState],
+    group: &[(usize, Hit)],
+) {
+    debug_assert!(!group.is_empty() && group.len() <= LANES);
+    for &(i, _) in group {
+        vertex_sampler(&mut paths[i]);
+    }
+    // Lanes past the group repeat its last path; their results are dropped.
+    let at = |lane: usize| group[lane.min(group.len() - 1)];
+    let samples: [usize; LANES] = std::array::from_fn(|lane| paths[at(lane).0].sample as usize);
+    let ctx = |lane: usize| &lanes.iterations[samples[lane]];
+    let scene = lanes.iterations[0].scene;
+    let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
+    let numbers: [[[f32; LANES]; 2]; PAIRS] = SobolSampler::peek_lanes(samplers);
+    let mut surface = SurfaceInputs::default();
+    let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
+    let mut mis = SubpathMis::<F32s>::default();
+    let mut distance_sq = F32s::default();
+    for lane in 0..LANES {
+        let (i, hit) = at(lane);
+        let path = &paths[i];
+        surface.gather(tables, scene, lane, (hit.triangle, hit.u, hit.v));
+        direction.set(lane, path.walk.direction);
+        throughput.set(lane, path.walk.throughput);
+        let walk_mis = &path.walk.mis;
+        (mis.d_vcm.0[lane], mis.d_vc.0[lane], mis.d_vm.0[lane]) =
+            (walk_mis.d_vcm, walk_mis.d_vc, walk_mis.d_vm);
+        // The first segment from a light at infinity has no length: × 1 leaves d_VCM as is.
+        let has_length = path.walk.segments > 1 || !path.from_infinity;
+        distance_sq.0[lane] = if has_length { hit.t * hit.t } else { 1.0 };
+    }
+    let factors = factors_of(|lane| &ctx(lane).factors);
+    let wo = -direction;
+    let vertex = Vertex::new(&surface, wo, Mask::first(group.len()));
+    mis.arrive(Some(distance_sq), vertex.cos_geometric_out());
+    let splats = lanes.splat.then(|| {
+        camera_connections(
+            &lanes.iterations[0],
+            (&vertex, &surface),
+            (throughput, &mis, &factors),
+        )
+    });
+    let next = vertex.sample(
+        surface.f,
+        (F32s(numbers[1][0]), F32s(numbers[1][1])),
+        TransportMode::Importance,
+        true,
+    );
+    let mut next_mis = mis;
+    let cos_out = vertex.cos_geometric(next.wi);
+    next_mis.scatter(cos_out, next.eval.pdf, next.eval.pdf_rev, false, &factors);
+    let next_throughput = throughput.mul(next.eval.f_cos.div(next.eval.pdf));
+    let origin = vertex.spawn(next.wi);
+    for (lane, &(i, hit)) in group.iter().enumerate() {
+        let path = &mut paths[i];
+        let max_segments = ctx(lane).max_segments();
+        let walk = &mut path.walk;
+        let kept = SubpathMis {
+            d_vcm: mis.d_vcm.0[lane],
+            d_vc: mis.d_vc.0[lane],
+            d_vm: mis.d_vm.0[lane],
+        };
+        let light_vertex = LightVertex {
+            position: vertex.position.lane(lane),
+            wo: wo.lane(lane),
+            throughput: walk.throughput,
+            mis: kept,
+            triangle: hit.triangle,
+            u: hit.u,
+            v: hit.v,
+            path_length: walk.segments,
+        };
+        if walk.segments < max_segments {
+            path.splat = splats.as_ref().and_then(|s| s.splat(ctx(lane), lane));
+        }
+        path.vertex = Some(light_vertex);
+        // A further vertex has segments + 1 segments, and using it takes one more.
+        let continues = walk.segments.saturating_add(2) <= max_segments;
+        if !(continues && vertex.alive.get(lane)) {
+            path.alive = false;
+            continue;
+        }
+        // The lobe and the direction.
+        walk.rng.skip(2);
+        if !next.valid.get(lane) {
+            path.alive = false;
+            continue;
+        }
+        walk.mis = SubpathMis {
+            d_vcm: next_mis.d_vcm.0[lane],
+            d_vc: next_mis.d_vc.0[lane],
+            d_vm: next_mis.d_vm.0[lane],
+        };
+        let mut throughput = next_throughput.lane(lane);
+        let roulette_number = numbers[2][0][lane];
+        let mut drawn = false;
+        let survives = walk.roulette.survives(walk.segments, &mut throughput, || {
+            drawn = true;
+            roulette_number
+        });
+        walk.rng.skip(u32::from(drawn));
+        walk.throughput = throughput;
+        path.alive = survives;
+        if survives {
+            walk.origin = origin.lane(lane);
+            walk.direction = next.wi.lane(lane);
+            walk.segments += 1;
+        }
+    }
+}
+
+/// The lanes' connections to the camera (`connect_to_camera`), before the projection.
+struct CameraConnections {
+    queued: Mask,
+    /// The light vertices.
+    position: Vec3s,
+    origin: Vec3s,
+    contribution: Vec3s,
+}
+
+/// The light vertices `vertex` connected to the camera of `ctx` (which all iterations
+/// share), with the paths' throughput and MIS quantities.
+#[inline(always)]
+fn camera_connections(
+    ctx: &FrameContext,
+    (vertex, surface): (&Vertex, &SurfaceInputs),
+    (throughput, mis, factors): (Vec3s, &SubpathMis<F32s>, &MisFactors<F32s>),
+) -> CameraConnections {
+    let camera = &ctx.scene.camera;
+    let to_camera = Vec3s::splat(camera.position) - vertex.position;
+    let distance_sq = to_camera.length_squared();
+    let direction = to_camera.div(distance_sq.sqrt());
+    let eval = vertex.eval(surface.f, direction, TransportMode::Importance, true);
+    // The camera's solid-angle pdf per pixel sample is d_image² / (pixel_area · cos θ) with
+    // d_image = 1 / cos θ; its area pdf at the vertex adds |cos θ_surface| / d².
+    let cos_camera = Vec3s::splat(camera.forward).dot(-direction);
+    let cubed = F32s::from_fn(|lane| cos_camera.0[lane].powi(3));
+    let camera_pdf_w = F32s::splat(1.0) / (F32s::splat(ctx.projection.pixel_area()) * cubed);
+    let camera_pdf_a = camera_pdf_w * vertex.cos_geometric(direction) / distance_sq;
+    let weight = if ctx.settings.algorithm == Algorithm::LightTracing {
+        F32s::splat(1.0)
+    } else {
+        camera_connection_weight(mis, camera_pdf_a, eval.pdf_rev, factors)
+    };
+    CameraConnections {
+        queued: vertex.alive & eval.valid & eval.f_cos.is_nonzero(),
+        position: vertex.position,
+        origin: vertex.spawn(direction),
+        contribution: throughput
+            .mul(eval.f_cos)
+            .scale(weight * camera_pdf_w / (distance_sq * factors.light_paths)),
+    }
+}
+
+impl CameraConnections {
+    /// Lane `lane`'s splat in iteration `ctx`, if it connected and projects into the image.
+    fn splat(&self, ctx: &FrameContext, lane: usize) -> Option<Splat> {
+        let position = ctx.scene.camera.position;
+        let VcmSettings { width, height, .. } = *ctx.settings;
+        if !self.queued.get(lane) {
+            return None;
+        }
+        let origin = self.origin.lane(lane);
+        let raster = ctx.projection.raster_of(self.position.lane(lane))?;
+        let (direction, tmax) = segment_to(origin, position);
+        let pixel = raster.as_uvec2().min(UVec2::new(width - 1, height - 1));
+        Some(Splat {
+            pixel: pixel.y * width + pixel.x,
+            ray: ShadowRay {
+                origin,
+                direction,
+                tmax,
+                contribution: self.contribution.lane(lane),
+            },
+        })
+    }
+}

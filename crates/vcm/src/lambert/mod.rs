@@ -1,0 +1,134 @@
+//! Vertices on plain Lambertian surfaces, [`LANES`](crate::lanes::LANES) paths at a time.
+//!
+//! The general vertex goes through the layered glTF BSDF one path at a time: a long chain of
+//! dependent steps, most of them there for lobes a plain diffuse surface does not have. Where
+//! every light of a scene is a constant, uncut area light and no volume absorbs, vertices on
+//! materials whose lobes are one plain Lambert lobe
+//! ([`Lobes::lambert`](vcm_scene::bsdf::Lobes::lambert)) are shaded in SIMD lanes instead,
+//! eight paths per instruction: the surface point, the BSDF's sides, frame, values and pdfs
+//! ([`surface`]), the area light sample ([`light_sample`]), the cosine-weighted
+//! continuation and the ray offsets. The integrators build their vertices from these parts
+//! ([`path_tracing`] here, the camera and light passes of the VCM family in
+//! [`crate::bidir`]).
+//!
+//! Each lane performs the operations the general vertex performs for such a surface, in the
+//! same order, on the same random numbers, so a path's result is bit for bit the same
+//! whichever way it is shaded (the tests render both ways and compare the films).
+
+pub(crate) mod light_sample;
+pub(crate) mod path_tracing;
+pub(crate) mod surface;
+
+use glam::Vec3;
+use vcm_scene::Scene;
+use vcm_scene::light::Light;
+
+use crate::ray_offset::barycentric_error;
+use crate::surface_hit::Hit;
+
+/// A material whose lobes are one plain Lambert lobe.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LambertMaterial {
+    /// f = albedo/π.
+    pub f: Vec3,
+    /// Whether it scatters from the back side too.
+    pub double_sided: bool,
+}
+
+/// An area light as light sampling reads it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LaneLight {
+    pub corners: [Vec3; 3],
+    /// Unit front-face normal.
+    pub normal: Vec3,
+    /// 1 / area.
+    pub inv_area: f32,
+    /// Emitted radiance.
+    pub emission: Vec3,
+    /// Error bound of any point computed on the triangle.
+    pub error: Vec3,
+}
+
+/// What shading in lanes needs of a scene that allows it ([`LambertLanes::for_scene`]).
+#[derive(Clone, Debug)]
+pub(crate) struct LambertLanes {
+    /// Per material, where it is plain Lambert.
+    pub materials: Vec<Option<LambertMaterial>>,
+    /// Per light (all of them area lights).
+    pub lights: Vec<LaneLight>,
+}
+
+impl LambertLanes {
+    /// The tables for `scene`, or why no vertex of it can be shaded in lanes.
+    pub fn for_scene(scene: &Scene) -> Result<LambertLanes, &'static str> {
+        if !scene.shading.lambert_lanes {
+            return Err("pruning is off: every vertex goes through the general BSDF");
+        }
+        if scene.features.absorbing_volumes {
+            return Err("a volume absorbs");
+        }
+        if scene.light_sampler.sample(0.5).is_none() {
+            return Err("no light to sample");
+        }
+        let lights = scene
+            .lights
+            .iter()
+            .map(|light| match light {
+                Light::Area(area) if area.texture.is_none() && area.cut_out.is_none() => {
+                    Some(LaneLight {
+                        corners: area.corners,
+                        normal: area.normal,
+                        inv_area: 1.0 / area.area,
+                        emission: area.emission,
+                        error: barycentric_error(&area.corners, Vec3::ONE),
+                    })
+                }
+                _ => None,
+            })
+            .collect::<Option<Vec<_>>>()
+            .ok_or("a light is not a constant, uncut area light")?;
+        let materials: Vec<_> = scene
+            .materials
+            .iter()
+            .zip(&scene.material_lobes)
+            .map(|(material, lobes)| {
+                let f = lobes.as_ref()?.lambert()?;
+                material
+                    .normal_texture
+                    .is_none()
+                    .then_some(LambertMaterial {
+                        f,
+                        double_sided: material.double_sided,
+                    })
+            })
+            .collect();
+        if !materials.iter().any(Option::is_some) {
+            return Err("no material is plain Lambert");
+        }
+        Ok(LambertLanes { materials, lights })
+    }
+
+    /// The plain Lambert material of `triangle`, if it has one.
+    #[inline]
+    pub fn material_of(&self, scene: &Scene, triangle: u32) -> Option<LambertMaterial> {
+        self.materials[scene.mesh.material_ids[triangle as usize] as usize]
+    }
+
+    /// Whether a vertex at `hit` can be shaded in lanes: a plain Lambert surface that does
+    /// not emit.
+    #[inline]
+    pub fn takes_surface(&self, scene: &Scene, hit: Hit) -> bool {
+        self.material_of(scene, hit.triangle).is_some()
+            && scene
+                .light_sampler
+                .light_of_triangle(hit.triangle)
+                .is_none()
+    }
+}
+
+/// Why the lanes run, for an integrator's decisions.
+pub(crate) const LANES_RUN: &str =
+    "some material is plain Lambert and every light is a constant area light";
+
+/// The name of the lanes in an integrator's decisions.
+pub(crate) const LANES_PART: &str = "plain Lambert vertices in SIMD lanes";
