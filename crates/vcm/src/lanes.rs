@@ -33,29 +33,7 @@ pub(crate) struct Vec3s {
     pub z: F32s,
 }
 
-/// The arithmetic formulas written once for one path (`f32`) and for [`LANES`] paths
-/// ([`F32s`]) need: each operation is the `f32` one, lane by lane.
-pub(crate) trait Real:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
-{
-    /// `x` (in every lane).
-    fn splat(x: f32) -> Self;
-
-    /// [`f32::abs`] (in every lane).
-    fn abs(self) -> Self;
-}
-
-impl Real for f32 {
-    #[inline(always)]
-    fn splat(x: f32) -> f32 {
-        x
-    }
-
-    #[inline(always)]
-    fn abs(self) -> f32 {
-        f32::abs(self)
-    }
-}
+pub(crate) use vcm_scene::Real;
 
 impl Real for F32s {
     #[inline(always)]

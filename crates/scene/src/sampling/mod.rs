@@ -38,6 +38,6 @@ pub trait Sampler {
 
 pub use warps::{
     cosine_hemisphere_pdf, power_heuristic, sample_concentric_disk, sample_cosine_hemisphere,
-    sample_uniform_cone, sample_uniform_sphere, sample_uniform_triangle, uniform_cone_pdf,
-    uniform_sphere_pdf,
+    sample_uniform_cone, sample_uniform_sphere, sample_uniform_triangle, sin_cos_octant,
+    uniform_cone_pdf, uniform_sphere_pdf,
 };

@@ -3,6 +3,7 @@
 //! Direction pdfs are with respect to solid angle (1/sr); disk and triangle warps are
 //! uniform with respect to area.
 
+use crate::real::Real;
 use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
@@ -21,9 +22,25 @@ pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     }
     let x_major = p.x.abs() > p.y.abs();
     let (major, minor) = if x_major { (p.x, p.y) } else { (p.y, p.x) };
-    let (sin, cos) = (FRAC_PI_4 * (minor / major)).sin_cos();
+    let (sin, cos) = sin_cos_octant(FRAC_PI_4 * (minor / major));
     let (x, y) = if x_major { (cos, sin) } else { (sin, cos) };
     major * Vec2::new(x, y)
+}
+
+/// sin x and cos x for |x| ≤ π/4, the angles of one octant, by polynomials that the same
+/// code evaluates on one number or on SIMD lanes ([`Real`]), so that a warp computed for
+/// several samples at once gives each the numbers it gives alone. The coefficients are the
+/// minimax fits of Moshier's Cephes `sinf` and `cosf` kernels on that interval: both within
+/// 6·10⁻⁸ of the exact values (half an ulp of 1; tested against `f64`).
+#[inline(always)]
+pub fn sin_cos_octant<T: Real>(x: T) -> (T, T) {
+    let c = T::splat;
+    let z = x * x;
+    let sin = ((c(-1.951_529_6e-4) * z + c(8.332_161e-3)) * z + c(-1.666_665_5e-1)) * z * x + x;
+    let cos = ((c(2.443_315_7e-5) * z + c(-1.388_731_6e-3)) * z + c(4.166_664_6e-2)) * z * z
+        - c(0.5) * z
+        + c(1.0);
+    (sin, cos)
 }
 
 /// Cosine-weighted direction on the hemisphere around +z (Malley's method: a concentric-disk
@@ -189,6 +206,19 @@ mod tests {
         assert!(pts.iter().all(|p| p.length() <= 1.0 + 1e-6));
         let (stat, cells) = grid_chi2(&pts, |p| p.length() <= 1.0, 1.0 / std::f64::consts::PI);
         assert_chi2_ok(stat, cells);
+    }
+
+    #[test]
+    fn octant_sine_and_cosine_are_within_half_an_ulp_of_one() {
+        let steps = 100_000;
+        let (mut sin_err, mut cos_err) = (0.0f64, 0.0f64);
+        for i in 0..=steps {
+            let x = (i as f32 / steps as f32 * 2.0 - 1.0) * FRAC_PI_4;
+            let (sin, cos) = sin_cos_octant(x);
+            sin_err = sin_err.max((f64::from(sin) - f64::from(x).sin()).abs());
+            cos_err = cos_err.max((f64::from(cos) - f64::from(x).cos()).abs());
+        }
+        assert!(sin_err < 6e-8 && cos_err < 6e-8, "{sin_err:e} {cos_err:e}");
     }
 
     #[test]

@@ -7,6 +7,7 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 use glam::Vec3;
 use vcm_scene::Scene;
 use vcm_scene::bsdf::{GRAZING_COS, TransportMode};
+use vcm_scene::sampling::sin_cos_octant;
 
 use super::LambertLanes;
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
@@ -278,18 +279,14 @@ fn mirror(back: Mask, l: F32s) -> F32s {
     back.select(-l, l)
 }
 
-/// `sample_concentric_disk` in each lane (the sine and cosine one lane at a time).
+/// `sample_concentric_disk` in each lane.
 #[inline(always)]
 fn concentric_disk(ux: F32s, uy: F32s) -> (F32s, F32s) {
     let (two, one, zero) = (F32s::splat(2.0), F32s::splat(1.0), F32s::splat(0.0));
     let (px, py) = (two * ux - one, two * uy - one);
     let x_major = px.abs().gt(py.abs());
     let (major, minor) = (x_major.select(px, py), x_major.select(py, px));
-    let angle = F32s::splat(FRAC_PI_4) * (minor / major);
-    let (mut sin, mut cos) = (zero, zero);
-    for lane in 0..LANES {
-        (sin.0[lane], cos.0[lane]) = angle.0[lane].sin_cos();
-    }
+    let (sin, cos) = sin_cos_octant(F32s::splat(FRAC_PI_4) * (minor / major));
     let (x, y) = (x_major.select(cos, sin), x_major.select(sin, cos));
     let center = px.eq(zero) & py.eq(zero);
     (

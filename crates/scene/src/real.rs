@@ -1,0 +1,29 @@
+//! [`Real`]: the arithmetic of formulas written once for one number and for several in SIMD
+//! lanes (the `vcm` crate's lane types implement it).
+
+use std::ops::{Add, Div, Mul, Sub};
+
+/// Numbers whose operations are those of `f32`, applied to one value or lane by lane: a
+/// formula written for `T: Real` computes, in every lane, bit for bit what it computes on
+/// one `f32` (Rust never fuses a multiply and an add).
+pub trait Real:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    /// `x` (in every lane).
+    fn splat(x: f32) -> Self;
+
+    /// [`f32::abs`] (in every lane).
+    fn abs(self) -> Self;
+}
+
+impl Real for f32 {
+    #[inline(always)]
+    fn splat(x: f32) -> f32 {
+        x
+    }
+
+    #[inline(always)]
+    fn abs(self) -> f32 {
+        f32::abs(self)
+    }
+}
