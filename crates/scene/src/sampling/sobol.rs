@@ -118,19 +118,27 @@ impl SobolSampler {
         }
     }
 
-    /// The next `N` pairs of dimensions of each of `samplers`, as `[pair][dimension][lane]`,
-    /// computed together in SIMD lanes: the values `N` calls of each sampler's
-    /// [`uniform2`](Sampler::uniform2) would return ([`uniform`](Sampler::uniform) takes
-    /// the first number of a pair), without drawing them. For code that shades several paths
-    /// at once and then says how many numbers each used ([`skip`](Self::skip)).
+    /// Pairs `offsets[k]` after the next of each of `samplers`, as `[k][dimension][lane]`,
+    /// computed together in SIMD lanes: the values each sampler's
+    /// [`uniform2`](Sampler::uniform2) would return at those draws ([`uniform`](Sampler::uniform)
+    /// takes the first number of a pair), without drawing them. For code that shades
+    /// several paths at once and then says how many numbers each used ([`skip`](Self::skip)).
     #[inline(always)]
     pub fn peek_lanes<const N: usize, const L: usize>(
         samplers: [&SobolSampler; L],
+        offsets: [u32; N],
     ) -> [[[f32; L]; 2]; N] {
         let seed = samplers.map(|s| s.seed);
         let index_rev = samplers.map(|s| s.index_rev);
         let first = samplers.map(|s| s.pair);
-        pairs_in_lanes(seed, index_rev, first, N)
+        let mut values = [[[0.0f32; L]; 2]; N];
+        for ([x, y], offset) in values.iter_mut().zip(offsets) {
+            for lane in 0..L {
+                let pair = first[lane].wrapping_add(offset);
+                (x[lane], y[lane]) = pair_numbers(index_rev[lane], pair_seed(seed[lane], pair));
+            }
+        }
+        values
     }
 
     /// Moves past the next `pairs` pairs of dimensions, as that many draws would.
@@ -495,8 +503,8 @@ mod tests {
         }
     }
 
-    /// `peek_lanes` returns what each sampler's draws would, from prefetched pairs and beyond
-    /// them, and `skip` moves on as the draws do.
+    /// `peek_lanes` returns what each sampler's draws would at the offsets asked for, whether
+    /// or not they were prefetched, and `skip` moves on as the draws do.
     #[test]
     fn peeking_in_lanes_sees_the_draws_and_skipping_makes_them() {
         let mut samplers: [SobolSampler; 3] =
@@ -505,11 +513,14 @@ mod tests {
             sampler.start_step(1 + i as u32, 4);
         }
         SobolSampler::prefetch(samplers[1..].iter_mut());
-        let peeked: [[[f32; 3]; 2]; 7] = SobolSampler::peek_lanes(samplers.each_ref());
+        let all: [[[f32; 3]; 2]; 7] =
+            SobolSampler::peek_lanes(samplers.each_ref(), [0, 1, 2, 3, 4, 5, 6]);
+        let some: [[[f32; 3]; 2]; 2] = SobolSampler::peek_lanes(samplers.each_ref(), [5, 2]);
+        assert_eq!(some, [all[5], all[2]]);
         for (lane, sampler) in samplers.iter_mut().enumerate() {
             let mut drawn = sampler.clone();
-            assert_eq!(peeked[0][0][lane], drawn.uniform(), "lane {lane}");
-            for pair in &peeked[1..] {
+            assert_eq!(all[0][0][lane], drawn.uniform(), "lane {lane}");
+            for pair in &all[1..] {
                 assert_eq!(Vec2::new(pair[0][lane], pair[1][lane]), drawn.uniform2());
             }
             sampler.skip(7);

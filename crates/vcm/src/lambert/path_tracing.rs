@@ -42,9 +42,13 @@ impl LaneShading<PathState> for LambertShading<'_> {
     }
 }
 
-/// The vertex's numbers, a pair each: light pick (first number), point on the light, lobe
-/// (unused: there is one), direction, Russian roulette (first number).
-const PAIRS: usize = 5;
+/// Pairs of numbers a vertex draws: light pick (first number), point on the light, lobe,
+/// direction, Russian roulette (first number).
+const PAIRS: u32 = 5;
+
+/// Those it uses (one lobe needs no choice): the light pick, the point, the direction and
+/// Russian roulette.
+const USED: [u32; 4] = [0, 1, 3, 4];
 
 /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`]), as
 /// [`crate::shade::shade`] would.
@@ -56,7 +60,7 @@ fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &
     // Lanes past the group repeat its last path; their results are dropped.
     let at = |lane: usize| group[lane.min(group.len() - 1)];
     let samplers = std::array::from_fn(|lane| &paths[at(lane).0].rng);
-    let numbers: [[[f32; LANES]; 2]; PAIRS] = SobolSampler::peek_lanes(samplers);
+    let numbers = SobolSampler::peek_lanes(samplers, USED);
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
     let (mut surface, mut light) = (SurfaceInputs::default(), LightInputs::default());
     let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
@@ -69,11 +73,11 @@ fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &
     }
     let vertex = Vertex::new(&surface, -direction, Mask::first(group.len()));
     let shadow = light_sample(&vertex, &surface, &light, throughput, pair(1));
-    let next = vertex.sample(surface.f, pair(3), TransportMode::Radiance, false);
+    let next = vertex.sample(surface.f, pair(2), TransportMode::Radiance, false);
     let continuation = Continuation {
         throughput: throughput.mul(next.eval.f_cos.div(next.eval.pdf)),
         origin: vertex.spawn(next.wi),
-        roulette_numbers: F32s(numbers[4][0]),
+        roulette_numbers: F32s(numbers[3][0]),
         next,
     };
     for (lane, &(i, _)) in group.iter().enumerate() {
@@ -150,7 +154,7 @@ impl Continuation {
             }
         });
         // Light pick, light point, lobe and direction.
-        path.rng.skip(PAIRS as u32 - 1);
+        path.rng.skip(PAIRS - 1);
         if !self.next.valid.get(lane) {
             path.alive = false;
             return;

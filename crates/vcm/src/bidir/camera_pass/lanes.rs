@@ -23,10 +23,13 @@ use crate::shadow::segment_to;
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::wave::LaneShading;
 
-/// The vertex's numbers, a pair each: the cache picks' stream, light pick (first number),
-/// point on the light, lobe (unused: there is one), direction, Russian roulette (first
-/// number).
-const PAIRS: usize = 6;
+/// Pairs of numbers a vertex draws: the cache picks' stream, light pick (first number),
+/// point on the light, lobe, direction, Russian roulette (first number).
+const PAIRS: u32 = 6;
+
+/// Those it uses as numbers (one lobe needs no choice): the light pick, the point, the
+/// direction and Russian roulette.
+const USED: [u32; 4] = [1, 2, 4, 5];
 
 /// The camera pass's vertices in lanes, where the frame and the scene allow them.
 pub(super) struct CameraLanes<'a> {
@@ -91,13 +94,13 @@ fn shade(
     let ctx = |lane: usize| &iterations[paths[at(lane).0].sample as usize];
     let scene = iterations[0].scene;
     let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
-    let numbers: [[[f32; LANES]; 2]; PAIRS] = SobolSampler::peek_lanes(samplers);
+    let numbers = SobolSampler::peek_lanes(samplers, USED);
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
     let (mut surface, mut light) = (SurfaceInputs::default(), LightInputs::default());
     let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
     let mut mis = SubpathMis::<F32s>::default();
     let mut t = F32s::default();
-    for (lane, &u_pick) in numbers[1][0].iter().enumerate() {
+    for (lane, &u_pick) in numbers[0][0].iter().enumerate() {
         let (i, hit) = at(lane);
         let walk = &paths[i].walk;
         surface.gather(tables, scene, lane, (hit.triangle, hit.u, hit.v));
@@ -114,7 +117,7 @@ fn shade(
     let sample = light_samples(
         (&vertex, &surface, &light),
         (throughput, &mis, &factors),
-        pair(2),
+        pair(1),
     );
     let picks: [CachePicks; LANES] =
         std::array::from_fn(|lane| CachePicks::next(&paths[at(lane).0].walk.rng, ctx(lane)));
@@ -133,7 +136,7 @@ fn shade(
             any.then(|| connections(lanes, &pick, (throughput, &mis, &factors)))
         })
         .collect();
-    let next = vertex.sample(surface.f, pair(4), TransportMode::Radiance, true);
+    let next = vertex.sample(surface.f, pair(2), TransportMode::Radiance, true);
     let mut next_mis = mis;
     let cos_out = vertex.cos_geometric(next.wi);
     next_mis.scatter(cos_out, next.eval.pdf, next.eval.pdf_rev, false, &factors);
@@ -146,7 +149,7 @@ fn shade(
             continue;
         }
         // The picks' stream, then the light sample's two pairs and the continuation's two.
-        path.walk.rng.skip(PAIRS as u32 - 1);
+        path.walk.rng.skip(PAIRS - 1);
         path.shadows.extend(sample.ray(lane));
         path.shadows
             .extend(connected.iter().filter_map(|c| c.ray(lane)));
@@ -161,7 +164,7 @@ fn shade(
             d_vm: next_mis.d_vm.0[lane],
         };
         let mut throughput = next_throughput.lane(lane);
-        let roulette_number = numbers[5][0][lane];
+        let roulette_number = numbers[3][0][lane];
         let mut drawn = false;
         let survives = walk.roulette.survives(walk.segments, &mut throughput, || {
             drawn = true;

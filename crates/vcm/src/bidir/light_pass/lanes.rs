@@ -19,9 +19,9 @@ use crate::shadow::segment_to;
 use crate::surface_hit::Hit;
 use crate::wave::LaneShading;
 
-/// The vertex's numbers, a pair each: lobe (unused: there is one), direction, Russian
-/// roulette (first number).
-const PAIRS: usize = 3;
+/// The numbers a vertex uses, of the pairs it draws (a lobe, a direction, Russian roulette):
+/// one lobe needs no choice.
+const USED: [u32; 2] = [1, 2];
 
 /// The light pass's vertices in lanes, where the scene allows them.
 pub(super) struct LightLanes<'a> {
@@ -76,7 +76,7 @@ fn shade(
     let ctx = |lane: usize| &lanes.iterations[samples[lane]];
     let scene = lanes.iterations[0].scene;
     let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
-    let numbers: [[[f32; LANES]; 2]; PAIRS] = SobolSampler::peek_lanes(samplers);
+    let numbers = SobolSampler::peek_lanes(samplers, USED);
     let mut surface = SurfaceInputs::default();
     let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
     let mut mis = SubpathMis::<F32s>::default();
@@ -107,7 +107,7 @@ fn shade(
     });
     let next = vertex.sample(
         surface.f,
-        (F32s(numbers[1][0]), F32s(numbers[1][1])),
+        (F32s(numbers[0][0]), F32s(numbers[0][1])),
         TransportMode::Importance,
         true,
     );
@@ -157,7 +157,7 @@ fn shade(
             d_vm: next_mis.d_vm.0[lane],
         };
         let mut throughput = next_throughput.lane(lane);
-        let roulette_number = numbers[2][0][lane];
+        let roulette_number = numbers[1][0][lane];
         let mut drawn = false;
         let survives = walk.roulette.survives(walk.segments, &mut throughput, || {
             drawn = true;
