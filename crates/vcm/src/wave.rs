@@ -106,7 +106,7 @@ pub(crate) fn shade_in_parallel<P: Send, T: Send>(
     hits: &HitBatch,
     vertex_sampler: impl Fn(&mut P) -> &mut SobolSampler + Sync,
     lanes: &impl LaneShading<P>,
-    prepare: impl Fn(&P, Hit) -> T + Sync,
+    prepare: impl Fn(&mut P, Hit) -> T + Sync,
     ahead: Option<impl Fn(&P, &mut T, Ahead) + Sync>,
     shade: impl Fn(&mut P, Option<(Hit, &T)>) + Sync,
 ) {
@@ -138,8 +138,8 @@ pub(crate) fn shade_in_parallel<P: Send, T: Send>(
                     .map(|(path, _)| vertex_sampler(path)),
             );
             prepared.clear();
-            let prepare_hit = |(path, hit): (&P, &Option<Hit>)| hit.map(|hit| prepare(path, hit));
-            prepared.extend(chunk.iter().zip(chunk_hits.iter()).map(prepare_hit));
+            let prepare_hit = |(path, hit): (&mut P, &Option<Hit>)| hit.map(|h| prepare(path, h));
+            prepared.extend(chunk.iter_mut().zip(chunk_hits.iter()).map(prepare_hit));
             if let Some(ahead) = &ahead {
                 // Path k takes its first step, path k − AHEAD_LAG (if any) its second.
                 for k in 0..chunk.len() + AHEAD_LAG {

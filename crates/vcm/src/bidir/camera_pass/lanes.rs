@@ -7,7 +7,7 @@ use glam::Vec3;
 use vcm_scene::bsdf::TransportMode;
 use vcm_scene::sampling::SobolSampler;
 
-use super::{CachePicks, CameraContext, CameraPathState, vertex_sampler};
+use super::{CachePicks, CameraContext, CameraPathState, pick_and_prefetch, vertex_sampler};
 use crate::bidir::Algorithm;
 use crate::bidir::mis::{
     ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight, light_sample_weight,
@@ -18,7 +18,6 @@ use crate::lambert::surface::{SurfaceInputs, Vertex};
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::light_vertex_cache::LightVertex;
 use crate::path_state::ShadowRay;
-use crate::prefetch::prefetch;
 use crate::shadow::segment_to;
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::wave::LaneShading;
@@ -64,10 +63,7 @@ impl LaneShading<CameraPathState> for CameraLanes<'_> {
 
     /// The light vertices the vertex connects to start loading (as [`super::prepare`]).
     fn prepare(&self, path: &mut CameraPathState, _: Hit) {
-        let ctx = &self.iterations[path.sample as usize];
-        let picks = CachePicks::next(vertex_sampler(path), ctx);
-        let vertices = ctx.cache.vertices();
-        picks.indices().for_each(|i| prefetch(&vertices[i]));
+        pick_and_prefetch(&self.iterations[path.sample as usize], path);
     }
 
     fn shade(&self, paths: &mut [CameraPathState], group: &[(usize, Hit)]) {
@@ -119,8 +115,10 @@ fn shade(
         (throughput, &mis, &factors),
         pair(1),
     );
-    let picks: [CachePicks; LANES] =
-        std::array::from_fn(|lane| CachePicks::next(&paths[at(lane).0].walk.rng, ctx(lane)));
+    let picks: [CachePicks; LANES] = std::array::from_fn(|lane| {
+        let picks = paths[at(lane).0].picks.clone();
+        picks.expect("a vertex in lanes is prepared")
+    });
     let most = picks.iter().map(|p| p.count).max().unwrap_or(0);
     let connected: Vec<ShadowLanes> = (0..most as usize)
         .filter_map(|k| {
@@ -144,6 +142,7 @@ fn shade(
     let origin = vertex.spawn(next.wi);
     for (lane, &(i, _)) in group.iter().enumerate() {
         let path = &mut paths[i];
+        path.picks = None;
         if !vertex.alive.get(lane) {
             path.alive = false;
             continue;
