@@ -15,6 +15,7 @@ use super::path_order::{in_path_order, path_key};
 use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::integrator::FrameStats;
+use crate::lanes::LANES;
 use crate::light_vertex_cache::LightVertex;
 use crate::medium::Medium;
 use crate::path_state::ShadowRay;
@@ -248,7 +249,8 @@ struct LightWavefront<'a> {
 impl Wavefront for LightWavefront<'_> {
     type Output = Vec<WorkerResults>;
 
-    /// Starts the light paths of the tile's indices, one per iteration.
+    /// Starts the light paths of the tile's indices, one per iteration: each emits from a
+    /// light, its numbers computed [`LANES`] paths at a time ([`SobolSampler::prefetch`]).
     fn start(&mut self, tile: Tile) {
         let (iterations, stream) = (self.iterations, self.stream);
         let samples = iterations.len() as u32;
@@ -256,13 +258,23 @@ impl Wavefront for LightWavefront<'_> {
             .pixels(self.grid_width)
             .flat_map(|index| (0..samples).map(move |sample| (index, sample)))
             .collect();
+        let first = self.paths.len();
         let new_paths = keys
             .into_par_iter()
             .with_min_len(256)
-            .map(|(index, sample)| emit(&iterations[sample as usize], index, sample, stream));
+            .map(|(index, sample)| {
+                LightPathState::new(&iterations[sample as usize], index, sample, stream)
+            });
         // Extending by an exact count writes the paths in place; the few that could not
         // start (a light that emits nothing) are dropped afterwards.
         self.paths.par_extend(new_paths);
+        let emitting = self.paths[first..].par_chunks_mut(LANES).with_min_len(32);
+        emitting.for_each(|chunk| {
+            SobolSampler::prefetch(chunk.iter_mut().map(|path| &mut path.walk.rng));
+            for path in chunk {
+                emit(&iterations[path.sample as usize], path);
+            }
+        });
         self.paths.retain(|path| path.alive);
     }
 
@@ -331,40 +343,49 @@ impl Wavefront for LightWavefront<'_> {
     }
 }
 
-/// Starts light path `index` of iteration `ctx` (the frame's `sample`): picks a light by
-/// power and samples an emitted ray.
-fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathState {
-    // The light paths of one iteration are the samples of one stratified sequence.
-    let key = [ctx.settings.seed, ctx.iteration, stream];
-    let mut rng = ctx.settings.sequence.sampler(&key, u64::from(index));
+impl LightPathState {
+    /// Light path `index` of iteration `ctx` (the frame's `sample`) before it is emitted,
+    /// its sampler at the numbers of the emission.
+    fn new(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathState {
+        // The light paths of one iteration are the samples of one stratified sequence.
+        let key = [ctx.settings.seed, ctx.iteration, stream];
+        let mut rng = ctx.settings.sequence.sampler(&key, u64::from(index));
+        rng.start_step(0, PAIRS_PER_VERTEX);
+        LightPathState {
+            index,
+            sample,
+            walk: Walk {
+                rng,
+                origin: Vec3::ZERO,
+                direction: Vec3::Z,
+                throughput: Vec3::ZERO,
+                medium: Medium::OUTSIDE,
+                mis: SubpathMis::default(),
+                segments: 1,
+                roulette: Roulette::UNIT,
+            },
+            from_infinity: false,
+            alive: false,
+            vertex: None,
+            splat: None,
+            kept_vertices: 0,
+            kept_splats: 0,
+        }
+    }
+}
+
+/// Starts `path` in iteration `ctx`: picks a light by power and samples an emitted ray. A
+/// light that emits nothing there leaves the path dead.
+fn emit(ctx: &FrameContext, path: &mut LightPathState) {
+    let rng = &mut path.walk.rng;
     let (u_pick, u_pos, u_dir) = (rng.uniform(), rng.uniform2(), rng.uniform2());
-    let mut path = LightPathState {
-        index,
-        sample,
-        walk: Walk {
-            rng,
-            origin: Vec3::ZERO,
-            direction: Vec3::Z,
-            throughput: Vec3::ZERO,
-            medium: Medium::OUTSIDE,
-            mis: SubpathMis::default(),
-            segments: 1,
-            roulette: Roulette::UNIT,
-        },
-        from_infinity: false,
-        alive: false,
-        vertex: None,
-        splat: None,
-        kept_vertices: 0,
-        kept_splats: 0,
-    };
     let scene = ctx.scene;
     let Some((light_index, pick_pmf)) = scene.light_sampler.sample(u_pick) else {
-        return path;
+        return;
     };
     let light = &scene.lights[light_index];
     let Some(emission) = light.emit(&scene.textures, u_pos, u_dir) else {
-        return path;
+        return;
     };
     let emission_pdf_w = emission.emission_pdf_w * pick_pmf;
     path.walk.throughput = emission.value * (emission.cos_at_light / emission_pdf_w);
@@ -381,7 +402,6 @@ fn emit(ctx: &FrameContext, index: u32, sample: u32, stream: u64) -> LightPathSt
     path.walk.direction = emission.direction;
     path.from_infinity = !light.is_finite();
     path.alive = path.walk.throughput.max_element() > 0.0 && path.walk.throughput.is_finite();
-    path
 }
 
 /// The sampler of `path`, moved to the numbers of the vertex it has reached.
