@@ -70,28 +70,43 @@ impl RayBatch {
 
     /// Replaces the batch's rays by `rays`, each `(origin, direction, tmin, tmax)` as for
     /// [`push`](Self::push). Faster than clearing and pushing one by one: the arrays grow
-    /// together, a block at a time, and each ray is stored without a capacity check per array.
+    /// together, a block at a time, and each ray is stored without a capacity or bounds
+    /// check per array.
     pub fn refill(&mut self, rays: impl IntoIterator<Item = (Vec3, Vec3, f32, f32)>) {
-        let rays = rays.into_iter();
+        let mut rays = rays.into_iter();
         let mut len = rays.size_hint().1.unwrap_or(REFILL_BLOCK);
-        self.resize(len);
         let mut n = 0;
-        for (origin, direction, tmin, tmax) in rays {
-            if n == len {
-                len = (2 * len).max(REFILL_BLOCK);
-                self.resize(len);
+        loop {
+            self.resize(len);
+            n += self.write_from(n, &mut rays);
+            // Stop once a block is left unfilled or nothing can follow.
+            if n < len || rays.size_hint().1 == Some(0) {
+                break;
             }
-            self.origin_x[n] = origin.x;
-            self.origin_y[n] = origin.y;
-            self.origin_z[n] = origin.z;
-            self.dir_x[n] = direction.x;
-            self.dir_y[n] = direction.y;
-            self.dir_z[n] = direction.z;
-            self.tmin[n] = tmin;
-            self.tmax[n] = tmax;
-            n += 1;
+            len = (2 * len).max(REFILL_BLOCK);
         }
         self.resize(n);
+    }
+
+    /// Writes rays taken from `rays` from index `from` on, up to the arrays' length, and
+    /// returns how many it wrote. Every array is sliced to the same length first, so that the
+    /// stores need no bounds checks.
+    fn write_from(
+        &mut self,
+        from: usize,
+        rays: &mut impl Iterator<Item = (Vec3, Vec3, f32, f32)>,
+    ) -> usize {
+        let room = self.len() - from;
+        let [ox, oy, oz, dx, dy, dz, t0, t1] = self.arrays_mut().map(|a| &mut a[from..from + room]);
+        for i in 0..room {
+            let Some((origin, direction, tmin, tmax)) = rays.next() else {
+                return i;
+            };
+            (ox[i], oy[i], oz[i]) = (origin.x, origin.y, origin.z);
+            (dx[i], dy[i], dz[i]) = (direction.x, direction.y, direction.z);
+            (t0[i], t1[i]) = (tmin, tmax);
+        }
+        room
     }
 
     /// Sets every array's length to `len` (new entries are zero).
