@@ -2,6 +2,8 @@
 //! of fixed capacity (Davidovič et al. 2014, "Progressive Light Transport Simulation on the
 //! GPU: Survey and Improvements").
 
+use std::num::NonZeroU32;
+
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -32,8 +34,10 @@ pub struct LightVertex {
     pub u: f32,
     /// Barycentric weight of the triangle's third corner.
     pub v: f32,
-    /// Segments from the light to this vertex (1: the first hit).
-    pub path_length: u32,
+    /// Segments from the light to this vertex (1: the first hit). Never zero, so that an
+    /// `Option<LightVertex>` (a light path's latest vertex, carried between waves) takes no
+    /// more room than a vertex: with a tag of its own it took two cache lines.
+    pub path_length: NonZeroU32,
 }
 
 /// The light vertices of one frame, path by path, each path's from the light on. Vertices
@@ -123,8 +127,14 @@ mod tests {
             triangle: i,
             u: 0.0,
             v: 0.0,
-            path_length: 1,
+            path_length: NonZeroU32::MIN,
         }
+    }
+
+    #[test]
+    fn a_vertex_and_a_vertex_in_flight_take_one_cache_line() {
+        assert_eq!(size_of::<LightVertex>(), 64);
+        assert_eq!(size_of::<Option<LightVertex>>(), 64);
     }
 
     #[test]

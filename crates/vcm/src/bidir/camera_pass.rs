@@ -508,7 +508,10 @@ fn connect_to_cache(
     let scale = vertices.len() as f32 / (ctx.settings.connections as f32 * ctx.factors.light_paths);
     for pick in picks.indices() {
         let vertex = &vertices[pick];
-        let segments = path.walk.segments.saturating_add(vertex.path_length + 1);
+        let segments = path
+            .walk
+            .segments
+            .saturating_add(vertex.path_length.get() + 1);
         if segments > ctx.max_segments() {
             continue;
         }
@@ -589,7 +592,7 @@ fn merge(
     // The vertices within the radius, found and requested by `look_ahead`.
     found.iter().for_each(|&i| {
         let vertex = &vertices[i as usize];
-        if path.walk.segments.saturating_add(vertex.path_length) > max_segments {
+        if path.walk.segments.saturating_add(vertex.path_length.get()) > max_segments {
             return;
         }
         let eval = seen.eval(vertex.wo, TransportMode::Radiance, Pdfs::Both);

@@ -1,6 +1,7 @@
 //! The light pass: light paths traced in waves, their vertices stored in the light vertex
 //! cache and (for light tracing, BPT and VCM) connected to the camera.
 
+use std::num::NonZeroU32;
 use std::sync::{Mutex, PoisonError};
 
 use glam::{UVec2, Vec3};
@@ -439,7 +440,7 @@ fn shade(
             triangle: hit.triangle,
             u: hit.u,
             v: hit.v,
-            path_length: path.walk.segments,
+            path_length: path_length(path.walk.segments),
         };
         if splat && path.walk.segments < max_segments {
             path.splat = seen
@@ -461,6 +462,11 @@ fn shade(
                 )
                 .is_some()
         });
+}
+
+/// The path length of a light vertex `segments` segments from the light.
+fn path_length(segments: u32) -> NonZeroU32 {
+    NonZeroU32::new(segments).expect("a light vertex lies at least one segment from the light")
 }
 
 /// Connects a light vertex, reached through `medium`, to the camera: its splat, if the vertex

@@ -126,7 +126,7 @@ fn shade(
                 let ctx = ctx(lane);
                 let light = &ctx.cache.vertices()[picks[lane].indices().nth(k)?];
                 let segments = paths[at(lane).0].walk.segments;
-                let length = segments.saturating_add(light.path_length + 1);
+                let length = segments.saturating_add(light.path_length.get() + 1);
                 (length <= ctx.max_segments()).then_some((ctx, light))
             });
             let any = pick.iter().any(Option::is_some);

@@ -7,7 +7,7 @@ use glam::UVec2;
 use vcm_scene::bsdf::TransportMode;
 use vcm_scene::sampling::SobolSampler;
 
-use super::{LightPathState, Splat, vertex_sampler};
+use super::{LightPathState, Splat, path_length, vertex_sampler};
 use crate::bidir::mis::{MisFactors, SubpathMis, camera_connection_weight};
 use crate::bidir::{Algorithm, FrameContext, VcmSettings};
 use crate::lambert::LambertLanes;
@@ -133,7 +133,7 @@ fn shade(
             triangle: hit.triangle,
             u: hit.u,
             v: hit.v,
-            path_length: walk.segments,
+            path_length: path_length(walk.segments),
         };
         if walk.segments < max_segments {
             path.splat = splats.as_ref().and_then(|s| s.splat(ctx(lane), lane));
