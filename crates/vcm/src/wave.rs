@@ -120,7 +120,9 @@ pub(crate) fn shade_in_parallel<P: Send, T: Send>(
                 in_lanes,
                 lane_group,
             } = lists;
-            (chunk_hits.clear(), in_lanes.clear(), lane_group.clear());
+            chunk_hits.clear();
+            in_lanes.clear();
+            lane_group.clear();
             for (i, path) in chunk.iter_mut().enumerate() {
                 let hit = Hit::from_batch(hits, first + i);
                 let taken = hit.filter(|&hit| lanes.takes(path, hit));
