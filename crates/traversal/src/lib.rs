@@ -3,7 +3,8 @@
 //! - [`RayBatch`] / [`HitBatch`]: structure-of-arrays buffers reused across calls.
 //! - [`Traversal`]: the backend interface, synchronous or via [`Traversal::submit`] and
 //!   [`PendingTraversal::wait`] for backends that overlap work.
-//! - [`CpuBvh`]: the CPU backend (obvhs CWBVH, watertight triangle test, rayon).
+//! - [`CpuBvh`]: the CPU backend (an obvhs-built 8-wide BVH with exact child boxes, watertight
+//!   triangle test, rayon).
 //!
 //! Backends are built from plain triangles (`&[[Vec3; 3]]`, index = primitive id) and an
 //! optional [`AlphaTest`], independent of any scene representation.

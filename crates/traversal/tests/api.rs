@@ -145,9 +145,11 @@ fn reports_build_statistics() {
     let tris = triangle_soup(&mut rng, 1000, 1.0);
     let bvh = CpuBvh::new(&tris, CpuBvhOptions::default()).unwrap();
     let bytes_per_triangle = bvh.memory_bytes() as f64 / tris.len() as f64;
-    // 36 bytes of triangle and 4 of id, plus a share of 80-byte nodes.
+    // 36 bytes of triangle and 4 of id, plus a share of 256-byte nodes: a node holds up to
+    // eight children of up to three triangles, and far more than a node per four triangles
+    // would mean mostly empty slots.
     assert!(
-        (40.0..68.0).contains(&bytes_per_triangle),
+        (40.0..104.0).contains(&bytes_per_triangle),
         "{bytes_per_triangle}"
     );
     assert!(bvh.build_time().as_nanos() > 0);

@@ -1,16 +1,17 @@
-//! Building the CWBVH and laying the triangles out in leaf order.
+//! Building the hierarchy and laying the triangles out in leaf order.
 
 use glam::Vec3;
 use obvhs::cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh};
 
 use super::triangle::LeafTriangles;
+use super::wide_node::{WideNode, wide_nodes};
 use crate::build::{BuildPreset, build_bvh2, cwbvh_levels};
 use crate::error::BuildError;
 
-/// A CWBVH whose leaves index `triangles` directly.
+/// An 8-wide hierarchy whose leaves index `triangles` directly.
 pub(crate) struct LeafGeometry {
-    /// The hierarchy; its `primitive_indices` are moved into `ids`.
-    pub bvh: CwBvh,
+    /// The nodes, root first (none without triangles).
+    pub nodes: Vec<WideNode>,
     /// Node levels, root included: bounds the traversal stack.
     pub levels: usize,
     /// Triangles in leaf order (a triangle split by the builder appears once per leaf).
@@ -33,23 +34,24 @@ impl LeafGeometry {
         let triangles = LeafTriangles::new(ids.iter().map(|&id| triangles[id as usize]));
         Ok(Self {
             levels: cwbvh_levels(&bvh),
-            bvh,
+            nodes: wide_nodes(&bvh, &triangles),
             triangles,
             ids,
         })
     }
 
-    /// Asks for the cache lines of node `index` (80 bytes: two lines).
+    /// Asks for the cache lines of node `index` (256 bytes: four lines).
     #[inline(always)]
     pub fn prefetch_node(&self, index: usize) {
-        let node = self.bvh.nodes.as_ptr().wrapping_add(index).cast::<u8>();
-        prefetch(node);
-        prefetch(node.wrapping_add(64));
+        let node = self.nodes.as_ptr().wrapping_add(index).cast::<u8>();
+        for line in 0..size_of::<WideNode>() / 64 {
+            prefetch(node.wrapping_add(64 * line));
+        }
     }
 
     /// Bytes used by nodes, leaf triangles and the id map.
     pub fn memory_bytes(&self) -> usize {
-        size_of_val(self.bvh.nodes.as_slice())
+        size_of_val(self.nodes.as_slice())
             + self.triangles.memory_bytes()
             + size_of_val(self.ids.as_slice())
     }

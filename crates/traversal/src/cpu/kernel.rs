@@ -1,30 +1,27 @@
-//! CWBVH traversal for closest-hit and any-hit searches: one ray at a time with obvhs's
-//! `traverse!` loop ([`search`]), or several rays in turn ([`search_in_turn`]), a step at a
-//! time in the same order.
+//! Traversal of the 8-wide hierarchy for closest-hit and any-hit searches: one ray at a
+//! time ([`search`]), or several rays in turn ([`search_in_turn`]), a step at a time in the
+//! same order.
 //!
-//! A step is one node test or the triangle tests of one node's leaves. On a hierarchy far
-//! larger than the caches, most of a step's time goes to waiting for its node or triangles
-//! to arrive from memory; taking [`LANES_LARGE`] rays in turn, each step prefetches what
-//! its ray's next step reads, so that those misses overlap the other rays' work. Where
-//! everything stays in cache the single-ray loop is faster (fewer branches per step).
-
-use glam::UVec2;
-use obvhs::cwbvh::firstbithigh;
-use obvhs::cwbvh::node::CwBvhNode;
-use obvhs::faststack::{FastStack, HeapStack};
+//! A step is one node test or the triangle tests of one node's hit leaves. A node's leaves
+//! are tested before its children are entered, and the children nearest along the ray are
+//! entered first, so that closest-hit searches shrink their interval early and skip the
+//! children that lie beyond their closest hit.
+//!
+//! On a hierarchy far larger than the caches, most of a step's time goes to waiting for its
+//! node or triangles to arrive from memory; taking [`LANES_LARGE`] rays in turn, each step
+//! prefetches what its ray's next step reads, so that those misses overlap the other rays'
+//! work. Where everything stays in cache the single-ray loop is faster (fewer branches per
+//! step).
 
 use super::filter::HitFilter;
 use super::geometry::LeafGeometry;
-use super::node::NodeTest;
+use super::node::{NodeHits, NodeTest, widen_up};
 use super::ray::PreparedRay;
 use super::triangle::{Candidate, TriangleTest};
+use super::wide_node::WideNode;
 
 /// Rays traced in turn per thread on hierarchies larger than the caches.
 pub(crate) const LANES_LARGE: usize = 8;
-
-/// A node group holding just the root: one hit bit in the top byte, which resolves to
-/// relative index 0 (node 0) whatever the ray's octant.
-const ROOT_GROUP: UVec2 = UVec2::new(0, 0x8000_0000);
 
 /// What a ray's traversal does next.
 #[derive(Clone, Copy)]
@@ -37,100 +34,85 @@ enum Step {
     Done,
 }
 
-/// One ray's place in the hierarchy, with the fields `traverse!` uses and a stack as deep
-/// as the hierarchy (obvhs's own traversal state has a fixed 32-entry stack that degenerate
-/// inputs can overflow). Reused across the rays of a chunk.
+/// One ray's place in the hierarchy, with a stack as deep as the hierarchy needs. Reused
+/// across the rays of a chunk.
 pub(crate) struct Walk {
-    stack: HeapStack<UVec2>,
-    /// Node children still to visit: base index, hit bits in the top byte, internal-child
-    /// mask in the low byte.
-    current_group: UVec2,
-    /// Leaf triangles still to test: first index, a bit per triangle.
-    primitive_group: UVec2,
-    oct_inv4: u32,
-    /// The leaf `traverse!` took last.
-    primitive_id: u32,
-    /// The last node test's hit mask (`traverse!`'s scratch).
-    hitmask: u32,
+    /// The node to visit next, with a lower bound of the ray parameter at which the ray
+    /// enters it: the only child the last node test hit, or the root. Kept off the stack,
+    /// since most nodes of a small hierarchy send a ray into one child or none.
+    only_child: Option<(u32, f32)>,
+    /// Nodes still to visit after it, with the same bounds; in decreasing order of the bound
+    /// within each node's children, so the nearest is on top.
+    stack: Vec<(u32, f32)>,
+    /// Leaf triangles still to test: the first index and a bit per triangle.
+    leaves: (usize, u32),
 }
 
 impl Walk {
     /// A walk able to traverse `geometry`.
     pub fn new(geometry: &LeafGeometry) -> Self {
+        // Each level pops one node and pushes at most eight children.
         Self {
-            stack: HeapStack::new_with_capacity(geometry.levels.max(1)),
-            current_group: UVec2::ZERO,
-            primitive_group: UVec2::ZERO,
-            oct_inv4: 0,
-            primitive_id: 0,
-            hitmask: 0,
+            only_child: None,
+            stack: Vec::with_capacity(7 * geometry.levels + 1),
+            leaves: (0, 0),
         }
     }
 
-    /// The primitives left in the node's group, including the one `traverse!` just took: the
-    /// first leaf index and a bit per leaf after it. Empties the group, so that `traverse!`
-    /// goes on to the next node once they are all tested together.
+    /// Starts over at the root.
     #[inline(always)]
-    fn take_primitive_group(&mut self) -> (usize, u32) {
-        let first = self.primitive_group.x;
-        let mask = self.primitive_group.y | (1 << (self.primitive_id - first));
-        self.primitive_group.y = 0;
-        (first as usize, mask)
-    }
-
-    /// Starts over at the root for `ray`.
-    #[inline(always)]
-    fn start(&mut self, geometry: &LeafGeometry, ray: &PreparedRay) {
+    fn start(&mut self, geometry: &LeafGeometry) {
         self.stack.clear();
-        self.current_group = if geometry.bvh.nodes.is_empty() {
-            UVec2::ZERO
-        } else {
-            ROOT_GROUP
-        };
-        self.primitive_group = UVec2::ZERO;
-        self.oct_inv4 = ray.oct_inv4;
+        self.only_child = (!geometry.nodes.is_empty()).then_some((0, f32::NEG_INFINITY));
+        self.leaves = (0, 0);
     }
 
-    /// The next step: the leaves of the node visited last, else the next child in the
-    /// current group, else the group on top of the stack.
+    /// The next step of a search that has nothing to find beyond `tmax`: the leaves of the
+    /// node visited last, else the nearest node left that the ray may enter by `tmax`.
     #[inline(always)]
-    fn next(&mut self) -> Step {
-        loop {
-            if self.primitive_group.y != 0 {
-                let UVec2 { x: first, y: mask } = self.primitive_group;
-                self.primitive_group = UVec2::ZERO;
-                return Step::Leaves {
-                    first: first as usize,
-                    mask,
-                };
-            }
-            let hits = self.current_group.y;
-            if hits & 0xff00_0000 != 0 {
-                let offset = firstbithigh(hits);
-                self.current_group.y &= !(1 << offset);
-                if self.current_group.y & 0xff00_0000 != 0 {
-                    self.stack.push(self.current_group);
-                }
-                // The child's slot in the node, and the internal children stored before it.
-                let slot = (offset - 24) ^ (self.oct_inv4 & 0xff);
-                let relative = (hits & !(u32::MAX << slot)).count_ones();
-                return Step::Node(self.current_group.x + relative);
-            }
-            if self.stack.is_empty() {
-                return Step::Done;
-            }
-            self.current_group = self.stack.pop_fast();
+    fn next(&mut self, tmax: f32) -> Step {
+        if self.leaves.1 != 0 {
+            let (first, mask) = std::mem::take(&mut self.leaves);
+            return Step::Leaves { first, mask };
         }
+        let bound = widen_up(tmax);
+        if let Some((node, entry)) = self.only_child.take()
+            && entry <= bound
+        {
+            return Step::Node(node);
+        }
+        while let Some((node, entry)) = self.stack.pop() {
+            if entry <= bound {
+                return Step::Node(node);
+            }
+        }
+        Step::Done
     }
 
-    /// Takes in the node test's hit mask for `node`.
+    /// Takes in what the ray overlaps among `node`'s children.
     #[inline(always)]
-    fn visited(&mut self, node: &CwBvhNode, hitmask: u32) {
-        self.current_group = UVec2::new(
-            node.child_base_idx,
-            (hitmask & 0xff00_0000) | u32::from(node.imask),
-        );
-        self.primitive_group = UVec2::new(node.primitive_base_idx, hitmask & 0x00ff_ffff);
+    fn visited(&mut self, node: &WideNode, hits: &NodeHits) {
+        self.leaves = (node.first_triangle as usize, hits.leaves);
+        let mut inner = hits.inner;
+        if inner & inner.wrapping_sub(1) == 0 {
+            let slot = inner.trailing_zeros() as usize;
+            self.only_child = (inner != 0).then(|| (node.children[slot], hits.entry[slot]));
+            return;
+        }
+        let base = self.stack.len();
+        while inner != 0 {
+            let slot = inner.trailing_zeros() as usize;
+            inner &= inner - 1;
+            let child = (node.children[slot], hits.entry[slot]);
+            // Insertion sort: the children pushed so far stay in decreasing entry order.
+            let mut at = self.stack.len();
+            self.stack.push(child);
+            while at > base && self.stack[at - 1].1 < child.1 {
+                self.stack[at] = self.stack[at - 1];
+                at -= 1;
+            }
+            self.stack[at] = child;
+        }
     }
 }
 
@@ -245,7 +227,32 @@ impl Search for AnyHit {
     }
 }
 
-/// Runs the search for `T` along `ray` with obvhs's `traverse!` loop, reusing `walk`.
+/// Takes `step` of `search` along `ray`; returns true when the search is over.
+#[inline(always)]
+fn take_step<T, N: NodeTest + TriangleTest, F: HitFilter>(
+    (geometry, node_test, filter): (&LeafGeometry, N, &F),
+    walk: &mut Walk,
+    ray: &PreparedRay,
+    search: &mut Found<T>,
+    step: Step,
+) -> bool
+where
+    Found<T>: Search,
+{
+    match step {
+        Step::Node(index) => {
+            let node = &geometry.nodes[index as usize];
+            walk.visited(node, &node_test.intersect(node, ray, search.tmax));
+            false
+        }
+        Step::Leaves { first, mask } => {
+            search.leaves(geometry, node_test, filter, ray, (first, mask))
+        }
+        Step::Done => true,
+    }
+}
+
+/// Runs the search for `T` along `ray`, reusing `walk`.
 #[inline(always)]
 pub(crate) fn search<T: Default, N: NodeTest + TriangleTest, F: HitFilter>(
     geometry: &LeafGeometry,
@@ -257,25 +264,14 @@ pub(crate) fn search<T: Default, N: NodeTest + TriangleTest, F: HitFilter>(
 where
     Found<T>: Search,
 {
-    let bvh = &geometry.bvh;
-    walk.start(geometry, ray);
+    walk.start(geometry);
     let mut search = Found::new(ray);
-    let mut node;
-    'search: {
-        obvhs::traverse!(
-            bvh,
-            node,
-            walk,
-            node_test.intersect(node, ray, walk.oct_inv4, search.tmax),
-            {
-                let group = walk.take_primitive_group();
-                if search.leaves(geometry, node_test, filter, ray, group) {
-                    break 'search;
-                }
-            }
-        );
+    loop {
+        let step = walk.next(search.tmax);
+        if take_step((geometry, node_test, filter), walk, ray, &mut search, step) {
+            return search;
+        }
     }
-    search
 }
 
 /// A ray in flight: its index in the chunk, the ray, its search and its next step.
@@ -310,8 +306,8 @@ pub(crate) fn search_in_turn<
             let index = next;
             next += 1;
             if let Some(ray) = ray(index) {
-                lane.walk.start(geometry, &ray);
-                lane.step = lane.walk.next();
+                lane.walk.start(geometry);
+                lane.step = lane.walk.next(ray.tmax);
                 lane.flight = Some((index, ray, Found::new(&ray)));
                 return true;
             }
@@ -334,19 +330,13 @@ pub(crate) fn search_in_turn<
             let Some((_, ray, search)) = &mut lane.flight else {
                 continue;
             };
-            let finished = match lane.step {
-                Step::Node(node) => {
-                    let node = &geometry.bvh.nodes[node as usize];
-                    let oct_inv4 = lane.walk.oct_inv4;
-                    let hitmask = node_test.intersect(node, ray, oct_inv4, search.tmax);
-                    lane.walk.visited(node, hitmask);
-                    false
-                }
-                Step::Leaves { first, mask } => {
-                    search.leaves(geometry, node_test, filter, ray, (first, mask))
-                }
-                Step::Done => true,
-            };
+            let finished = take_step(
+                (geometry, node_test, filter),
+                &mut lane.walk,
+                ray,
+                search,
+                lane.step,
+            );
             if finished {
                 let (index, _, search) = lane.flight.take().expect("the lane is in flight");
                 done(index, Some(search));
@@ -355,7 +345,7 @@ pub(crate) fn search_in_turn<
                     continue;
                 }
             } else {
-                lane.step = lane.walk.next();
+                lane.step = lane.walk.next(search.tmax);
             }
             prefetch(geometry, lane.step);
         }

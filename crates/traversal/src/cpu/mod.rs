@@ -1,6 +1,6 @@
-//! The CPU backend: an obvhs compressed wide BVH (CWBVH) traversed on rayon, one ray at a
-//! time per thread or, on hierarchies larger than the caches, several in turn, with a
-//! watertight triangle test.
+//! The CPU backend: obvhs's 8-wide BVH (CWBVH) with exact single-precision child boxes,
+//! traversed nearest child first on rayon, one ray at a time per thread or, on hierarchies
+//! larger than the caches, several in turn, with a watertight triangle test.
 
 mod batch;
 mod filter;
@@ -10,6 +10,7 @@ mod node;
 mod options;
 mod ray;
 mod triangle;
+mod wide_node;
 
 use std::fmt;
 use std::sync::Arc;
@@ -32,13 +33,14 @@ struct AlphaState {
     masked: Vec<bool>,
 }
 
-/// CPU ray traversal over a CWBVH built with obvhs's parallel PLOC builder.
+/// CPU ray traversal over an 8-wide BVH built with obvhs's parallel PLOC builder and
+/// converted from its compressed layout (CWBVH) to 256-byte nodes with exact child boxes.
 ///
 /// Triangles are copied into BVH leaf order (nine coordinate planes, 36 bytes each) so
 /// leaves index them directly; an id map turns leaf positions back into the caller's ids.
 /// Batches are split into chunks traced in parallel on the current rayon pool, one ray at a
-/// time or several in turn ([`Interleave`]), with 8-wide AVX2 node tests and the triangles of a node's hit leaves tested 8 at a
-/// time where the CPU has AVX2.
+/// time or several in turn ([`Interleave`]), with a node's eight children and the triangles
+/// of its hit leaves tested 8 at a time where the CPU has AVX2.
 pub struct CpuBvh {
     geometry: LeafGeometry,
     alpha: Option<AlphaState>,
@@ -127,7 +129,7 @@ impl CpuBvh {
 impl fmt::Debug for CpuBvh {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("CpuBvh")
-            .field("nodes", &self.geometry.bvh.nodes.len())
+            .field("nodes", &self.geometry.nodes.len())
             .field("leaf_triangles", &self.geometry.triangles.len())
             .field("alpha_test", &self.alpha.is_some())
             .field("simd", &self.simd)

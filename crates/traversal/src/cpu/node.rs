@@ -1,81 +1,43 @@
-//! Ray tests against the eight quantised child boxes of a CWBVH node.
+//! Ray tests against the eight child boxes of a [`WideNode`].
 //!
-//! Child boxes are stored as 8-bit offsets on a per-node grid (origin `p`, cell size `e`
-//! per axis). The slab distance of plane `q` is `q · (e / d) + (p − o) / d`. Both terms are
-//! rounded, and obvhs rounds the grid coordinates of a child once before flooring them, so
-//! each distance is widened by a bound on those errors: a few ulps of the largest term. That
-//! keeps geometry lying exactly on a box face (axis-aligned walls, cube corners) from being
-//! culled by a one-ulp miss.
+//! Each slab distance `(plane − o) · (1/d)` takes three roundings (the subtraction, the
+//! reciprocal and the product), so it is within a relative `γ₃ = 3u/(1 − 3u)` of the exact
+//! distance. The test widens the entry distance down and the exit distance up by
+//! [`SLAB_SLACK`] of their magnitude before comparing them, so a box is never culled that
+//! the exact test would keep: geometry lying exactly on a box face (axis-aligned walls,
+//! cube corners) is never missed by one ulp. An empty slot's inverted box gives an infinite
+//! entry and exit, whose widening is NaN, and NaN compares false: it is never entered.
 
-use glam::{Vec3A, Vec4};
-use obvhs::cwbvh::node::CwBvhNode;
+use glam::Vec4;
 
 use super::ray::PreparedRay;
+use super::wide_node::{LEAF, WideNode};
 
-/// Relative error bound on a slab distance, in units of its largest term.
-const SLAB_SLACK: f32 = 8.0 * f32::EPSILON;
+/// Relative widening of slab distances: `2γ₃` and the rounding of the widening itself,
+/// with room to spare.
+const SLAB_SLACK: f32 = 4.0 * f32::EPSILON;
+
+/// What a ray overlaps among a node's children.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct NodeHits {
+    /// A bit per overlapped internal child slot.
+    pub inner: u32,
+    /// A bit per leaf triangle `node.first_triangle + k` of the overlapped leaf children.
+    pub leaves: u32,
+    /// Per slot, a lower bound of the ray parameter at which the ray enters the child box.
+    pub entry: [f32; 8],
+}
 
 /// Intersects a ray with the children of a node.
 pub(crate) trait NodeTest: Copy {
-    /// Returns obvhs's hit mask for the children whose boxes the ray overlaps within
-    /// `[ray.tmin, tmax]`: internal children in the top byte (in traversal order for
-    /// octant `oct_inv4`), leaf primitives in the low 24 bits.
-    fn intersect(self, node: &CwBvhNode, ray: &PreparedRay, oct_inv4: u32, tmax: f32) -> u32;
+    /// The children whose boxes the ray overlaps within `[ray.tmin, tmax]`.
+    fn intersect(self, node: &WideNode, ray: &PreparedRay, tmax: f32) -> NodeHits;
 }
 
-/// The ray transformed into a node's grid: slab distance of grid plane `q` along an axis is
-/// `q · scale + near` for the entry plane and `q · scale + far` for the exit plane.
-struct NodeFrame {
-    scale: Vec3A,
-    near: Vec3A,
-    far: Vec3A,
-}
-
-impl NodeFrame {
-    #[inline(always)]
-    fn new(node: &CwBvhNode, ray: &PreparedRay) -> Self {
-        let extent = node.compute_extent();
-        let offset = Vec3A::from(node.p) - ray.origin;
-        let base = offset * ray.inv_dir;
-        let slack = (offset.abs() + extent * 255.0) * ray.inv_dir.abs() * SLAB_SLACK;
-        Self {
-            scale: extent * ray.inv_dir,
-            near: base - slack,
-            far: base + slack,
-        }
-    }
-}
-
-/// The grid planes a ray enters and exits each child through along one axis.
+/// `exit` widened up by [`SLAB_SLACK`] of its magnitude.
 #[inline(always)]
-fn entry_exit_planes<'n>(
-    node: &'n CwBvhNode,
-    ray: &PreparedRay,
-    axis: usize,
-) -> (&'n [u8; 8], &'n [u8; 8]) {
-    let (min, max) = match axis {
-        0 => (&node.child_min_x, &node.child_max_x),
-        1 => (&node.child_min_y, &node.child_max_y),
-        _ => (&node.child_min_z, &node.child_max_z),
-    };
-    if ray.negative[axis] {
-        (max, min)
-    } else {
-        (min, max)
-    }
-}
-
-/// Turns a mask of overlapped child slots into obvhs's traversal hit mask.
-#[inline(always)]
-fn hit_mask(node: &CwBvhNode, oct_inv4: u32, mut slots: u32) -> u32 {
-    let (child_bits, bit_index) = node.get_child_and_index_bits(oct_inv4);
-    let mut mask = 0;
-    while slots != 0 {
-        let shift = slots.trailing_zeros() * 8;
-        slots &= slots - 1;
-        mask |= ((child_bits >> shift) as u32 & 0xff) << ((bit_index >> shift) as u32 & 0xff);
-    }
-    mask
+pub(crate) fn widen_up(exit: f32) -> f32 {
+    exit + exit.abs() * SLAB_SLACK
 }
 
 /// Four children at a time with 4-wide vectors; works on every target.
@@ -84,28 +46,39 @@ pub(crate) struct Portable;
 
 impl NodeTest for Portable {
     #[inline(always)]
-    fn intersect(self, node: &CwBvhNode, ray: &PreparedRay, oct_inv4: u32, tmax: f32) -> u32 {
-        let frame = NodeFrame::new(node, ray);
-        let planes = [0, 1, 2].map(|axis| entry_exit_planes(node, ray, axis));
-        let mut slots = 0;
+    fn intersect(self, node: &WideNode, ray: &PreparedRay, tmax: f32) -> NodeHits {
+        let mut overlapped = 0;
+        let mut entry = [0.0; 8];
         for half in 0..2 {
-            let mut entry = Vec4::splat(ray.tmin);
-            let mut exit = Vec4::splat(tmax);
-            for (axis, (near, far)) in planes.iter().enumerate() {
-                let scale = Vec4::splat(frame.scale[axis]);
-                entry = entry.max(quads(near, half) * scale + Vec4::splat(frame.near[axis]));
-                exit = exit.min(quads(far, half) * scale + Vec4::splat(frame.far[axis]));
+            let quad = |plane: usize| Vec4::from_slice(&node.planes[plane][half * 4..]);
+            let mut near = Vec4::splat(ray.tmin);
+            let mut far = Vec4::splat(tmax);
+            for axis in 0..3 {
+                let (origin, inv_dir) = (Vec4::splat(ray.origin[axis]), ray.inv_dir[axis]);
+                let plane = ray.near_planes[axis];
+                near = near.max((quad(plane) - origin) * inv_dir);
+                far = far.min((quad(plane ^ 1) - origin) * inv_dir);
             }
-            slots |= entry.cmple(exit).bitmask() << (half * 4);
+            let near = near - near.abs() * SLAB_SLACK;
+            let far = far + far.abs() * SLAB_SLACK;
+            overlapped |= near.cmple(far).bitmask() << (half * 4);
+            near.write_to_slice(&mut entry[half * 4..]);
         }
-        hit_mask(node, oct_inv4, slots)
+        let mut hits = NodeHits {
+            inner: 0,
+            leaves: 0,
+            entry,
+        };
+        while overlapped != 0 {
+            let slot = overlapped.trailing_zeros() as usize;
+            overlapped &= overlapped - 1;
+            match node.children[slot] {
+                child if child & LEAF != 0 => hits.leaves |= child & !LEAF,
+                _ => hits.inner |= 1 << slot,
+            }
+        }
+        hits
     }
-}
-
-#[inline(always)]
-fn quads(bytes: &[u8; 8], half: usize) -> Vec4 {
-    let b = &bytes[half * 4..half * 4 + 4];
-    Vec4::new(b[0] as f32, b[1] as f32, b[2] as f32, b[3] as f32)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -115,10 +88,9 @@ pub(crate) use avx2::Avx2;
 mod avx2 {
     use std::arch::x86_64::*;
 
-    use obvhs::cwbvh::node::CwBvhNode;
-
-    use super::{NodeFrame, NodeTest, entry_exit_planes};
+    use super::{NodeHits, NodeTest, SLAB_SLACK};
     use crate::cpu::ray::PreparedRay;
+    use crate::cpu::wide_node::{LEAF, WideNode};
 
     /// All eight children at once with AVX2 and FMA. Only constructible where the CPU
     /// supports both.
@@ -139,47 +111,52 @@ mod avx2 {
         // Not a `#[target_feature]` function, so that it can be `inline(always)` into the
         // AVX2 chunk loops, where the intrinsics then inline too.
         #[inline(always)]
-        fn intersect(self, node: &CwBvhNode, ray: &PreparedRay, oct_inv4: u32, tmax: f32) -> u32 {
-            let frame = NodeFrame::new(node, ray);
-            // SAFETY: `Avx2` values only exist when the CPU supports AVX2 and FMA.
+        fn intersect(self, node: &WideNode, ray: &PreparedRay, tmax: f32) -> NodeHits {
+            // SAFETY: `Avx2` values only exist when the CPU supports AVX2 and FMA; the
+            // loads read whole `[f32; 8]` and `[u32; 8]` arrays.
             unsafe {
-                let mut entry = _mm256_set1_ps(ray.tmin);
-                let mut exit = _mm256_set1_ps(tmax);
+                let plane = |index: usize| _mm256_loadu_ps(node.planes[index].as_ptr());
+                let mut near = _mm256_set1_ps(ray.tmin);
+                let mut far = _mm256_set1_ps(tmax);
                 for axis in 0..3 {
-                    let (near, far) = entry_exit_planes(node, ray, axis);
-                    let scale = _mm256_set1_ps(frame.scale[axis]);
-                    let near_t =
-                        _mm256_fmadd_ps(octs(near), scale, _mm256_set1_ps(frame.near[axis]));
-                    let far_t = _mm256_fmadd_ps(octs(far), scale, _mm256_set1_ps(frame.far[axis]));
-                    entry = _mm256_max_ps(entry, near_t);
-                    exit = _mm256_min_ps(exit, far_t);
+                    let origin = _mm256_set1_ps(ray.origin[axis]);
+                    let inv_dir = _mm256_set1_ps(ray.inv_dir[axis]);
+                    let entry_plane = ray.near_planes[axis];
+                    let distance =
+                        |index| _mm256_mul_ps(_mm256_sub_ps(plane(index), origin), inv_dir);
+                    near = _mm256_max_ps(near, distance(entry_plane));
+                    far = _mm256_min_ps(far, distance(entry_plane ^ 1));
                 }
-                let overlapped = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(entry, exit));
-                traversal_mask(node, oct_inv4, overlapped)
+                let (sign, slack) = (_mm256_set1_ps(-0.0), _mm256_set1_ps(SLAB_SLACK));
+                let widen = |t| _mm256_mul_ps(_mm256_andnot_ps(sign, t), slack);
+                let near = _mm256_sub_ps(near, widen(near));
+                let far = _mm256_add_ps(far, widen(far));
+                let overlapped = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
+                let children = _mm256_loadu_si256(node.children.as_ptr().cast());
+                // Leaf children have their sign bit set.
+                let leaf_slots = _mm256_castsi256_ps(children);
+                let hit_children = _mm256_and_si256(_mm256_castps_si256(overlapped), children);
+                let hit_leaves = _mm256_srai_epi32::<31>(hit_children);
+                let mut entry = [0.0; 8];
+                _mm256_storeu_ps(entry.as_mut_ptr(), near);
+                NodeHits {
+                    inner: _mm256_movemask_ps(_mm256_andnot_ps(leaf_slots, overlapped)) as u32,
+                    leaves: or_lanes(hit_leaves, hit_children) & !LEAF,
+                    entry,
+                }
             }
         }
     }
 
-    /// Branch-free equivalent of [`hit_mask`](super::hit_mask) for a lane mask of
-    /// overlapped slots: every lane shifts its child bits into place, then the lanes are
-    /// OR-reduced.
+    /// The OR of the lanes of `values` selected by the all-ones lanes of `selected`.
     ///
     /// # Safety
     /// The CPU must support AVX2.
     #[inline(always)]
-    unsafe fn traversal_mask(node: &CwBvhNode, oct_inv4: u32, overlapped: __m256i) -> u32 {
+    unsafe fn or_lanes(selected: __m256i, values: __m256i) -> u32 {
         // SAFETY: the caller guarantees AVX2.
         unsafe {
-            let meta = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(i64::from_le_bytes(node.child_meta)));
-            // Internal children have offsets 24..32: both bits 3 and 4 set.
-            let inner_bits = _mm256_set1_epi32(0b1_1000);
-            let inner = _mm256_cmpeq_epi32(_mm256_and_si256(meta, inner_bits), inner_bits);
-            let octant = _mm256_and_si256(_mm256_set1_epi32((oct_inv4 & 0xff) as i32), inner);
-            let bit_index =
-                _mm256_and_si256(_mm256_xor_si256(meta, octant), _mm256_set1_epi32(0b1_1111));
-            let child_bits =
-                _mm256_and_si256(_mm256_srli_epi32::<5>(meta), _mm256_set1_epi32(0b111));
-            let lanes = _mm256_and_si256(_mm256_sllv_epi32(child_bits, bit_index), overlapped);
+            let lanes = _mm256_and_si256(selected, values);
             let halves = _mm_or_si128(
                 _mm256_castsi256_si128(lanes),
                 _mm256_extracti128_si256::<1>(lanes),
@@ -187,19 +164,6 @@ mod avx2 {
             let pairs = _mm_or_si128(halves, _mm_shuffle_epi32::<0b01_00_11_10>(halves));
             let all = _mm_or_si128(pairs, _mm_shuffle_epi32::<0b10_11_00_01>(pairs));
             _mm_cvtsi128_si32(all) as u32
-        }
-    }
-
-    /// Converts eight grid coordinates to floats.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[inline(always)]
-    unsafe fn octs(bytes: &[u8; 8]) -> __m256 {
-        // SAFETY: the caller guarantees AVX2.
-        unsafe {
-            let packed = _mm_cvtsi64_si128(i64::from_le_bytes(*bytes));
-            _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(packed))
         }
     }
 }

@@ -13,11 +13,10 @@ pub(crate) struct PreparedRay {
     pub origin: Vec3A,
     /// Safe reciprocal of the direction: finite and never zero.
     pub inv_dir: Vec3A,
-    /// Per axis, whether `inv_dir` is negative (the slab is entered through its max plane).
-    pub negative: [bool; 3],
-    /// The octant in obvhs's child-ordering encoding: per byte, bits 2, 1, 0 are set for
-    /// non-negative x, y, z.
-    pub oct_inv4: u32,
+    /// Per axis, the [`WideNode::planes`](super::wide_node::WideNode::planes) index of the
+    /// plane the ray enters a slab through: `2·axis` (the minimum) for a positive direction,
+    /// `2·axis + 1` (the maximum) for a negative one. The exit plane is the other, `^ 1`.
+    pub near_planes: [usize; 3],
     /// Inclusive lower bound of the ray parameter.
     pub tmin: f32,
     /// Exclusive upper bound of the ray parameter.
@@ -59,18 +58,16 @@ impl PreparedRay {
         }
         let safe_dir = Vec3A::from(direction.signum() * abs.max(Vec3::splat(MIN_DIR_COMPONENT)));
         let inv_dir = safe_dir.recip();
-        let negative = [inv_dir.x < 0.0, inv_dir.y < 0.0, inv_dir.z < 0.0];
-        let oct_inv4 = [0x0404_0404, 0x0202_0202, 0x0101_0101]
-            .into_iter()
-            .zip(negative)
-            .filter(|&(_, negative)| !negative)
-            .fold(0, |octant, (bits, _)| octant | bits);
+        let near_planes = [
+            usize::from(inv_dir.x < 0.0),
+            2 + usize::from(inv_dir.y < 0.0),
+            4 + usize::from(inv_dir.z < 0.0),
+        ];
         let sz = 1.0 / d[kz];
         Some(Self {
             origin: origin.into(),
             inv_dir,
-            negative,
-            oct_inv4,
+            near_planes,
             tmin,
             tmax,
             axes: [kx, ky, kz],

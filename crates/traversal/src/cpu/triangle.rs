@@ -12,6 +12,7 @@
 //! bit-identical hits.
 
 use glam::{DVec3, Vec3, Vec3A, Vec3Swizzles};
+use obvhs::aabb::Aabb;
 
 use super::node::Portable;
 use super::ray::PreparedRay;
@@ -70,6 +71,15 @@ impl LeafTriangles {
     fn plane(&self, vertex: usize, axis: usize) -> &[f32] {
         let start = (3 * vertex + axis) * self.stride;
         &self.coords[start..start + self.stride]
+    }
+
+    /// The bounding box of triangle `i`.
+    pub fn bounds(&self, i: usize) -> Aabb {
+        let axes = self.get(i).axes;
+        Aabb::new(
+            Vec3A::from(axes.map(|a| a.min_element())),
+            Vec3A::from(axes.map(|a| a.max_element())),
+        )
     }
 
     /// Triangle `i`, transposed for the one-triangle test.
