@@ -293,13 +293,16 @@ mod avx2 {
     ) -> (Block, u32, u32) {
         // SAFETY: the caller guarantees AVX2; `start + 8` is within the padded plane.
         unsafe {
-            let [kx, ky, kz] = ray.axes;
             let [sx, sy, sz] = ray.shear.map(|s| _mm256_set1_ps(s));
             let [ox, oy, oz] = ray.origin_permuted.map(|o| _mm256_set1_ps(o));
-            let load = |vertex: usize, axis: usize| {
-                let plane = triangles.plane(vertex, axis);
-                debug_assert!(start + 8 <= plane.len());
-                _mm256_loadu_ps(plane.as_ptr().add(start))
+            // Plane `3·vertex + axis` starts `(3·vertex + axis)·stride` floats in: offsets
+            // computed once per block rather than a checked plane slice per load.
+            let stride = triangles.stride;
+            debug_assert!(start + 8 <= stride && triangles.coords.len() == 9 * stride);
+            let block = triangles.coords.as_ptr().add(start);
+            let [kx, ky, kz] = ray.axes.map(|axis| axis * stride);
+            let load = |vertex: usize, axis_offset: usize| {
+                _mm256_loadu_ps(block.add(3 * stride * vertex + axis_offset))
             };
             let mut x = [_mm256_setzero_ps(); 3];
             let mut y = [_mm256_setzero_ps(); 3];
