@@ -66,10 +66,16 @@ impl LeafTriangles {
         }
     }
 
+    /// Where coordinate plane `3·vertex + axis` starts in `coords`.
+    #[inline(always)]
+    fn plane_start(&self, vertex: usize, axis: usize) -> usize {
+        (3 * vertex + axis) * self.stride
+    }
+
     /// Coordinate plane `3·vertex + axis`, padding included.
     #[inline(always)]
     fn plane(&self, vertex: usize, axis: usize) -> &[f32] {
-        let start = (3 * vertex + axis) * self.stride;
+        let start = self.plane_start(vertex, axis);
         &self.coords[start..start + self.stride]
     }
 
@@ -295,14 +301,13 @@ mod avx2 {
         unsafe {
             let [sx, sy, sz] = ray.shear.map(|s| _mm256_set1_ps(s));
             let [ox, oy, oz] = ray.origin_permuted.map(|o| _mm256_set1_ps(o));
-            // Plane `3·vertex + axis` starts `(3·vertex + axis)·stride` floats in: offsets
-            // computed once per block rather than a checked plane slice per load.
-            let stride = triangles.stride;
-            debug_assert!(start + 8 <= stride && triangles.coords.len() == 9 * stride);
+            let [kx, ky, kz] = ray.axes;
+            // Unchecked loads from the block's first triangle: a checked slice of each
+            // plane per load put a bounds check on every load of the hot loop.
+            debug_assert!(start + 8 <= triangles.stride);
             let block = triangles.coords.as_ptr().add(start);
-            let [kx, ky, kz] = ray.axes.map(|axis| axis * stride);
-            let load = |vertex: usize, axis_offset: usize| {
-                _mm256_loadu_ps(block.add(3 * stride * vertex + axis_offset))
+            let load = |vertex: usize, axis: usize| {
+                _mm256_loadu_ps(block.add(triangles.plane_start(vertex, axis)))
             };
             let mut x = [_mm256_setzero_ps(); 3];
             let mut y = [_mm256_setzero_ps(); 3];
