@@ -1,6 +1,7 @@
-//! Several paths' numbers side by side: arrays of [`LANES`] values whose element-wise loops
-//! the compiler turns into SIMD instructions (eight `f32` fill an AVX2 register), for shading
-//! several paths with each instruction.
+//! Several paths' numbers side by side: arrays of [`LANES`] values, for shading several
+//! paths with each instruction. Where the build targets AVX, each operation is one AVX
+//! instruction on all eight lanes (`lanes/avx.rs`); elsewhere an element-wise loop that the
+//! compiler vectorizes (`lanes/portable.rs`).
 //!
 //! Every operation is the `f32` operation of the same name applied lane by lane, so code
 //! written with these types computes, in each lane, bit for bit what the same steps compute
@@ -35,6 +36,16 @@ pub(crate) struct Vec3s {
 
 pub(crate) use vcm_scene::Real;
 
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+#[path = "lanes/avx.rs"]
+mod ops;
+// Built into AVX test builds too, which check both versions against each other.
+#[cfg(any(test, not(all(target_arch = "x86_64", target_feature = "avx"))))]
+#[path = "lanes/portable.rs"]
+mod portable;
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+use portable as ops;
+
 impl Real for F32s {
     #[inline(always)]
     fn splat(x: f32) -> F32s {
@@ -45,28 +56,6 @@ impl Real for F32s {
     fn abs(self) -> F32s {
         F32s::abs(self)
     }
-}
-
-#[inline(always)]
-fn map<T: Copy, U: Copy + Default>(a: [T; LANES], f: impl Fn(T) -> U) -> [U; LANES] {
-    let mut out = [U::default(); LANES];
-    for lane in 0..LANES {
-        out[lane] = f(a[lane]);
-    }
-    out
-}
-
-#[inline(always)]
-fn zip<T: Copy, U: Copy + Default>(
-    a: [T; LANES],
-    b: [T; LANES],
-    f: impl Fn(T, T) -> U,
-) -> [U; LANES] {
-    let mut out = [U::default(); LANES];
-    for lane in 0..LANES {
-        out[lane] = f(a[lane], b[lane]);
-    }
-    out
 }
 
 impl F32s {
@@ -85,68 +74,68 @@ impl F32s {
     /// [`f32::sqrt`] in each lane.
     #[inline(always)]
     pub fn sqrt(self) -> F32s {
-        F32s(map(self.0, f32::sqrt))
+        ops::sqrt(self)
     }
 
     /// [`f32::abs`] in each lane.
     #[inline(always)]
     pub fn abs(self) -> F32s {
-        F32s(map(self.0, f32::abs))
+        ops::abs(self)
     }
 
     /// `self` where it is greater than `other`, else `other` (glam's `max` and
     /// `max_element`: NaN in `self` gives `other`).
     #[inline(always)]
     pub fn max(self, other: F32s) -> F32s {
-        F32s(zip(self.0, other.0, |a, b| if a > b { a } else { b }))
+        ops::max(self, other)
     }
 
     /// `1.0.copysign(self)` in each lane.
     #[inline(always)]
     pub fn sign_of(self) -> F32s {
-        F32s(map(self.0, |x| 1.0f32.copysign(x)))
+        ops::sign_of(self)
     }
 
     /// Lanes where `self < other`.
     #[inline(always)]
     pub fn lt(self, other: F32s) -> Mask {
-        Mask::from_bools(zip(self.0, other.0, |a, b| a < b))
+        ops::lt(self, other)
     }
 
     /// Lanes where `self <= other`.
     #[inline(always)]
     pub fn le(self, other: F32s) -> Mask {
-        Mask::from_bools(zip(self.0, other.0, |a, b| a <= b))
+        ops::le(self, other)
     }
 
     /// Lanes where `self > other`.
     #[inline(always)]
     pub fn gt(self, other: F32s) -> Mask {
-        Mask::from_bools(zip(self.0, other.0, |a, b| a > b))
+        ops::gt(self, other)
     }
 
     /// Lanes where `self >= other`.
     #[inline(always)]
     pub fn ge(self, other: F32s) -> Mask {
-        Mask::from_bools(zip(self.0, other.0, |a, b| a >= b))
+        ops::ge(self, other)
     }
 
     /// Lanes where `self == other`.
     #[inline(always)]
     pub fn eq(self, other: F32s) -> Mask {
-        Mask::from_bools(zip(self.0, other.0, |a, b| a == b))
+        ops::eq(self, other)
     }
 
     /// Lanes holding a finite number ([`f32::is_finite`]).
     #[inline(always)]
     pub fn is_finite(self) -> Mask {
-        Mask::from_bools(map(self.0, f32::is_finite))
+        ops::is_finite(self)
     }
 
     /// Lanes holding NaN.
     #[inline(always)]
     pub fn is_nan(self) -> Mask {
-        Mask::from_bools(map(self.0, f32::is_nan))
+        ops::is_nan(self)
     }
 }
 
@@ -156,7 +145,7 @@ macro_rules! lane_ops {
             type Output = F32s;
             #[inline(always)]
             fn $method(self, rhs: F32s) -> F32s {
-                F32s(zip(self.0, rhs.0, |a, b| a $op b))
+                ops::$method(self, rhs)
             }
         }
     )*};
@@ -167,7 +156,7 @@ impl Neg for F32s {
     type Output = F32s;
     #[inline(always)]
     fn neg(self) -> F32s {
-        F32s(map(self.0, |x| -x))
+        ops::neg(self)
     }
 }
 
@@ -175,7 +164,7 @@ impl Mask {
     /// The mask of `bools`.
     #[inline(always)]
     pub fn from_bools(bools: [bool; LANES]) -> Mask {
-        Mask(map(bools, |b| 0u32.wrapping_sub(u32::from(b))))
+        Mask(bools.map(|b| 0u32.wrapping_sub(u32::from(b))))
     }
 
     /// The first `count` lanes set.
@@ -187,7 +176,7 @@ impl Mask {
     /// Each lane's truth value.
     #[inline(always)]
     pub fn bools(self) -> [bool; LANES] {
-        map(self.0, |m| m != 0)
+        self.0.map(|m| m != 0)
     }
 
     /// Whether lane `lane` is set.
@@ -199,10 +188,7 @@ impl Mask {
     /// `yes` in the set lanes, `no` in the others.
     #[inline(always)]
     pub fn select(self, yes: F32s, no: F32s) -> F32s {
-        F32s(std::array::from_fn(|lane| {
-            let m = self.0[lane];
-            f32::from_bits((yes.0[lane].to_bits() & m) | (no.0[lane].to_bits() & !m))
-        }))
+        ops::select(self, yes, no)
     }
 
     /// [`Mask::select`] for each coordinate.
@@ -220,7 +206,7 @@ impl BitAnd for Mask {
     type Output = Mask;
     #[inline(always)]
     fn bitand(self, rhs: Mask) -> Mask {
-        Mask(zip(self.0, rhs.0, |a, b| a & b))
+        ops::and(self, rhs)
     }
 }
 
@@ -228,7 +214,7 @@ impl BitOr for Mask {
     type Output = Mask;
     #[inline(always)]
     fn bitor(self, rhs: Mask) -> Mask {
-        Mask(zip(self.0, rhs.0, |a, b| a | b))
+        ops::or(self, rhs)
     }
 }
 
@@ -236,7 +222,7 @@ impl BitXor for Mask {
     type Output = Mask;
     #[inline(always)]
     fn bitxor(self, rhs: Mask) -> Mask {
-        Mask(zip(self.0, rhs.0, |a, b| a ^ b))
+        ops::xor(self, rhs)
     }
 }
 
@@ -244,7 +230,7 @@ impl Not for Mask {
     type Output = Mask;
     #[inline(always)]
     fn not(self) -> Mask {
-        Mask(map(self.0, |a| !a))
+        ops::not(self)
     }
 }
 
@@ -456,6 +442,98 @@ mod tests {
             );
             assert_eq!(la.is_finite().get(i), x.is_finite());
             assert_eq!(la.is_nonzero().get(i), x != Vec3::ZERO);
+        }
+    }
+
+    /// The AVX instructions against the portable loops.
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    mod avx_against_portable {
+        use super::super::{F32s, LANES, Mask, ops, portable};
+
+        /// Values where instructions and scalar code could disagree: signed zeros, subnormals,
+        /// infinities, NaNs of both signs, and ordinary numbers.
+        const SPECIAL: [f32; 16] = [
+            0.0,
+            -0.0,
+            1.0,
+            -2.5,
+            1e-42,
+            -1e-42,
+            f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+            3.0e-20,
+            7.5,
+            -0.1,
+            1e30,
+        ];
+
+        /// Every pair of [`SPECIAL`] values, eight pairs at a time.
+        fn special_pairs() -> Vec<(F32s, F32s)> {
+            let pairs: Vec<_> = SPECIAL
+                .iter()
+                .flat_map(|&a| SPECIAL.iter().map(move |&b| (a, b)))
+                .collect();
+            pairs
+                .chunks(LANES)
+                .map(|chunk| {
+                    (
+                        F32s::from_fn(|lane| chunk[lane].0),
+                        F32s::from_fn(|lane| chunk[lane].1),
+                    )
+                })
+                .collect()
+        }
+
+        type Binary = fn(F32s, F32s) -> F32s;
+        type Unary = fn(F32s) -> F32s;
+        type Comparison = fn(F32s, F32s) -> Mask;
+
+        #[test]
+        fn avx_operations_match_the_portable_loops_bit_for_bit() {
+            let same = |x: F32s, y: F32s| x.0.map(f32::to_bits) == y.0.map(f32::to_bits);
+            for (a, b) in special_pairs() {
+                let binary: [(Binary, Binary); 5] = [
+                    (ops::add, portable::add),
+                    (ops::sub, portable::sub),
+                    (ops::mul, portable::mul),
+                    (ops::div, portable::div),
+                    (ops::max, portable::max),
+                ];
+                for (k, (avx, loops)) in binary.iter().enumerate() {
+                    assert!(same(avx(a, b), loops(a, b)), "binary {k}: {a:?} {b:?}");
+                }
+                let unary: [(Unary, Unary); 4] = [
+                    (ops::neg, portable::neg),
+                    (ops::abs, portable::abs),
+                    (ops::sqrt, portable::sqrt),
+                    (ops::sign_of, portable::sign_of),
+                ];
+                for (k, (avx, loops)) in unary.iter().enumerate() {
+                    assert!(same(avx(a), loops(a)), "unary {k}: {a:?}");
+                }
+                let compare: [(Comparison, Comparison); 5] = [
+                    (ops::lt, portable::lt),
+                    (ops::le, portable::le),
+                    (ops::gt, portable::gt),
+                    (ops::ge, portable::ge),
+                    (ops::eq, portable::eq),
+                ];
+                for (k, (avx, loops)) in compare.iter().enumerate() {
+                    assert_eq!(avx(a, b), loops(a, b), "comparison {k}: {a:?} {b:?}");
+                }
+                assert_eq!(ops::is_finite(a), portable::is_finite(a));
+                assert_eq!(ops::is_nan(a), portable::is_nan(a));
+                let (m, n) = (portable::lt(a, b), portable::is_nan(b));
+                assert_eq!(ops::and(m, n), portable::and(m, n));
+                assert_eq!(ops::or(m, n), portable::or(m, n));
+                assert_eq!(ops::xor(m, n), portable::xor(m, n));
+                assert_eq!(ops::not(m), portable::not(m));
+                assert!(same(ops::select(m, a, b), portable::select(m, a, b)));
+            }
         }
     }
 }
