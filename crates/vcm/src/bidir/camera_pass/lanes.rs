@@ -4,6 +4,7 @@
 //! the MIS quantities' update and Russian roulette.
 
 use glam::Vec3;
+use smallvec::SmallVec;
 use vcm_scene::bsdf::TransportMode;
 use vcm_scene::sampling::SobolSampler;
 
@@ -120,7 +121,9 @@ fn shade(
         picks.expect("a vertex in lanes is prepared")
     });
     let most = picks.iter().map(|p| p.count).max().unwrap_or(0);
-    let connected: Vec<ShadowLanes> = (0..most as usize)
+    // One connection per vertex by default (`--connections`): kept inline, not allocated
+    // for every group.
+    let connected: SmallVec<[ShadowLanes; 1]> = (0..most as usize)
         .filter_map(|k| {
             let pick: [Pick; LANES] = std::array::from_fn(|lane| {
                 let ctx = ctx(lane);
