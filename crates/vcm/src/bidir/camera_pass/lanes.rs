@@ -152,9 +152,11 @@ fn shade(
         }
         // The picks' stream, then the light sample's two pairs and the continuation's two.
         path.walk.rng.skip(PAIRS - 1);
-        path.shadows.extend(sample.ray(lane));
-        path.shadows
-            .extend(connected.iter().filter_map(|c| c.ray(lane)));
+        // One push per ray: `extend` from an iterator did not inline.
+        let rays = std::iter::once(&sample).chain(&connected);
+        for ray in rays.filter_map(|shadows| shadows.ray(lane)) {
+            path.shadows.push(ray);
+        }
         if !next.valid.get(lane) {
             path.alive = false;
             continue;
