@@ -140,7 +140,7 @@ impl F32s {
 }
 
 macro_rules! lane_ops {
-    ($($trait:ident $method:ident $op:tt),*) => {$(
+    ($($trait:ident $method:ident),*) => {$(
         impl $trait for F32s {
             type Output = F32s;
             #[inline(always)]
@@ -150,7 +150,7 @@ macro_rules! lane_ops {
         }
     )*};
 }
-lane_ops!(Add add +, Sub sub -, Mul mul *, Div div /);
+lane_ops!(Add add, Sub sub, Mul mul, Div div);
 
 impl Neg for F32s {
     type Output = F32s;
