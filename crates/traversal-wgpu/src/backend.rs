@@ -81,7 +81,7 @@ impl GpuBvh {
     ) -> Result<Self, GpuError> {
         let start = Instant::now();
         let bvh = build_bvh2(triangles, options.preset)?;
-        let leaf_size = options.preset.params().max_prims_per_leaf;
+        let leaf_size = options.preset.params(triangles.len()).max_prims_per_leaf;
         let layout = SceneLayout::new(&bvh, triangles, options.layout, leaf_size);
         let masked = masks.any();
         let device = &gpu.device;

@@ -22,7 +22,7 @@ mod traversal;
 
 pub use alpha::AlphaTest;
 pub use batch::{HitBatch, NO_HIT, RayBatch};
-pub use build::BuildPreset;
+pub use build::{BEST_BUILD_UP_TO, BuildPreset};
 pub use cpu::{CpuBvh, CpuBvhOptions, CpuKernel, INTERLEAVE_ABOVE_BYTES, Interleave};
 pub use error::BuildError;
 pub use traversal::{CompletedTraversal, PendingTraversal, Traversal, TraversalJob};

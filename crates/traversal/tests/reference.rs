@@ -91,6 +91,7 @@ preset_tests! {
     portable_kernel_matches_reference: Medium, Portable, Auto, 5;
     rays_in_turn_match_reference: Medium, Auto, On, 6;
     portable_rays_in_turn_match_reference: Slow, Portable, On, 7;
+    full_reinsertion_preset_matches_reference: VerySlow, Auto, Auto, 8;
 }
 
 #[test]

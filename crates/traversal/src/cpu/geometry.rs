@@ -27,7 +27,10 @@ impl LeafGeometry {
         let mut bvh = if triangles.is_empty() {
             CwBvh::default()
         } else {
-            let leaf_size = preset.params().max_prims_per_leaf.clamp(1, 3);
+            let leaf_size = preset
+                .params(triangles.len())
+                .max_prims_per_leaf
+                .clamp(1, 3);
             bvh2_to_cwbvh(&bvh2, leaf_size, true, false)
         };
         let ids = std::mem::take(&mut bvh.primitive_indices);

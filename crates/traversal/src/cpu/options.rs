@@ -51,7 +51,7 @@ pub enum CpuKernel {
 }
 
 impl Default for CpuBvhOptions {
-    /// The `Fast` preset, 256-ray chunks and the widest kernel. Throughput is flat from 64 to
+    /// The `Auto` preset, 256-ray chunks and the widest kernel. Throughput is flat from 64 to
     /// 4096 rays per chunk on both benchmark scenes (a chunk takes ≥ 20 µs, far above
     /// rayon's per-task cost), 16 loses ~2% on the Cornell box; 256 still leaves a 64k-ray
     /// batch 256 tasks to balance.
