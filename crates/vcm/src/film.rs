@@ -1,6 +1,7 @@
 //! Accumulation of radiance samples per pixel.
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 use crate::image_io::RgbImage;
 
@@ -50,11 +51,7 @@ impl Film {
     /// [`Film::dropped`]. Panics if `pixel` is outside the image.
     pub fn add(&mut self, pixel: usize, rgb: Vec3) {
         self.samples[pixel] += 1;
-        if rgb.is_finite() {
-            self.sum[pixel] += rgb.as_dvec3();
-        } else {
-            self.dropped += 1;
-        }
+        accumulate(&mut self.sum[pixel], &mut self.dropped, rgb);
     }
 
     /// Adds a light tracing splat to `pixel`: radiance that reaches the pixel from a light
@@ -62,11 +59,35 @@ impl Film {
     /// [`Film::add`] it does not count as a sample (each frame's camera samples do). A
     /// non-finite splat is dropped and counted. Panics if `pixel` is outside the image.
     pub fn add_splat(&mut self, pixel: usize, rgb: Vec3) {
-        if rgb.is_finite() {
-            self.sum[pixel] += rgb.as_dvec3();
-        } else {
-            self.dropped += 1;
-        }
+        accumulate(&mut self.sum[pixel], &mut self.dropped, rgb);
+    }
+
+    /// Runs `add` once for each band of consecutive pixels (one band per thread of the
+    /// rayon pool), the bands in parallel. Each call is meant to offer the band every
+    /// sample and splat, in one order: the band takes those of its own pixels. A pixel so
+    /// receives its additions in the order the calls make them, and its sums are bit for bit
+    /// those of calling [`Film::add`] and [`Film::add_splat`] in that order on one thread.
+    pub fn add_in_bands(&mut self, add: impl Fn(&mut FilmBand<'_>) + Sync) {
+        let pixels = self.sum.len();
+        let size = pixels.div_ceil(rayon::current_num_threads()).max(1);
+        let dropped: u64 = self
+            .sum
+            .par_chunks_mut(size)
+            .zip(self.samples.par_chunks_mut(size))
+            .enumerate()
+            .map(|(band, (sum, samples))| {
+                let mut band = FilmBand {
+                    first: band * size,
+                    pixels,
+                    sum,
+                    samples,
+                    dropped: 0,
+                };
+                add(&mut band);
+                band.dropped
+            })
+            .sum();
+        self.dropped += dropped;
     }
 
     /// Number of samples dropped as non-finite, over all pixels.
@@ -120,6 +141,56 @@ impl Film {
     }
 }
 
+/// Consecutive pixels of a [`Film`], for [`Film::add_in_bands`]: additions to other pixels
+/// are left to the other bands.
+pub struct FilmBand<'a> {
+    /// The band's first pixel.
+    first: usize,
+    /// Pixels in the whole image.
+    pixels: usize,
+    sum: &'a mut [DVec3],
+    samples: &'a mut [u64],
+    dropped: u64,
+}
+
+impl FilmBand<'_> {
+    /// [`Film::add`] if `pixel` lies in the band. Panics if it is outside the image.
+    #[inline]
+    pub fn add(&mut self, pixel: usize, rgb: Vec3) {
+        if let Some(i) = self.index(pixel) {
+            self.samples[i] += 1;
+            accumulate(&mut self.sum[i], &mut self.dropped, rgb);
+        }
+    }
+
+    /// [`Film::add_splat`] if `pixel` lies in the band. Panics if it is outside the image.
+    #[inline]
+    pub fn add_splat(&mut self, pixel: usize, rgb: Vec3) {
+        if let Some(i) = self.index(pixel) {
+            accumulate(&mut self.sum[i], &mut self.dropped, rgb);
+        }
+    }
+
+    /// `pixel`'s index in the band, if it lies there.
+    #[inline]
+    fn index(&self, pixel: usize) -> Option<usize> {
+        assert!(pixel < self.pixels, "pixel {pixel} outside the image");
+        pixel
+            .checked_sub(self.first)
+            .filter(|&i| i < self.sum.len())
+    }
+}
+
+/// Adds `rgb` to `sum` if every channel is finite, else counts it in `dropped`.
+#[inline]
+fn accumulate(sum: &mut DVec3, dropped: &mut u64, rgb: Vec3) {
+    if rgb.is_finite() {
+        *sum += rgb.as_dvec3();
+    } else {
+        *dropped += 1;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -157,6 +228,45 @@ mod tests {
         assert_eq!(film.samples(0), 1);
         assert_eq!(film.dropped(), 1);
         assert_eq!(film.mean(), vec![Vec3::splat(3.0)]);
+    }
+
+    /// Adds samples and splats, some non-finite, over every pixel of a 7 × 5 film.
+    fn offer(mut add: impl FnMut(bool, usize, Vec3)) {
+        for k in 0..300u32 {
+            let pixel = (k as usize * 17) % 35;
+            let value = Vec3::new(k as f32 * 0.1, 1.0 / (k + 1) as f32, (k % 7) as f32);
+            let value = if k % 41 == 0 { Vec3::NAN } else { value };
+            add(k % 3 == 0, pixel, value);
+        }
+    }
+
+    #[test]
+    fn bands_add_bit_for_bit_what_one_thread_adds() {
+        let mut serial = Film::new(7, 5);
+        offer(|splat, pixel, rgb| match splat {
+            true => serial.add_splat(pixel, rgb),
+            false => serial.add(pixel, rgb),
+        });
+        for threads in [1, 2, 3, 8, 64] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build();
+            let mut banded = Film::new(7, 5);
+            pool.expect("a thread pool").install(|| {
+                banded.add_in_bands(|band| {
+                    offer(|splat, pixel, rgb| match splat {
+                        true => band.add_splat(pixel, rgb),
+                        false => band.add(pixel, rgb),
+                    })
+                })
+            });
+            assert_eq!(banded, serial, "{threads} threads");
+        }
+        assert!(serial.dropped() > 0);
+    }
+
+    #[test]
+    #[should_panic(expected = "outside the image")]
+    fn a_band_rejects_pixels_outside_the_image() {
+        Film::new(2, 2).add_in_bands(|band| band.add(4, Vec3::ONE));
     }
 
     #[test]

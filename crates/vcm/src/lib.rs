@@ -66,7 +66,7 @@ mod wave;
 
 pub use bidir::{Algorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Vcm, VcmSettings};
 pub use error::RenderError;
-pub use film::Film;
+pub use film::{Film, FilmBand};
 pub use integrator::{FrameStats, Integrator, Schedule};
 pub use path_tracer::{PathTracer, PtSettings};
 pub use vcm_scheduler::{Scheduler, SchedulerStats};

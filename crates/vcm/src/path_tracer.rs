@@ -120,15 +120,20 @@ impl Integrator for PathTracer {
             self.traversal.as_ref(),
             new_wavefront,
         );
-        let mut finished: Vec<_> = outputs.into_iter().flatten().collect();
         // With several samples per pixel, the order of a pixel's additions must not depend
         // on the scheduler; with one, every pixel gets a single addition anyway.
-        if samples > 1 {
-            finished.par_sort_unstable_by_key(|&(key, _)| key);
-        }
-        for (key, radiance) in finished {
-            film.add((key / u64::from(samples)) as usize, radiance);
-        }
+        let finished = if samples > 1 {
+            let mut all: Vec<_> = outputs.into_iter().flatten().collect();
+            all.par_sort_unstable_by_key(|&(key, _)| key);
+            vec![all]
+        } else {
+            outputs
+        };
+        film.add_in_bands(|band| {
+            for &(key, radiance) in finished.iter().flatten() {
+                band.add((key / u64::from(samples)) as usize, radiance);
+            }
+        });
         self.last_schedule_stats = stats;
         let camera_rays = u64::from(width) * u64::from(height) * u64::from(samples);
         let traversal_time = stats.traversal_share();

@@ -394,16 +394,18 @@ impl Integrator for Vcm {
             .map(|(frame, (cache, grid))| camera_pass::CameraContext { frame, cache, grid })
             .collect();
         let camera = camera_pass::run(&samples, scheduler, &mut stats);
-        for (sample, radiance) in camera.into_iter().enumerate() {
-            if let Some(results) = light.get(sample).filter(|_| plan.splats) {
-                for &(_, pixel, contribution) in &results.splats {
-                    film.add_splat(pixel as usize, contribution);
+        film.add_in_bands(|band| {
+            for (sample, radiance) in camera.iter().enumerate() {
+                if let Some(results) = light.get(sample).filter(|_| plan.splats) {
+                    for &(_, pixel, contribution) in &results.splats {
+                        band.add_splat(pixel as usize, contribution);
+                    }
+                }
+                for &(pixel, radiance) in radiance {
+                    band.add(pixel as usize, radiance);
                 }
             }
-            for (pixel, radiance) in radiance {
-                film.add(pixel as usize, radiance);
-            }
-        }
+        });
         self.light_buffers.recycle(light);
         (self.caches, self.grids) = (caches, grids);
         stats.shading_time = start
