@@ -20,7 +20,7 @@ pub(crate) fn fill_extension_rays(
 /// Paths shaded together: what their shading can do ahead is done for all of them first.
 const SHADE_CHUNK: usize = 64;
 
-/// How many paths the first [`Ahead`] step runs ahead of the second.
+/// How many prepared hits the first [`Ahead`] step runs ahead of the second.
 const AHEAD_LAG: usize = 8;
 
 /// The two look-ahead steps a prepared hit goes through before it is shaded.
@@ -28,7 +28,7 @@ const AHEAD_LAG: usize = 8;
 pub(crate) enum Ahead {
     /// Right after the chunk's preparations.
     First,
-    /// [`AHEAD_LAG`] paths after the first step.
+    /// [`AHEAD_LAG`] hits after the first step.
     Second,
 }
 
@@ -65,22 +65,31 @@ impl<P> LaneShading<P> for NoLanes {
 /// on the stack they were cleared in full for every chunk (their memset was ~2.6 k
 /// instructions a chunk, 3.5% of VCM's on the Cornell box), however few paths used them.
 struct ChunkLists<T> {
-    /// Each path's hit, where it is shaded alone.
-    hits: Vec<Option<Hit>>,
-    /// What `prepare` computed from each of those hits.
-    prepared: Vec<Option<T>>,
-    /// Whether each path is shaded in lanes.
-    in_lanes: Vec<bool>,
+    /// How each path of the chunk is shaded.
+    kinds: Vec<Shading>,
+    /// What `prepare` computed for each path of the chunk shaded alone at a hit, in path
+    /// order, with the path's index in the chunk: only those paths, so that the paths
+    /// shaded in lanes cost no write of an empty entry (an `Option` per path was a
+    /// store of its whole size, 2.9% of the path tracer's time on the Cornell box).
+    prepared: Vec<(usize, T)>,
     /// (index in the chunk, hit) of the paths shaded in lanes.
     lane_group: Vec<(usize, Hit)>,
+}
+
+/// How one path of a chunk is shaded.
+#[derive(Clone, Copy)]
+enum Shading {
+    /// Alone, at its hit, or where it escaped (`None`).
+    Alone(Option<Hit>),
+    /// With others, in SIMD lanes.
+    InLanes,
 }
 
 impl<T> ChunkLists<T> {
     fn new() -> ChunkLists<T> {
         ChunkLists {
-            hits: Vec::with_capacity(SHADE_CHUNK),
+            kinds: Vec::with_capacity(SHADE_CHUNK),
             prepared: Vec::with_capacity(SHADE_CHUNK),
-            in_lanes: Vec::with_capacity(SHADE_CHUNK),
             lane_group: Vec::with_capacity(SHADE_CHUNK),
         }
     }
@@ -96,7 +105,7 @@ impl<T> ChunkLists<T> {
 /// take long to arrive): one path's shading is a long chain of dependent steps, while these
 /// first steps of different paths are independent, so the CPU overlaps them. `ahead`, if
 /// given, then takes each prepared hit through two more steps ([`Ahead`]) in a loop of its
-/// own, the second [`AHEAD_LAG`] paths behind the first: for chains of loads, each step
+/// own, the second [`AHEAD_LAG`] hits behind the first: for chains of loads, each step
 /// reading what the step before it requested, which has arrived by then.
 ///
 /// The vertices `lanes` takes are shaded by it instead, [`LANES`] at a time, once the
@@ -115,58 +124,64 @@ pub(crate) fn shade_in_parallel<P: Send, T: Send>(
         |lists, (chunk_index, chunk)| {
             let first = chunk_index * SHADE_CHUNK;
             let ChunkLists {
-                hits: chunk_hits,
+                kinds,
                 prepared,
-                in_lanes,
                 lane_group,
             } = lists;
-            chunk_hits.clear();
-            in_lanes.clear();
+            kinds.clear();
             lane_group.clear();
             for (i, path) in chunk.iter_mut().enumerate() {
                 let hit = Hit::from_batch(hits, first + i);
-                let taken = hit.filter(|&hit| lanes.takes(path, hit));
-                if let Some(hit) = taken {
-                    lanes.prepare(path, hit);
-                    lane_group.push((i, hit));
-                }
-                in_lanes.push(taken.is_some());
-                chunk_hits.push(if taken.is_some() { None } else { hit });
+                kinds.push(match hit {
+                    Some(hit) if lanes.takes(path, hit) => {
+                        lanes.prepare(path, hit);
+                        lane_group.push((i, hit));
+                        Shading::InLanes
+                    }
+                    _ => Shading::Alone(hit),
+                });
             }
-            let alone_hits = chunk.iter_mut().zip(chunk_hits.iter());
             SobolSampler::prefetch(
-                alone_hits
-                    .filter(|(_, hit)| hit.is_some())
-                    .map(|(path, _)| vertex_sampler(path)),
+                alone_hits(chunk, kinds).map(|(_, path, _)| vertex_sampler(path)),
             );
             prepared.clear();
-            let prepare_hit = |(path, hit): (&mut P, &Option<Hit>)| hit.map(|h| prepare(path, h));
-            prepared.extend(chunk.iter_mut().zip(chunk_hits.iter()).map(prepare_hit));
+            prepared.extend(alone_hits(chunk, kinds).map(|(i, path, hit)| (i, prepare(path, hit))));
             if let Some(ahead) = &ahead {
-                // Path k takes its first step, path k − AHEAD_LAG (if any) its second.
-                for k in 0..chunk.len() + AHEAD_LAG {
+                // Entry k takes its first step, entry k − AHEAD_LAG (if any) its second.
+                for k in 0..prepared.len() + AHEAD_LAG {
                     let steps = [
                         (k, Ahead::First),
                         (k.wrapping_sub(AHEAD_LAG), Ahead::Second),
                     ];
-                    for (i, step) in steps {
-                        if let Some(Some(prepared)) = prepared.get_mut(i) {
-                            ahead(&chunk[i], prepared, step);
+                    for (j, step) in steps {
+                        if let Some((i, prepared)) = prepared.get_mut(j) {
+                            ahead(&chunk[*i], prepared, step);
                         }
                     }
                 }
             }
-            let alone = chunk
-                .iter_mut()
-                .zip(chunk_hits.iter())
-                .zip(prepared.iter())
-                .zip(in_lanes.iter());
-            for (((path, hit), ahead), _) in alone.filter(|(_, in_lanes)| !**in_lanes) {
-                shade(path, hit.zip(ahead.as_ref()));
+            let mut prepared = prepared.iter().map(|(_, prepared)| prepared);
+            for (path, kind) in chunk.iter_mut().zip(kinds.iter()) {
+                if let &Shading::Alone(hit) = kind {
+                    let ahead = hit.map(|hit| (hit, prepared.next().expect("prepared ahead")));
+                    shade(path, ahead);
+                }
             }
             for group in lane_group.chunks(LANES) {
                 lanes.shade(chunk, group);
             }
         },
     );
+}
+
+/// (index in the chunk, path, hit) of the paths of `chunk` shaded alone at a hit.
+fn alone_hits<'a, P>(
+    chunk: &'a mut [P],
+    kinds: &'a [Shading],
+) -> impl Iterator<Item = (usize, &'a mut P, Hit)> {
+    let paths = chunk.iter_mut().zip(kinds).enumerate();
+    paths.filter_map(|(i, (path, kind))| match *kind {
+        Shading::Alone(Some(hit)) => Some((i, path, hit)),
+        _ => None,
+    })
 }
