@@ -18,7 +18,7 @@ use crate::lambert::{LANES_PART, LANES_RUN, LambertLanes};
 use crate::path_state::{PathState, ShadowRay};
 use crate::shade::{ShadeContext, shade, vertex_sampler};
 use crate::surface_hit::SurfaceHit;
-use crate::wave::{fill_extension_rays, shade_in_parallel};
+use crate::wave::{fill_extension_rays, shade_in_parallel, start_paths};
 
 /// What a [`PathTracer`] renders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -204,22 +204,14 @@ impl Wavefront for PtWavefront<'_> {
         let (first_sample, samples) = (self.first_sample, self.samples);
         let camera = &self.scene.camera;
         let projection = camera.projection(width, height);
-        let starts: Vec<(u32, u32)> = tile
-            .pixels(width)
-            .flat_map(|pixel| (0..samples).map(move |sample| (pixel, sample)))
-            .collect();
-        let new_paths = starts
-            .into_par_iter()
-            .with_min_len(256)
-            .map(|(pixel, sample)| {
-                let index = u64::from(first_sample + sample);
-                let mut rng = sequence.sampler(&[seed, u64::from(pixel)], index);
-                let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
-                let raster: Vec2 = xy + rng.uniform2();
-                let direction = projection.direction(raster);
-                PathState::new(pixel, sample, rng, camera.position, direction)
-            });
-        self.paths.par_extend(new_paths);
+        start_paths(&mut self.paths, (tile, width), samples, |pixel, sample| {
+            let index = u64::from(first_sample + sample);
+            let mut rng = sequence.sampler(&[seed, u64::from(pixel)], index);
+            let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
+            let raster: Vec2 = xy + rng.uniform2();
+            let direction = projection.direction(raster);
+            PathState::new(pixel, sample, rng, camera.position, direction)
+        });
     }
 
     fn active(&self) -> usize {

@@ -4,7 +4,6 @@
 use std::f32::consts::PI;
 
 use glam::{UVec2, Vec2, Vec3};
-use rayon::prelude::*;
 use smallvec::SmallVec;
 use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
 use vcm_scene::light::HitEmission;
@@ -27,7 +26,7 @@ use crate::prefetch::prefetch;
 use crate::roulette::Roulette;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
-use crate::wave::{Ahead, NoLanes, fill_extension_rays, shade_in_parallel};
+use crate::wave::{Ahead, NoLanes, fill_extension_rays, shade_in_parallel, start_paths};
 
 mod lanes;
 
@@ -123,15 +122,10 @@ impl Wavefront for CameraWavefront<'_> {
     fn start(&mut self, tile: Tile) {
         let iterations = self.iterations;
         let samples = iterations.len() as u32;
-        let keys: Vec<(u32, u32)> = tile
-            .pixels(iterations[0].settings.width)
-            .flat_map(|pixel| (0..samples).map(move |sample| (pixel, sample)))
-            .collect();
-        let new_paths = keys
-            .into_par_iter()
-            .with_min_len(256)
-            .map(|(pixel, sample)| start(&iterations[sample as usize], pixel, sample));
-        self.paths.par_extend(new_paths);
+        let width = iterations[0].settings.width;
+        start_paths(&mut self.paths, (tile, width), samples, |pixel, sample| {
+            start(&iterations[sample as usize], pixel, sample)
+        });
     }
 
     fn active(&self) -> usize {

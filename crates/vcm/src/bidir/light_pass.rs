@@ -23,7 +23,7 @@ use crate::path_state::ShadowRay;
 use crate::roulette::Roulette;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
-use crate::wave::{fill_extension_rays, shade_in_parallel};
+use crate::wave::{fill_extension_rays, shade_in_parallel, start_paths};
 
 mod lanes;
 
@@ -255,20 +255,15 @@ impl Wavefront for LightWavefront<'_> {
     fn start(&mut self, tile: Tile) {
         let (iterations, stream) = (self.iterations, self.stream);
         let samples = iterations.len() as u32;
-        let keys: Vec<(u32, u32)> = tile
-            .pixels(self.grid_width)
-            .flat_map(|index| (0..samples).map(move |sample| (index, sample)))
-            .collect();
         let first = self.paths.len();
-        let new_paths = keys
-            .into_par_iter()
-            .with_min_len(256)
-            .map(|(index, sample)| {
+        start_paths(
+            &mut self.paths,
+            (tile, self.grid_width),
+            samples,
+            |index, sample| {
                 LightPathState::new(&iterations[sample as usize], index, sample, stream)
-            });
-        // Extending by an exact count writes the paths in place; the few that could not
-        // start (a light that emits nothing) are dropped afterwards.
-        self.paths.par_extend(new_paths);
+            },
+        );
         let emitting = self.paths[first..].par_chunks_mut(LANES).with_min_len(32);
         emitting.for_each(|chunk| {
             SobolSampler::prefetch(chunk.iter_mut().map(|path| &mut path.walk.rng));
@@ -276,6 +271,7 @@ impl Wavefront for LightWavefront<'_> {
                 emit(&iterations[path.sample as usize], path);
             }
         });
+        // The few that could not start (a light that emits nothing) are dropped.
         self.paths.retain(|path| path.alive);
     }
 
