@@ -252,18 +252,18 @@ impl Wavefront for PtWavefront<'_> {
         ShadowRay::fill_batch(shadow_rays, shadows);
     }
 
-    /// Adds the unoccluded shadow contributions and retires the paths that ended.
+    /// Adds the unoccluded shadow contributions and retires the paths that ended, in one
+    /// pass over the paths.
     fn resolve(&mut self, occluded: &[bool]) {
-        let with_shadow = self.paths.iter_mut().filter(|p| p.shadow.is_some());
-        for (path, &blocked) in with_shadow.zip(occluded) {
-            let shadow = path.shadow.take().expect("filtered on a queued shadow ray");
-            if !blocked {
-                path.radiance += shadow.contribution;
-            }
-        }
+        let mut blocked = occluded.iter();
         let samples = u64::from(self.samples);
         let finished = &mut self.finished;
-        self.paths.retain(|path| {
+        self.paths.retain_mut(|path| {
+            if let Some(shadow) = path.shadow.take()
+                && !blocked.next().expect("one test per queued ray")
+            {
+                path.radiance += shadow.contribution;
+            }
             if !path.alive {
                 let key = u64::from(path.pixel) * samples + u64::from(path.sample);
                 finished.push((key, path.radiance));
