@@ -16,14 +16,13 @@ use super::path_order::{in_path_order, path_key};
 use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::integrator::FrameStats;
-use crate::lanes::LANES;
 use crate::light_vertex_cache::LightVertex;
 use crate::medium::Medium;
 use crate::path_state::ShadowRay;
 use crate::roulette::Roulette;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
-use crate::wave::{fill_extension_rays, shade_in_parallel, start_paths};
+use crate::wave::{fill_extension_rays, for_started_in_lanes, shade_in_parallel, start_paths};
 
 mod lanes;
 
@@ -251,7 +250,8 @@ impl Wavefront for LightWavefront<'_> {
     type Output = Vec<WorkerResults>;
 
     /// Starts the light paths of the tile's indices, one per iteration: each emits from a
-    /// light, its numbers computed [`LANES`] paths at a time ([`SobolSampler::prefetch`]).
+    /// light, its numbers computed [`LANES`](crate::lanes::LANES) paths at a time
+    /// ([`SobolSampler::prefetch`]).
     fn start(&mut self, tile: Tile) {
         let (iterations, stream) = (self.iterations, self.stream);
         let samples = iterations.len() as u32;
@@ -264,8 +264,7 @@ impl Wavefront for LightWavefront<'_> {
                 LightPathState::new(&iterations[sample as usize], index, sample, stream)
             },
         );
-        let emitting = self.paths[first..].par_chunks_mut(LANES).with_min_len(32);
-        emitting.for_each(|chunk| {
+        for_started_in_lanes(&mut self.paths[first..], |chunk| {
             SobolSampler::prefetch(chunk.iter_mut().map(|path| &mut path.walk.rng));
             for path in chunk {
                 emit(&iterations[path.sample as usize], path);
