@@ -179,18 +179,17 @@ impl Wavefront for CameraWavefront<'_> {
         ShadowRay::fill_batch(shadow_rays, shadows);
     }
 
-    /// Adds the unoccluded contributions to their paths and retires the paths that ended.
+    /// Adds the unoccluded contributions to their paths and retires the paths that ended,
+    /// in one pass over the paths.
     fn resolve(&mut self, occluded: &[bool]) {
         let mut blocked = occluded.iter();
-        for path in &mut self.paths {
+        let finished = &mut self.finished;
+        self.paths.retain_mut(|path| {
             for shadow in path.shadows.drain(..) {
                 if !blocked.next().expect("one test per queued ray") {
                     path.radiance += shadow.contribution;
                 }
             }
-        }
-        let finished = &mut self.finished;
-        self.paths.retain(|path| {
             if !path.alive {
                 finished.push((path.sample, path.pixel, path.radiance));
             }

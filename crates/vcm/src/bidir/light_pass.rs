@@ -316,22 +316,22 @@ impl Wavefront for LightWavefront<'_> {
         ShadowRay::fill_batch(shadow_rays, rays);
     }
 
-    /// Keeps the unoccluded splats and retires the paths that ended.
+    /// Keeps the unoccluded splats and retires the paths that ended, in one pass over the
+    /// paths.
     fn resolve(&mut self, occluded: &[bool]) {
-        let with_splat = self.paths.iter_mut().filter(|p| p.splat.is_some());
-        for (path, &blocked) in with_splat.zip(occluded) {
-            let splat = path.splat.take().expect("filtered on a queued splat");
-            if !blocked {
+        let mut blocked = occluded.iter();
+        let results = &mut self.results;
+        self.paths.retain_mut(|path| {
+            if let Some(splat) = path.splat.take()
+                && !blocked.next().expect("one test per queued splat")
+            {
                 let key = path_key(path.index, path.kept_splats);
-                self.results[path.sample as usize].splats.push((
-                    key,
-                    splat.pixel,
-                    splat.ray.contribution,
-                ));
+                let splats = &mut results[path.sample as usize].splats;
+                splats.push((key, splat.pixel, splat.ray.contribution));
                 path.kept_splats += 1;
             }
-        }
-        self.paths.retain(|p| p.alive);
+            path.alive
+        });
     }
 
     fn finish(self) -> Vec<WorkerResults> {
