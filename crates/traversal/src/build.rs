@@ -43,9 +43,8 @@ pub enum BuildPreset {
 /// Triangles up to which [`BuildPreset::Auto`] builds with `VerySlow`. Its pre-splits and
 /// full reinsertion pass take 2–3.5 times as long as `Fast`'s build (2.1× at 10k triangles,
 /// 3.4× at 100k; ~2.6 µs per triangle on 2 cores here: ~0.17 s at this size, against a
-/// render of seconds), and it gives hierarchies that
-/// cost fewer triangle tests per ray: on the Cornell box 2.55 instead of 3.66 (0.86 leaf
-/// visits instead of 1.21), the same hits.
+/// render of seconds), and it gives hierarchies that cost fewer triangle tests per ray: on
+/// the Cornell box 2.55 instead of 3.66 (0.86 leaf visits instead of 1.21), the same hits.
 pub const BEST_BUILD_UP_TO: usize = 1 << 16;
 
 impl BuildPreset {

@@ -252,7 +252,7 @@ mod tests {
             },
             1,
         );
-        assert!(small.0.len() * 3 < PARALLEL_START_FROM);
+        assert!(small.0.len() * (small.1 as usize) < PARALLEL_START_FROM);
         assert!(large.0.len() >= PARALLEL_START_FROM);
         for (tile, samples) in [small, large] {
             let mut paths = vec![(u32::MAX, u32::MAX)];
