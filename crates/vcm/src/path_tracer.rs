@@ -253,12 +253,16 @@ impl Wavefront for PtWavefront<'_> {
     }
 
     /// Adds the unoccluded shadow contributions and retires the paths that ended, in one
-    /// pass over the paths.
+    /// pass over the paths from the last: an ended path's place is taken by the list's last
+    /// path, already resolved, so only ended paths cause a move (keeping the list in order
+    /// moved every path behind the first that ended: 3.3% of the path tracer's time on the
+    /// Cornell box). No result depends on the order: each path draws from its own keyed
+    /// numbers, and a frame's film additions are put in key order when a pixel has several.
     fn resolve(&mut self, occluded: &[bool]) {
-        let mut blocked = occluded.iter();
+        let mut blocked = occluded.iter().rev();
         let samples = u64::from(self.samples);
-        let finished = &mut self.finished;
-        self.paths.retain_mut(|path| {
+        for i in (0..self.paths.len()).rev() {
+            let path = &mut self.paths[i];
             if let Some(shadow) = path.shadow.take()
                 && !blocked.next().expect("one test per queued ray")
             {
@@ -266,10 +270,10 @@ impl Wavefront for PtWavefront<'_> {
             }
             if !path.alive {
                 let key = u64::from(path.pixel) * samples + u64::from(path.sample);
-                finished.push((key, path.radiance));
+                self.finished.push((key, path.radiance));
+                self.paths.swap_remove(i);
             }
-            path.alive
-        });
+        }
     }
 
     fn finish(self) -> Self::Output {
