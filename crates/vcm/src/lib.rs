@@ -43,6 +43,7 @@
 
 pub mod atomic_write;
 mod bidir;
+mod camera_rays;
 mod error;
 mod film;
 pub mod hash_grid;

@@ -3,13 +3,14 @@
 
 use std::sync::Arc;
 
-use glam::{UVec2, Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
-use vcm_scene::sampling::{SampleSequence, Sampler};
+use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Decision, Scene};
 use vcm_scheduler::{SchedulerStats, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch, Traversal};
 
+use crate::camera_rays::jittered_directions;
 use crate::error::RenderError;
 use crate::film::Film;
 use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
@@ -18,7 +19,7 @@ use crate::lambert::{LANES_PART, LANES_RUN, LambertLanes};
 use crate::path_state::{PathState, ShadowRay};
 use crate::shade::{ShadeContext, shade, vertex_sampler};
 use crate::surface_hit::SurfaceHit;
-use crate::wave::{fill_extension_rays, shade_in_parallel, start_paths};
+use crate::wave::{fill_extension_rays, for_started_in_lanes, shade_in_parallel, start_paths};
 
 /// What a [`PathTracer`] renders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -204,13 +205,19 @@ impl Wavefront for PtWavefront<'_> {
         let (first_sample, samples) = (self.first_sample, self.samples);
         let camera = &self.scene.camera;
         let projection = camera.projection(width, height);
+        let first_new = self.paths.len();
         start_paths(&mut self.paths, (tile, width), samples, |pixel, sample| {
             let index = u64::from(first_sample + sample);
-            let mut rng = sequence.sampler(&[seed, u64::from(pixel)], index);
-            let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
-            let raster: Vec2 = xy + rng.uniform2();
-            let direction = projection.direction(raster);
-            PathState::new(pixel, sample, rng, camera.position, direction)
+            let rng = sequence.sampler(&[seed, u64::from(pixel)], index);
+            // Aimed below, in lanes.
+            PathState::new(pixel, sample, rng, camera.position, Vec3::ZERO)
+        });
+        for_started_in_lanes(&mut self.paths[first_new..], |paths| {
+            let directions = jittered_directions(paths, &projection, width, |p| (p.pixel, &p.rng));
+            for (path, direction) in paths.iter_mut().zip(directions) {
+                path.direction = direction;
+                path.rng.skip(1);
+            }
         });
     }
 
