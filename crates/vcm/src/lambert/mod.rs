@@ -56,6 +56,10 @@ pub(crate) struct LambertLanes {
     pub materials: Vec<Option<LambertMaterial>>,
     /// Per light (all of them area lights).
     pub lights: Vec<LaneLight>,
+    /// Per triangle, whether vertices on it are shaded in lanes: a plain Lambert surface
+    /// that does not emit. One load per vertex where the two tests behind it take three,
+    /// two of them dependent (the triangle's material, then that material's entry).
+    lane_surfaces: Vec<bool>,
 }
 
 impl LambertLanes {
@@ -105,7 +109,17 @@ impl LambertLanes {
         if !materials.iter().any(Option::is_some) {
             return Err("no material is plain Lambert");
         }
-        Ok(LambertLanes { materials, lights })
+        let lane_surfaces = (0..scene.mesh.triangle_count() as u32)
+            .map(|triangle| {
+                materials[scene.mesh.material_ids[triangle as usize] as usize].is_some()
+                    && scene.light_sampler.light_of_triangle(triangle).is_none()
+            })
+            .collect();
+        Ok(LambertLanes {
+            materials,
+            lights,
+            lane_surfaces,
+        })
     }
 
     /// The plain Lambert material of `triangle`, if it has one.
@@ -117,12 +131,8 @@ impl LambertLanes {
     /// Whether a vertex at `hit` can be shaded in lanes: a plain Lambert surface that does
     /// not emit.
     #[inline]
-    pub fn takes_surface(&self, scene: &Scene, hit: Hit) -> bool {
-        self.material_of(scene, hit.triangle).is_some()
-            && scene
-                .light_sampler
-                .light_of_triangle(hit.triangle)
-                .is_none()
+    pub fn takes_surface(&self, hit: Hit) -> bool {
+        self.lane_surfaces[hit.triangle as usize]
     }
 }
 

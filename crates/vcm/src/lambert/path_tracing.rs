@@ -30,9 +30,8 @@ impl LaneShading<PathState> for LambertShading<'_> {
     /// A plain Lambert surface that does not emit, with room left for another segment.
     #[inline]
     fn takes(&self, path: &PathState, hit: Hit) -> bool {
-        self.tables.is_some_and(|tables| {
-            path.segments < self.max_segments && tables.takes_surface(self.scene, hit)
-        })
+        self.tables
+            .is_some_and(|tables| path.segments < self.max_segments && tables.takes_surface(hit))
     }
 
     fn shade(&self, paths: &mut [PathState], group: &[(usize, Hit)]) {

@@ -58,7 +58,7 @@ impl LaneShading<CameraPathState> for CameraLanes<'_> {
     fn takes(&self, path: &CameraPathState, hit: Hit) -> bool {
         self.tables.is_some_and(|tables| {
             let ctx = &self.iterations[path.sample as usize];
-            path.walk.segments < ctx.max_segments() && tables.takes_surface(ctx.scene, hit)
+            path.walk.segments < ctx.max_segments() && tables.takes_surface(hit)
         })
     }
 

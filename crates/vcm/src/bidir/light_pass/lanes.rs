@@ -35,8 +35,7 @@ impl LaneShading<LightPathState> for LightLanes<'_> {
     #[inline]
     fn takes(&self, _: &LightPathState, hit: Hit) -> bool {
         let ctx = &self.iterations[0];
-        ctx.lanes
-            .is_some_and(|tables| tables.takes_surface(ctx.scene, hit))
+        ctx.lanes.is_some_and(|tables| tables.takes_surface(hit))
     }
 
     fn shade(&self, paths: &mut [LightPathState], group: &[(usize, Hit)]) {
