@@ -61,7 +61,8 @@ fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &
     let samplers = std::array::from_fn(|lane| &paths[at(lane).0].rng);
     let numbers = SobolSampler::peek_lanes(samplers, USED);
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
-    let (mut surface, mut light) = (SurfaceInputs::default(), LightInputs::default());
+    let mut surface = SurfaceInputs::default();
+    let mut light = LightInputs::default();
     let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
     for (lane, &u_pick) in numbers[0][0].iter().enumerate() {
         let (i, hit) = at(lane);

@@ -93,7 +93,8 @@ fn shade(
     let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
     let numbers = SobolSampler::peek_lanes(samplers, USED);
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
-    let (mut surface, mut light) = (SurfaceInputs::default(), LightInputs::default());
+    let mut surface = SurfaceInputs::default();
+    let mut light = LightInputs::default();
     let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
     let mut mis = SubpathMis::<F32s>::default();
     let mut t = F32s::default();
