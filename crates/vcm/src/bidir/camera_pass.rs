@@ -3,11 +3,11 @@
 
 use std::f32::consts::PI;
 
-use glam::Vec3;
+use glam::{UVec2, Vec2, Vec3};
 use smallvec::SmallVec;
 use vcm_scene::bsdf::{FixedOutgoing, Pdfs, TransportMode};
 use vcm_scene::light::HitEmission;
-use vcm_scene::sampling::{Rng, SobolSampler};
+use vcm_scene::sampling::{Rng, Sampler, SobolSampler};
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
@@ -17,7 +17,6 @@ use super::mis::{
 };
 use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
-use crate::camera_rays::jittered_directions;
 use crate::hash_grid::{GridCells, HashGrid};
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::{LightVertex, LightVertexCache};
@@ -27,9 +26,7 @@ use crate::prefetch::prefetch;
 use crate::roulette::Roulette;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
-use crate::wave::{
-    Ahead, NoLanes, fill_extension_rays, for_started_in_lanes, shade_in_parallel, start_paths,
-};
+use crate::wave::{Ahead, NoLanes, fill_extension_rays, shade_in_parallel, start_paths};
 
 mod lanes;
 
@@ -126,17 +123,8 @@ impl Wavefront for CameraWavefront<'_> {
         let iterations = self.iterations;
         let samples = iterations.len() as u32;
         let width = iterations[0].settings.width;
-        let first_new = self.paths.len();
         start_paths(&mut self.paths, (tile, width), samples, |pixel, sample| {
             start(&iterations[sample as usize], pixel, sample)
-        });
-        let projection = iterations[0].projection;
-        for_started_in_lanes(&mut self.paths[first_new..], |paths| {
-            let directions =
-                jittered_directions(paths, projection, width, |p| (p.pixel, &p.walk.rng));
-            for (path, direction) in paths.iter_mut().zip(directions) {
-                aim(&iterations[path.sample as usize], path, direction);
-            }
         });
     }
 
@@ -214,22 +202,33 @@ impl Wavefront for CameraWavefront<'_> {
     }
 }
 
-/// Starts the camera path of `pixel` in iteration `ctx` (the frame's `sample`), to be
-/// [`aim`]ed: its camera ray's direction is computed for several paths at once.
+/// Starts the camera path of `pixel` in iteration `ctx` (the frame's `sample`), its position
+/// jittered uniformly over the pixel.
 fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
-    let VcmSettings { seed, sequence, .. } = *ctx.settings;
+    let VcmSettings {
+        width,
+        seed,
+        sequence,
+        ..
+    } = *ctx.settings;
+    let camera = &ctx.scene.camera;
     // The iterations' camera paths through a pixel are the samples of its stratified sequence.
-    let rng = sequence.sampler(&[seed, u64::from(pixel), 0], ctx.iteration);
+    let mut rng = sequence.sampler(&[seed, u64::from(pixel), 0], ctx.iteration);
+    let xy = UVec2::new(pixel % width, pixel / width).as_vec2();
+    let raster: Vec2 = xy + rng.uniform2();
+    let direction = ctx.projection.direction(raster);
+    let cos_camera = camera.forward.dot(direction);
+    let camera_pdf_w = 1.0 / (ctx.projection.pixel_area() * cos_camera.powi(3));
     CameraPathState {
         pixel,
         sample,
         walk: Walk {
             rng,
-            origin: ctx.scene.camera.position,
-            direction: Vec3::ZERO,
+            origin: camera.position,
+            direction,
             throughput: Vec3::ONE,
             medium: Medium::OUTSIDE,
-            mis: SubpathMis::default(),
+            mis: SubpathMis::camera(camera_pdf_w, &ctx.factors),
             segments: 1,
             roulette: Roulette::UNIT,
         },
@@ -238,18 +237,6 @@ fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
         shadows: SmallVec::new(),
         picks: None,
     }
-}
-
-/// Aims the camera ray of `path`, just started, along `direction`: the unit direction
-/// through its pixel jittered by the first pair of its numbers ([`jittered_directions`]),
-/// which it moves past.
-fn aim(ctx: &CameraContext, path: &mut CameraPathState, direction: Vec3) {
-    let cos_camera = ctx.scene.camera.forward.dot(direction);
-    let camera_pdf_w = 1.0 / (ctx.projection.pixel_area() * cos_camera.powi(3));
-    let walk = &mut path.walk;
-    walk.rng.skip(1);
-    walk.direction = direction;
-    walk.mis = SubpathMis::camera(camera_pdf_w, &ctx.factors);
 }
 
 /// The sampler of `path`, moved to the numbers of the vertex it has reached.
