@@ -137,17 +137,13 @@ impl Projection {
     /// corner of the image, (width, height) the bottom-right).
     #[inline]
     pub fn direction(&self, raster: Vec2) -> Vec3 {
-        let (c, h) = (&self.camera, self.half_extent);
-        let ndc = Vec2::new(
-            2.0 * raster.x / self.size.x - 1.0,
-            1.0 - 2.0 * raster.y / self.size.y,
-        );
-        (c.forward + c.right * (ndc.x * h.x) + c.up * (ndc.y * h.y)).normalize()
+        let [[x], [y], [z]] = self.directions([[raster.x], [raster.y]]);
+        Vec3::new(x, y, z)
     }
 
     /// [`direction`](Self::direction) of each of `L` raster positions, given as their x
-    /// and y coordinates, operation for operation (the same bits) in loops over the lanes
-    /// that the compiler vectorizes: for starting many camera paths at once.
+    /// and y coordinates, in loops over the lanes that the compiler vectorizes: for starting
+    /// many camera paths at once. Each lane gets the bits a one-lane call gives it.
     #[inline(always)]
     pub fn directions<const L: usize>(&self, raster: [[f32; L]; 2]) -> [[f32; L]; 3] {
         let (c, h) = (&self.camera, self.half_extent);
