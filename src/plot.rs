@@ -6,10 +6,12 @@
 //! Liberation) are tried; without any, the plot is drawn without labels and a warning says so.
 
 use std::io::Write;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use anyhow::bail;
+use plotters::coord::combinators::{BindKeyPoints, LogCoord, WithKeyPoints};
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use vcm::atomic_write::write_atomically;
@@ -71,8 +73,8 @@ pub fn plot_relmse(path: &Path, title: &str, series: &[Series]) -> anyhow::Resul
         (a.min(*e), b.max(*e))
     });
     let axes = Axes {
-        x: (t0 / 1.5..t1 * 1.5).log_scale(),
-        y: (e0 / 2.0..e1 * 2.0).log_scale(),
+        x: log_axis(t0 / 1.5..t1 * 1.5),
+        y: log_axis(e0 / 2.0..e1 * 2.0),
         x_desc: "seconds",
         y_desc: "relMSE",
     };
@@ -121,7 +123,7 @@ pub fn plot_speedup(path: &Path, title: &str, series: &[Series]) -> anyhow::Resu
         .filter(|y| y.is_finite())
         .fold(1.0, f64::max);
     let axes = Axes {
-        x: (1.0..x_end * 1.2).log_scale(),
+        x: log_axis(1.0..x_end * 1.2),
         y: 0.0..y_end * 1.15,
         x_desc: "samples per pixel per frame",
         y_desc: "speed-up over one batch, 1 sample per frame",
@@ -135,6 +137,48 @@ struct Axes<X, Y> {
     y: Y,
     x_desc: &'static str,
     y_desc: &'static str,
+}
+
+/// A logarithmic axis over `range` with ticks of our own: plotters' own log ticks crowd
+/// (and repeat) labels near a power of ten.
+///
+/// Labelled ticks at 1, 2 and 5 times each power of ten, or at the powers of ten alone where
+/// the range spans more than three decades; light grid lines at every integer multiple of
+/// each power of ten.
+fn log_axis(range: Range<f64>) -> WithKeyPoints<LogCoord<f64>> {
+    let decades = (range.end / range.start).log10();
+    let labelled: &[f64] = if decades > 3.0 {
+        &[1.0]
+    } else {
+        &[1.0, 2.0, 5.0]
+    };
+    let within = |multiples: &[f64]| -> Vec<f64> {
+        let first = range.start.log10().floor() as i32;
+        let last = range.end.log10().ceil() as i32;
+        (first..=last)
+            .flat_map(|power| multiples.iter().map(move |m| m * 10f64.powi(power)))
+            .filter(|v| range.contains(v))
+            .collect()
+    };
+    let light: Vec<f64> = (1..10).map(f64::from).collect();
+    range
+        .clone()
+        .log_scale()
+        .with_key_points(within(labelled))
+        .with_light_points(within(&light))
+}
+
+/// A tick's label, as short as its value allows at six significant digits: `20`, `1.5`,
+/// `0.01`; `1e-3` and `2e5` outside 0.01 … 10⁵. (plotters writes every value of a float axis
+/// with a decimal point and in full: `10.0`, `0.30000000000000004`.)
+fn tick_label(value: &f64) -> String {
+    // Rounding drops the last bits of ticks computed as multiples (3 · 0.1).
+    let rounded: f64 = format!("{value:.5e}").parse().unwrap_or(*value);
+    if rounded == 0.0 || (0.01..1e5).contains(&rounded.abs()) {
+        format!("{rounded}")
+    } else {
+        format!("{rounded:e}")
+    }
 }
 
 /// Draws `series` within `axes` into a PNG at `path`, through a temporary file.
@@ -192,6 +236,8 @@ where
     if labels {
         mesh.x_desc(axes.x_desc)
             .y_desc(axes.y_desc)
+            .x_label_formatter(&tick_label)
+            .y_label_formatter(&tick_label)
             .label_style(("sans-serif", 14));
     } else {
         mesh.x_labels(0).y_labels(0);
@@ -218,4 +264,56 @@ where
     }
     root.present()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use plotters::coord::ranged1d::{BoldPoints, LightPoints, Ranged};
+
+    use super::*;
+
+    #[test]
+    fn log_axis_labels_one_two_five_within_the_range() {
+        let axis = log_axis(0.75..45.0);
+        assert_eq!(
+            axis.key_points(BoldPoints(100)),
+            [1.0, 2.0, 5.0, 10.0, 20.0]
+        );
+        let light = axis.key_points(LightPoints::new(100, 100));
+        assert_eq!(light.first(), Some(&0.8));
+        assert_eq!(light.last(), Some(&40.0));
+        assert_eq!(light.len(), 2 + 9 + 4);
+    }
+
+    #[test]
+    fn log_axis_over_many_decades_labels_powers_of_ten_only() {
+        let axis = log_axis(3e-5..0.2);
+        assert_eq!(axis.key_points(BoldPoints(100)), [1e-4, 1e-3, 1e-2, 1e-1]);
+    }
+
+    #[test]
+    fn tick_labels_are_short() {
+        let ticks = [
+            0.0,
+            1.0,
+            2.0,
+            10.0,
+            20.0,
+            0.5,
+            1.5,
+            0.1 * 3.0,
+            0.05,
+            0.01,
+            1e-3,
+            2e-4,
+            250.0,
+            2e5,
+        ];
+        let labels: Vec<String> = ticks.iter().map(tick_label).collect();
+        let expected = [
+            "0", "1", "2", "10", "20", "0.5", "1.5", "0.3", "0.05", "0.01", "1e-3", "2e-4", "250",
+            "2e5",
+        ];
+        assert_eq!(labels, expected);
+    }
 }
