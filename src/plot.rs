@@ -77,6 +77,8 @@ pub fn plot_relmse(path: &Path, title: &str, series: &[Series]) -> anyhow::Resul
         y: log_axis(e0 / 2.0..e1 * 2.0),
         x_desc: "seconds",
         y_desc: "relMSE",
+        // Errors fall over time, leaving the upper right empty.
+        legend_at: SeriesLabelPosition::UpperRight,
     };
     let positive_series: Vec<Series> = series
         .iter()
@@ -109,6 +111,8 @@ pub fn plot_utilization(path: &Path, title: &str, series: &[Series]) -> anyhow::
         y: 0.0..105.0,
         x_desc: "seconds",
         y_desc: "CPU utilization (%)",
+        // Utilization stays near the top.
+        legend_at: SeriesLabelPosition::LowerRight,
     };
     plot(path, title, series, axes)
 }
@@ -127,16 +131,20 @@ pub fn plot_speedup(path: &Path, title: &str, series: &[Series]) -> anyhow::Resu
         y: 0.0..y_end * 1.15,
         x_desc: "samples per pixel per frame",
         y_desc: "speed-up over one batch, 1 sample per frame",
+        // Speed-ups grow with the samples per frame, leaving the upper left empty.
+        legend_at: SeriesLabelPosition::UpperLeft,
     };
     plot(path, title, series, axes)
 }
 
-/// The x and y ranges of a plot and the axes' names.
+/// The x and y ranges of a plot, the axes' names and where the legend goes.
 struct Axes<X, Y> {
     x: X,
     y: Y,
     x_desc: &'static str,
     y_desc: &'static str,
+    /// A corner the curves usually leave empty.
+    legend_at: SeriesLabelPosition,
 }
 
 /// A logarithmic axis over `range` with ticks of our own: plotters' own log ticks crowd
@@ -231,6 +239,7 @@ where
             .x_label_area_size(45)
             .y_label_area_size(70);
     }
+    let legend_at = axes.legend_at;
     let mut chart = builder.build_cartesian_2d(axes.x, axes.y)?;
     let mut mesh = chart.configure_mesh();
     if labels {
@@ -257,6 +266,7 @@ where
     if labels {
         chart
             .configure_series_labels()
+            .position(legend_at)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .label_font(("sans-serif", 14))
