@@ -2,7 +2,7 @@
 # Builds the `vcm` binary with profile-guided optimization (PGO): an instrumented build
 # renders a training set, and the final build lays out and inlines the code by what those
 # renders ran. Images are bit for bit those of the plain release build; only the speed
-# differs (README, Performance). Code the training does not reach is laid out as cold, so
+# differs (docs/performance.md). Code the training does not reach is laid out as cold, so
 # the training covers every integrator on every scene of `scenes/` (PT and VCM only on the
 # large one), and PT and VCM on the third-party models of `../shared/scenes/` (textures,
 # normal maps, OBJ) where they are present.
