@@ -151,8 +151,9 @@ struct Axes<X, Y> {
 /// (and repeat) labels near a power of ten.
 ///
 /// Labelled ticks at 1, 2 and 5 times each power of ten, or at the powers of ten alone where
-/// the range spans more than three decades; light grid lines at every integer multiple of
-/// each power of ten.
+/// the range spans more than three decades, or at every integer multiple of a power of ten
+/// where the range is too narrow to hold two of 1, 2 and 5; light grid lines at every integer
+/// multiple of each power of ten.
 fn log_axis(range: Range<f64>) -> WithKeyPoints<LogCoord<f64>> {
     let decades = (range.end / range.start).log10();
     let labelled: &[f64] = if decades > 3.0 {
@@ -168,12 +169,16 @@ fn log_axis(range: Range<f64>) -> WithKeyPoints<LogCoord<f64>> {
             .filter(|v| range.contains(v))
             .collect()
     };
-    let light: Vec<f64> = (1..10).map(f64::from).collect();
+    let light = within(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
+    let mut labelled = within(labelled);
+    if labelled.len() < 2 {
+        labelled.clone_from(&light);
+    }
     range
         .clone()
         .log_scale()
-        .with_key_points(within(labelled))
-        .with_light_points(within(&light))
+        .with_key_points(labelled)
+        .with_light_points(light)
 }
 
 /// A tick's label, as short as its value allows at six significant digits: `20`, `1.5`,
@@ -299,6 +304,12 @@ mod tests {
     fn log_axis_over_many_decades_labels_powers_of_ten_only() {
         let axis = log_axis(3e-5..0.2);
         assert_eq!(axis.key_points(BoldPoints(100)), [1e-4, 1e-3, 1e-2, 1e-1]);
+    }
+
+    #[test]
+    fn narrow_log_axis_labels_every_multiple() {
+        let axis = log_axis(2.1..4.6);
+        assert_eq!(axis.key_points(BoldPoints(100)), [3.0, 4.0]);
     }
 
     #[test]
