@@ -156,7 +156,7 @@ struct Axes<X, Y> {
 /// multiple of each power of ten.
 fn log_axis(range: Range<f64>) -> WithKeyPoints<LogCoord<f64>> {
     let decades = (range.end / range.start).log10();
-    let labelled: &[f64] = if decades > 3.0 {
+    let labelled_multiples: &[f64] = if decades > 3.0 {
         &[1.0]
     } else {
         &[1.0, 2.0, 5.0]
@@ -170,7 +170,7 @@ fn log_axis(range: Range<f64>) -> WithKeyPoints<LogCoord<f64>> {
             .collect()
     };
     let light = within(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
-    let mut labelled = within(labelled);
+    let mut labelled = within(labelled_multiples);
     if labelled.len() < 2 {
         labelled.clone_from(&light);
     }
