@@ -1,6 +1,5 @@
 //! Shared test helpers: seeded random draws (the project's PCG32 from `vcm_scene`), mesh
 //! generators and a brute-force f64 reference.
-#![allow(dead_code)] // Each test binary uses a different subset.
 
 use glam::{DVec3, Vec3};
 use vcm_scene::sampling::sample_uniform_sphere;

@@ -1,14 +1,13 @@
 //! The batch types, the submit/wait pair and chunking behave as documented.
 
-mod common;
-
-use common::{Rng, RngExt, triangle_soup};
 use glam::{Vec3, vec3};
 use vcm_traversal::contract::TRIANGLE_AT_Z1;
 use vcm_traversal::{
     BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, Interleave, NO_HIT, RayBatch,
     Traversal, TraversalJob,
 };
+
+use crate::common::{Rng, RngExt, triangle_soup};
 
 fn random_rays(rng: &mut Rng, count: usize) -> RayBatch {
     let mut rays = RayBatch::with_capacity(count);

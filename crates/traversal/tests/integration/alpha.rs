@@ -1,14 +1,13 @@
 //! Alpha-tested triangles are transparent where the test says so, for both query kinds.
 
-mod common;
-
 use std::sync::Arc;
 
-use common::{Rng, RngExt};
 use glam::{Vec3, vec3};
 use vcm_traversal::{
     AlphaTest, CpuBvh, CpuBvhOptions, HitBatch, Interleave, NO_HIT, RayBatch, Traversal,
 };
+
+use crate::common::{Rng, RngExt};
 
 /// Triangles with even ids are masked and opaque only where `u < 0.5`.
 struct HalfCutout;

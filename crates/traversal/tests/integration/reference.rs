@@ -1,13 +1,12 @@
 //! Random rays against random meshes agree with a brute-force f64 reference.
 
-mod common;
-
-use common::{Rng, RngExt, assert_matches_reference, height_field, triangle_soup};
 use glam::Vec3;
 use vcm_traversal::contract::uv_sphere;
 use vcm_traversal::{
     BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, HitBatch, Interleave, RayBatch, Traversal,
 };
+
+use crate::common::{self, Rng, RngExt, assert_matches_reference, height_field, triangle_soup};
 
 /// Random rays: origins in the meshes' bounding box, random directions and lengths, a
 /// quarter with a bounded `[tmin, tmax)`.

@@ -2,14 +2,13 @@
 //! contract (`vcm_traversal::contract`) for every build preset and kernel, plus what is
 //! specific to the CPU backend.
 
-mod common;
-
-use common::{Rng, RngExt};
 use glam::{Vec3, vec3};
 use vcm_traversal::contract::{self, TRIANGLE_AT_Z1, assert_no_leaks, cuboid, uv_sphere};
 use vcm_traversal::{
     BuildError, BuildPreset, CpuBvh, CpuBvhOptions, CpuKernel, Interleave, RayBatch, Traversal,
 };
+
+use crate::common::{self, Rng, RngExt};
 
 fn build(tris: &[[Vec3; 3]]) -> Box<dyn Traversal> {
     Box::new(CpuBvh::new(tris, CpuBvhOptions::default()).unwrap())
