@@ -1,6 +1,5 @@
 //! Shared helpers of the GPU tests: the adapter (or a clear skip), random rays and the
 //! comparison against the CPU backend.
-#![allow(dead_code)] // Each test binary uses a different subset.
 
 use glam::Vec3;
 use vcm_scene::sampling::{Rng, Sampler, sample_uniform_sphere};

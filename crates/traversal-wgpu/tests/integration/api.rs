@@ -1,16 +1,15 @@
 //! The GPU backend against the backend-independent traversal contract, and its own API:
 //! submit/wait with several batches in flight, outputs resized and overwritten, build errors.
 
-mod common;
-
 use std::sync::Arc;
 
-use common::{gpu, random_rays};
 use glam::Vec3;
 use vcm_scene::sampling::Rng;
 use vcm_traversal::contract::{self, uv_sphere};
 use vcm_traversal::{BuildError, HitBatch, NO_HIT, RayBatch, Traversal, TraversalJob};
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice, GpuError, NodeLayout};
+
+use crate::common::{gpu, random_rays};
 
 fn backend(device: &Arc<GpuDevice>, triangles: &[[Vec3; 3]]) -> GpuBvh {
     GpuBvh::new(device.clone(), triangles, GpuBvhOptions::default()).unwrap()

@@ -1,14 +1,13 @@
 //! The GPU backend against the CPU backend on the same rays, for every scene in `scenes/`:
 //! camera rays, incoherent rays, diffuse bounces from the camera hits and finite shadow rays.
 
-mod common;
-
-use common::{Agreement, compare, gpu, random_rays};
 use glam::{Vec2, Vec3};
 use vcm_scene::Scene;
 use vcm_scene::sampling::{Rng, Sampler, sample_uniform_sphere};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, NodeLayout};
+
+use crate::common::{Agreement, compare, gpu, random_rays};
 
 const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes");
 
