@@ -1,7 +1,5 @@
 //! Scenes built in code and frame statistics shared by the integration tests.
 
-#![allow(dead_code)] // each test binary uses a different part
-
 use std::ops::Range;
 use std::path::PathBuf;
 use std::sync::Arc;

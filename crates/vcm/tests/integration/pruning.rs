@@ -4,12 +4,12 @@
 //! within the standard errors where the estimator changes (VCM without merging on a scene
 //! without specular surfaces, which is then BPT, bit for bit).
 
-mod common;
-
 use glam::Vec3;
 use vcm::{Algorithm, Film, FrameStats, Integrator, PtSettings, Vcm, VcmSettings};
 use vcm_scene::light::{Light, PointLight};
 use vcm_scene::{Material, Scene, ShadingPlan};
+
+use crate::common;
 
 const SIZE: u32 = 32;
 /// A merge radius at which merging carries a large share of VCM's weights on a 32² image

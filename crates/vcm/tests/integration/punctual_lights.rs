@@ -6,12 +6,12 @@
 //! BPT and VCM: with delta lights, a light sample and a light path splatted through the camera
 //! both find the direct light, so the check covers their MIS weights too.
 
-mod common;
-
 use glam::{DVec3, Vec3, Vec4};
 use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
 use vcm_scene::light::{DirectionalLight, Light, PointLight, SpotLight};
 use vcm_scene::{Material, Scene};
+
+use crate::common;
 
 const ALBEDO: f32 = 0.5;
 /// Radiant intensity at scale 1 (W/sr).

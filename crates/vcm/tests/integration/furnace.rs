@@ -2,12 +2,12 @@
 //! Lambertian albedo ρ, the radiance is Le · Σₖ ρᵏ over the path lengths allowed, Le / (1 − ρ)
 //! without a limit, in every pixel and every direction, whatever the sphere's size.
 
-mod common;
-
 use glam::Vec3;
 use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
 use vcm_scene::Material;
 use vcm_scene::sampling::SampleSequence;
+
+use crate::common;
 
 const ALBEDO: f32 = 0.5;
 const EMITTED: f32 = 1.0;

@@ -6,7 +6,7 @@ use std::path::Path;
 use vcm::PtSettings;
 use vcm_scene::Scene;
 
-mod common;
+use crate::common;
 
 /// Regions per image side: the image is split into REGIONS × REGIONS blocks whose means are
 /// compared (a pixel alone is too noisy for a short render's error estimate).

@@ -10,9 +10,9 @@ use glam::Vec3;
 use vcm::Algorithm;
 use vcm_scene::Material;
 
+use super::harness::{self, ALL_BUT_LIGHT_TRACING, REGIONS, Setup};
+use super::scenes::{Placement, SceneParts, camera_looking};
 use crate::common;
-use crate::harness::{self, ALL_BUT_LIGHT_TRACING, REGIONS, Setup};
-use crate::scenes::{Placement, SceneParts, camera_looking};
 
 /// The furnace's value Le / (1 − ρ).
 const FURNACE_VALUE: f64 = 2.0;

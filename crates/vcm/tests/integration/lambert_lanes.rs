@@ -8,12 +8,11 @@
 //! one-sided and double-sided surfaces seen from both sides under two lights of different
 //! power, beside glossy and emitting ones.
 
-mod common;
-
-use common::EVERY_ALGORITHM;
 use glam::{Vec3, Vec4};
 use vcm::{Algorithm, Film, Integrator, PtSettings, Schedule, VcmSettings};
 use vcm_scene::{Material, Scene, ShadingPlan};
+
+use crate::common::{self, EVERY_ALGORITHM};
 
 const SIZE: u32 = 40;
 const FRAMES: u32 = 3;

@@ -7,10 +7,10 @@ use vcm::Algorithm;
 use vcm_scene::Material;
 use vcm_scene::light::{Light, PointLight};
 
+use super::harness::{self, REGIONS, Setup};
+use super::scenes::{Placement, SceneParts, camera_looking, emitter};
 use crate::common;
 use crate::common::EVERY_ALGORITHM;
-use crate::harness::{self, REGIONS, Setup};
-use crate::scenes::{Placement, SceneParts, camera_looking, emitter};
 
 /// Radiance of the large light; the tiny one emits a million times more.
 const DIM: f32 = 0.25;

@@ -1,12 +1,12 @@
 //! A render is a pure function of (scene, settings, seed, samples): the same film, bit for
 //! bit, for any number of threads, any scheduler and any frame sizes.
 
-mod common;
-
 use glam::Vec3;
 use vcm::{Algorithm, Film, Integrator, PtSettings, Schedule, Scheduler, VcmSettings};
 use vcm_scene::Material;
 use vcm_scene::light::{Light, PointLight};
+
+use crate::common;
 
 /// [`render_frames`]: 4 frames of `schedule`.
 fn render(threads: usize, algorithm: Option<Algorithm>, schedule: Schedule) -> Film {

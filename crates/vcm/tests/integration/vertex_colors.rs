@@ -2,12 +2,12 @@
 //! moved from the materials onto the vertices renders the same image, bit for bit, with the
 //! path tracer and with VCM (whose light paths rebuild BSDFs at cached vertices).
 
-mod common;
-
 use glam::Vec3;
 use vcm::{Algorithm, Film, Integrator, PtSettings, VcmSettings};
 use vcm_scene::light::Light;
 use vcm_scene::{Material, Scene};
+
+use crate::common;
 
 const SIZE: u32 = 32;
 const FRAMES: u32 = 4;

@@ -5,11 +5,11 @@
 //! "The irradiance Jacobian for partially occluded polyhedral sources", eq. 3). Light sampling
 //! and BSDF sampling both find the light, so the test checks their MIS weights sum to one.
 
-mod common;
-
 use glam::{DVec3, Vec3};
 use vcm::{Algorithm, PtSettings, VcmSettings};
 use vcm_scene::Material;
+
+use crate::common;
 
 const ALBEDO: f32 = 0.6;
 /// Emitted radiance of the light (W·sr⁻¹·m⁻²).

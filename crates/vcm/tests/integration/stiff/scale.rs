@@ -6,10 +6,10 @@
 use glam::Vec3;
 use vcm_scene::Material;
 
+use super::harness::{self, REGIONS, Setup};
+use super::scenes::{Placement, SceneParts, emitter};
 use crate::common;
 use crate::common::EVERY_ALGORITHM;
-use crate::harness::{self, REGIONS, Setup};
-use crate::scenes::{Placement, SceneParts, emitter};
 
 const FRAMES: u32 = 200;
 

@@ -5,15 +5,14 @@
 //! All of them agree too where every shading normal leans off the geometric one, and on
 //! textured third-party models (`../shared/scenes/khronos-samples/`).
 
-mod common;
-
 use std::path::Path;
 
-use common::RegionSeries;
 use glam::Vec3;
 use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
 use vcm_scene::Scene;
 use vcm_scene::light::{Light, PointLight};
+
+use crate::common::{self, RegionSeries};
 
 /// The image is compared in REGIONS × REGIONS blocks.
 const REGIONS: usize = 4;

@@ -12,12 +12,12 @@
 //! carry: BPT and VCM agree with bidirectional photon mapping. (Light tracing cannot see
 //! inside: the slab's surface is in the way of its camera connections.)
 
-mod common;
-
 use glam::{DVec3, Vec3, Vec3Swizzles};
 use vcm::{Algorithm, Integrator};
 use vcm_scene::light::{Light, PointLight};
 use vcm_scene::{Camera, Material, Scene};
+
+use crate::common;
 
 const SKY: Vec3 = Vec3::new(1.0, 0.5, 0.25);
 const ALBEDO: f32 = 0.5;

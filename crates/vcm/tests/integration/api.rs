@@ -1,7 +1,5 @@
 //! The path tracer's settings checks and statistics.
 
-mod common;
-
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -9,6 +7,8 @@ use vcm::{Film, Integrator, PathTracer, PtSettings, RenderError};
 use vcm_scene::Material;
 use vcm_scene::light::{Light, PointLight};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};
+
+use crate::common;
 
 /// A diffuse square at z = 0 filling the view, under a point light.
 fn lit_plane() -> vcm_scene::Scene {

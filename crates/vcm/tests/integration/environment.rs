@@ -4,14 +4,14 @@
 //! samples that escape, and by light paths entering the scene from the sky. Constant or
 //! painted (an equirectangular map with a sun), the algorithms agree where it is occluded.
 
-mod common;
-
 use std::sync::Arc;
 
 use glam::Vec3;
 use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
 use vcm_scene::light::EnvironmentMap;
 use vcm_scene::{Camera, Material, Scene};
+
+use crate::common;
 
 const SKY: Vec3 = Vec3::new(1.0, 0.5, 0.25);
 const ALBEDO: f32 = 0.5;

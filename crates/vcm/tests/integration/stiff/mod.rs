@@ -10,8 +10,6 @@
 //!   coincident, degenerate and sliver triangles, 100-bounce mirror chains and photon mapping
 //!   after a billion iterations, all inside a white furnace whose value is known.
 
-#[path = "../common/mod.rs"]
-mod common;
 mod furnaces;
 mod harness;
 mod lights;

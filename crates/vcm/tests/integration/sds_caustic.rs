@@ -12,12 +12,12 @@
 //! the test compares the mean relMSE of several independent renders, which estimates the
 //! expected relMSE, the quantity "far below" is about.
 
-mod common;
-
 use glam::Vec3;
 use vcm::metrics::compare;
 use vcm::{Algorithm, Film, Integrator, PtSettings, VcmSettings};
 use vcm_scene::{Camera, Material, Scene};
+
+use crate::common;
 
 const SIZE: u32 = 32;
 const FRAMES: u32 = 64;
