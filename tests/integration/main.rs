@@ -1,0 +1,10 @@
+//! The integration tests of `vcm-rs`: the `vcm` command line run as a separate process, and the
+//! committed scenes. One module per concern; filter with `cargo test --test integration cli::`.
+//!
+//! One test binary for the whole package rather than one per file: each binary links the whole
+//! stack, so every extra file in `tests/` would add a link to `cargo test` (see issue 57).
+
+mod cli;
+mod gpu_backend;
+mod mitsuba_crosscheck;
+mod scenes;
