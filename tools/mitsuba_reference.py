@@ -220,9 +220,9 @@ def material_plugins(material, doc, base_dir, work_dir):
     # Mitsuba's `normalmap` is another shading-normal model: a diffuse plane whose normal map
     # tilts it by 40 degrees reflects 0.79 of a uniform sky's light there, where the cosine
     # about the shading normal, clipped to the geometric hemisphere, gives (1 + cos 40°) / 2
-    # = 0.88 (the renderer's value, tested in crates/vcm/tests/environment.rs). Vertex
-    # normals differ too (Mitsuba lets in light from below the geometric plane: 1.0 there),
-    # so scenes whose vertex normals lean far off their faces make poor cross-checks.
+    # = 0.88 (the renderer's value, tested in crates/vcm/tests/integration/environment.rs).
+    # Vertex normals differ too (Mitsuba lets in light from below the geometric plane: 1.0
+    # there), so scenes whose vertex normals lean far off their faces make poor cross-checks.
     if "normalTexture" in material:
         raise Unsupported(f"material {material.get('name')!r} has a normalTexture")
     base = pbr.get("baseColorFactor", [1, 1, 1, 1])[:3]
