@@ -8,18 +8,19 @@
 //! * [`estimate_mean`]: fixed-seed Monte Carlo mean with its standard error.
 //! * [`bsdf_chi2_test`] and [`estimate_albedo`]: the above for a [`Bsdf`](crate::bsdf::Bsdf)
 //!   (sampling vs pdf; directional albedo ∫ f_cos dωi by importance sampling).
-//! * [`exr_claiming`]: an OpenEXR file whose header claims a given size (for size limits).
+//! * [`exr_claiming`], [`png_claiming`]: OpenEXR and PNG files whose headers claim a given
+//!   size (for size limits).
 //!
 //! Available to other crates' tests through the `testing` feature.
 
 mod bsdf;
 mod chi2;
 mod estimate;
-mod exr_header;
+mod image_headers;
 mod integrate;
 
 pub use bsdf::{bsdf_chi2_test, estimate_albedo};
 pub use chi2::{Chi2Config, Chi2Result, chi2_test, sidak_significance};
 pub use estimate::{Estimate, estimate_mean};
-pub use exr_header::exr_claiming;
+pub use image_headers::{exr_claiming, png_claiming};
 pub use integrate::{integrate_cell, integrate_sphere, spherical_direction};
