@@ -1,6 +1,8 @@
 //! Textures: 8-bit RGBA texels, decoded to linear on lookup, bilinear or nearest-texel
 //! filtering and glTF wrap modes.
 
+use std::sync::Arc;
+
 use glam::{Vec2, Vec4};
 
 /// How texture coordinates outside [0, 1] are mapped (glTF sampler `wrapS` / `wrapT`).
@@ -62,7 +64,8 @@ pub struct Texture {
     pub name: String,
     width: u32,
     height: u32,
-    texels: Vec<[u8; 4]>,
+    /// Shared by the textures of one image (which differ in encoding or sampler only).
+    texels: Arc<[[u8; 4]]>,
     encoding: ColorEncoding,
     /// Mean linear RGBA over all texels, computed once.
     average: std::sync::OnceLock<Vec4>,
@@ -105,7 +108,7 @@ impl Texture {
             name,
             width,
             height,
-            texels,
+            texels: texels.into(),
             encoding,
             average: std::sync::OnceLock::new(),
             wrap_u: WrapMode::Repeat,
@@ -121,6 +124,22 @@ impl Texture {
         let texels = rgba.pixels().map(|p| p.0).collect();
         Texture::new(name, width, height, texels, encoding)
             .expect("an RGBA8 image buffer always holds width*height texels")
+    }
+
+    /// The same texels under another name and encoding, with the default sampler, sharing
+    /// their memory: for the textures of one image.
+    pub fn sharing_texels(&self, name: String, encoding: ColorEncoding) -> Texture {
+        Texture {
+            name,
+            width: self.width,
+            height: self.height,
+            texels: Arc::clone(&self.texels),
+            encoding,
+            average: std::sync::OnceLock::new(),
+            wrap_u: WrapMode::Repeat,
+            wrap_v: WrapMode::Repeat,
+            filter: Filter::Bilinear,
+        }
     }
 
     /// Width in texels.
