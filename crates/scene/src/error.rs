@@ -57,6 +57,28 @@ pub enum SceneError {
         /// The cameras there are, in words.
         reason: String,
     },
+    /// The scene needs more than the [`LoadOptions`](crate::loader::LoadOptions) allow
+    /// (triangles or vertices once instanced, node instances).
+    #[error("{path}: {reason}")]
+    TooLarge {
+        /// The scene file.
+        path: PathBuf,
+        /// What it would need and what is allowed, in words.
+        reason: String,
+    },
+    /// A URI or file name in the scene leads outside the scene file's folder, which the
+    /// [`LoadOptions`](crate::loader::LoadOptions) do not allow. Nothing outside was opened,
+    /// so the message says nothing about the file itself.
+    #[error(
+        "{path}: '{name}' is outside the scene's folder; files there are read only where the \
+         load options allow it"
+    )]
+    OutsideFolder {
+        /// The scene file.
+        path: PathBuf,
+        /// The URI or file name as the scene writes it.
+        name: String,
+    },
     /// Geometry data is unusable (non-finite positions, indices out of range ...).
     #[error("{path}: {mesh}: {reason}")]
     Geometry {
@@ -70,6 +92,20 @@ pub enum SceneError {
 }
 
 impl SceneError {
+    pub(crate) fn too_large(path: &std::path::Path, reason: impl Into<String>) -> Self {
+        SceneError::TooLarge {
+            path: path.to_path_buf(),
+            reason: reason.into(),
+        }
+    }
+
+    pub(crate) fn outside(path: &std::path::Path, name: &str) -> Self {
+        SceneError::OutsideFolder {
+            path: path.to_path_buf(),
+            name: name.to_string(),
+        }
+    }
+
     pub(crate) fn gltf(path: &std::path::Path, reason: impl Into<String>) -> Self {
         SceneError::Gltf {
             path: path.to_path_buf(),

@@ -46,6 +46,7 @@ pub use camera::{Camera, FileCamera, Projection};
 pub use decision::Decision;
 pub use error::SceneError;
 pub use features::SceneFeatures;
+pub use loader::LoadOptions;
 pub use material::{AlphaMode, Material};
 pub use mesh::{Bounds, Mesh, SurfacePoint};
 pub use real::Real;

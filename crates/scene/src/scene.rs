@@ -53,9 +53,19 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Loads a glTF (`.gltf`, `.glb`) or OBJ (`.obj`) file.
+    /// Loads a glTF (`.gltf`, `.glb`) or OBJ (`.obj`) file with the default
+    /// [`LoadOptions`](crate::LoadOptions).
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         crate::loader::load(path.as_ref())
+    }
+
+    /// Loads a glTF (`.gltf`, `.glb`) or OBJ (`.obj`) file within `options` (how many
+    /// triangles it may expand to, whether it may read files outside its folder).
+    pub fn load_with(
+        path: impl AsRef<Path>,
+        options: &crate::LoadOptions,
+    ) -> Result<Scene, SceneError> {
+        crate::loader::load_with(path.as_ref(), options)
     }
 
     /// Assembles a scene from parts: area lights are made for every emissive triangle and

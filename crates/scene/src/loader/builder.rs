@@ -8,6 +8,7 @@ use glam::{Vec2, Vec3, Vec4};
 use crate::camera::{Camera, FileCamera};
 use crate::error::SceneError;
 use crate::light::{DirectionalLight, EnvironmentLight, EnvironmentMap, Light};
+use crate::loader::options::LoadOptions;
 use crate::material::{AlphaMode, Material};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
@@ -49,10 +50,17 @@ pub(crate) struct SceneBuilder {
     pub cameras: Vec<FileCamera>,
     warnings: Vec<String>,
     degenerate_triangles: usize,
+    /// Most triangles and vertices the mesh may reach (the load options').
+    max_triangles: u64,
+    max_vertices: u64,
+    /// Texels the textures may still decode to (the load options' `max_texels`, less those
+    /// decoded).
+    texels_left: u64,
+    max_texels: u64,
 }
 
 impl SceneBuilder {
-    pub fn new(path: &Path) -> Self {
+    pub fn new(path: &Path, options: &LoadOptions) -> Self {
         SceneBuilder {
             path: path.to_path_buf(),
             mesh: Mesh::default(),
@@ -64,6 +72,35 @@ impl SceneBuilder {
             cameras: Vec::new(),
             warnings: Vec::new(),
             degenerate_triangles: 0,
+            max_triangles: options.max_triangles,
+            max_vertices: options.max_vertices(),
+            texels_left: options.max_texels,
+            max_texels: options.max_texels,
+        }
+    }
+
+    /// Takes `width` × `height` texels for the image `name` out of what the load options
+    /// let the textures decode to; `Err` when they do not fit.
+    pub fn reserve_texels(
+        &mut self,
+        name: &str,
+        width: u32,
+        height: u32,
+    ) -> Result<(), SceneError> {
+        let texels = u64::from(width) * u64::from(height);
+        match self.texels_left.checked_sub(texels) {
+            Some(left) => {
+                self.texels_left = left;
+                Ok(())
+            }
+            None => {
+                let reason = format!(
+                    "texture {name}: its {width} × {height} texels take the textures past the \
+                     {} texels the load options allow (max_texels)",
+                    self.max_texels
+                );
+                Err(SceneError::too_large(&self.path, reason))
+            }
         }
     }
 
@@ -113,6 +150,16 @@ impl SceneBuilder {
     /// Validates a primitive and appends it; zero-area triangles are dropped and counted.
     pub fn add_primitive(&mut self, p: Primitive) -> Result<(), SceneError> {
         let n = p.positions.len();
+        let vertices = (self.mesh.positions.len() + n) as u64;
+        let triangles = (self.mesh.triangles.len() + p.triangles.len()) as u64;
+        if vertices > self.max_vertices || triangles > self.max_triangles {
+            let reason = format!(
+                "{}: the scene reaches {triangles} triangles and {vertices} vertices, more than \
+                 the load options allow ({} triangles, {} vertices)",
+                p.name, self.max_triangles, self.max_vertices
+            );
+            return Err(SceneError::too_large(&self.path, reason));
+        }
         if let Some(i) = p.positions.iter().position(|v| !v.is_finite()) {
             return Err(self.geometry_error(
                 &p.name,

@@ -17,24 +17,35 @@
 //! Files without materials use the grey diffuse default; OBJ files have no cameras or lights
 //! other than emissive materials, so the default camera frames the scene.
 
-use std::io::BufRead;
+use std::cell::RefCell;
+use std::io::{BufRead, Read};
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
 use crate::error::SceneError;
+use crate::image_limits::image_decoder;
+use crate::loader::LoadOptions;
 use crate::loader::builder::{Primitive, SceneBuilder};
+use crate::loader::files::{Length, ReadError, SceneFolder, open_regular_file};
 use crate::material::Material;
 use crate::scene::Scene;
 use crate::texture::{ColorEncoding, Texture, TextureRef};
 
-/// Loads an OBJ file and the MTL files it references (relative to its folder).
+/// Loads an OBJ file and the MTL files it references (relative to its folder) with the
+/// default [`LoadOptions`].
 pub fn load_obj(path: &Path) -> Result<Scene, SceneError> {
-    let file = std::fs::File::open(path).map_err(|reason| SceneError::Io {
+    load_obj_with(path, &LoadOptions::default())
+}
+
+/// [`load_obj`] within `options`.
+pub fn load_obj_with(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
+    let (file, length) = open_regular_file(path).map_err(|reason| SceneError::Io {
         path: path.to_path_buf(),
         reason,
     })?;
-    load_obj_from_reader(path, &mut std::io::BufReader::new(file))
+    let mut reader = std::io::BufReader::new(file.take(length));
+    load_obj_from_reader_with(path, &mut reader, options)
 }
 
 fn obj_error(path: &Path, reason: impl Into<String>) -> SceneError {
@@ -44,28 +55,61 @@ fn obj_error(path: &Path, reason: impl Into<String>) -> SceneError {
     }
 }
 
-/// Loads OBJ text from `reader`; `path` names it in messages and locates MTL and texture files.
+/// Loads OBJ text from `reader` with the default [`LoadOptions`]; `path` names it in
+/// messages and locates MTL and texture files.
 pub fn load_obj_from_reader(path: &Path, reader: &mut impl BufRead) -> Result<Scene, SceneError> {
-    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let options = tobj::LoadOptions {
+    load_obj_from_reader_with(path, reader, &LoadOptions::default())
+}
+
+/// [`load_obj_from_reader`] within `options`.
+pub fn load_obj_from_reader_with(
+    path: &Path,
+    reader: &mut impl BufRead,
+    options: &LoadOptions,
+) -> Result<Scene, SceneError> {
+    let folder = SceneFolder::of(path, options);
+    let obj_options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, materials) =
-        tobj::load_obj_buf(reader, &options, |mtl| tobj::load_mtl(base.join(mtl)))
-            .map_err(|e| obj_error(path, e.to_string()))?;
+    // tobj's errors are fixed words; why a library was not read is kept here to report.
+    let library_error: RefCell<Option<ReadError>> = RefCell::new(None);
+    let load_library = |mtl: &Path| {
+        let bytes = folder
+            .read(&mtl.to_string_lossy(), Length::Whole)
+            .map_err(|e| {
+                let problem = match &e {
+                    ReadError::Outside => tobj::LoadError::OpenFileFailed,
+                    ReadError::Failed(_) => tobj::LoadError::ReadError,
+                };
+                library_error.replace(Some(e));
+                problem
+            })?;
+        tobj::load_mtl_buf(&mut std::io::Cursor::new(bytes))
+    };
+    let (models, materials) = tobj::load_obj_buf(reader, &obj_options, load_library)
+        .map_err(|e| obj_error(path, e.to_string()))?;
 
-    let mut builder = SceneBuilder::new(path);
-    match materials {
-        Ok(materials) => {
+    let mut builder = SceneBuilder::new(path, options);
+    match (materials, library_error.into_inner()) {
+        (Ok(materials), _) => {
             for m in &materials {
-                let material = convert_material(&mut builder, &base, m)?;
+                let material = convert_material(&mut builder, &folder, m)?;
                 builder.materials.push(material);
             }
         }
-        Err(e) => builder.warn(format!(
+        (Err(_), Some(ReadError::Outside)) => builder.warn(format!(
+            "{}: a material library is outside the scene's folder and is not read (the load \
+             options do not allow it); using the default material",
+            path.display()
+        )),
+        (Err(_), Some(ReadError::Failed(reason))) => builder.warn(format!(
+            "{}: material library not loaded ({reason}); using the default material",
+            path.display()
+        )),
+        (Err(e), None) => builder.warn(format!(
             "{}: material library not loaded ({e}); using the default material",
             path.display()
         )),
@@ -130,7 +174,7 @@ pub fn load_obj_from_reader(path: &Path, reader: &mut impl BufRead) -> Result<Sc
 /// Maps one MTL material (see the module documentation for the table).
 fn convert_material(
     builder: &mut SceneBuilder,
-    base: &Path,
+    folder: &SceneFolder,
     m: &tobj::Material,
 ) -> Result<Material, SceneError> {
     let path = builder.path().to_path_buf();
@@ -190,7 +234,7 @@ fn convert_material(
         material.specular = material.specular.max(1.0);
     }
     if let Some(texture) = &m.diffuse_texture {
-        material.base_color_texture = Some(load_texture(builder, base, texture)?);
+        material.base_color_texture = Some(load_texture(builder, folder, texture)?);
     }
     let ignored = [
         ("map_Ks", &m.specular_texture),
@@ -212,15 +256,24 @@ fn convert_material(
 /// Loads `map_Kd` (sRGB) relative to the OBJ's folder.
 fn load_texture(
     builder: &mut SceneBuilder,
-    base: &Path,
+    folder: &SceneFolder,
     name: &str,
 ) -> Result<TextureRef, SceneError> {
-    let file = base.join(name);
-    let image = image::open(&file).map_err(|e| SceneError::Texture {
-        path: builder.path().to_path_buf(),
-        texture: file.display().to_string(),
-        reason: e.to_string(),
+    let path = builder.path().to_path_buf();
+    let texture_error = |reason: String| SceneError::Texture {
+        path: path.clone(),
+        texture: name.to_string(),
+        reason,
+    };
+    let bytes = folder.read(name, Length::Whole).map_err(|e| match e {
+        ReadError::Outside => SceneError::outside(builder.path(), name),
+        ReadError::Failed(reason) => texture_error(reason),
     })?;
+    let decoder = image_decoder(&bytes).map_err(texture_error)?;
+    let (width, height) = image::ImageDecoder::dimensions(&decoder);
+    builder.reserve_texels(name, width, height)?;
+    let image = image::DynamicImage::from_decoder(decoder)
+        .map_err(|e| texture_error(format!("cannot decode: {e}")))?;
     let index = builder.textures.len();
     builder.textures.push(Texture::from_image(
         name.to_string(),

@@ -9,14 +9,14 @@
 //! ```
 
 use std::io::Cursor;
-use std::path::Path;
 
 use glam::Vec3;
 use gltf::json::Value;
 
 use super::extension_json::{finite, malformed};
-use crate::image_limits::{check_exr_layers, check_texels};
+use crate::image_limits::{check_exr_file, check_image_size};
 use crate::light::EnvironmentMap;
+use crate::loader::files::{Length, ReadError, SceneFolder};
 use crate::loader::uri::read_uri;
 
 /// The extension's name in the document's `extensions`.
@@ -79,12 +79,14 @@ const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 /// The first bytes of every Radiance HDR (RGBE) file: `#?RADIANCE` or `#?RGBE`.
 const RADIANCE_MAGIC: &[u8] = b"#?";
 
-/// Reads the image at `uri` (relative to `base`) as an environment map: OpenEXR or Radiance
-/// HDR, told apart by their first bytes (not by the name); errors name the image and the
-/// problem.
-pub(super) fn load_map(base: &Path, uri: &str) -> Result<EnvironmentMap, String> {
-    let fail = |reason: String| format!("{EXTENSION} image '{uri}': {reason}");
-    let bytes = read_uri(base, uri).map_err(fail)?;
+/// Reads the image at `uri` (in `folder`) as an environment map: OpenEXR or Radiance HDR,
+/// told apart by their first bytes (not by the name); errors name the image and the problem.
+pub(super) fn load_map(folder: &SceneFolder, uri: &str) -> Result<EnvironmentMap, ReadError> {
+    let fail = |reason: String| ReadError::Failed(format!("{EXTENSION} image '{uri}': {reason}"));
+    let bytes = read_uri(folder, uri, Length::Whole).map_err(|e| match e {
+        ReadError::Failed(reason) => fail(reason),
+        outside => outside,
+    })?;
     let (width, height, texels) = if bytes.starts_with(&EXR_MAGIC) {
         read_exr(bytes)
     } else if bytes.starts_with(RADIANCE_MAGIC) {
@@ -101,7 +103,7 @@ pub(super) fn load_map(base: &Path, uri: &str) -> Result<EnvironmentMap, String>
 /// layer.
 fn read_exr(bytes: Vec<u8>) -> Result<(usize, usize, Vec<Vec3>), String> {
     use exr::prelude::{ReadChannels, ReadLayers};
-    check_exr_layers(bytes.as_slice())?;
+    check_exr_file(&bytes)?;
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -128,11 +130,12 @@ fn read_radiance(bytes: Vec<u8>) -> Result<(usize, usize, Vec<Vec3>), String> {
     // Strict decoding accepts only a `#?RADIANCE` first line; Mitsuba and others write
     // `#?RGBE`, which the lenient decoder skips as a comment.
     let decoding = |e: image::ImageError| format!("Radiance HDR: {e}");
+    let length = bytes.len();
     let decoder =
         image::codecs::hdr::HdrDecoder::new_nonstrict(Cursor::new(bytes)).map_err(decoding)?;
     let (width, height) = image::ImageDecoder::dimensions(&decoder);
     let (width, height) = (width as usize, height as usize);
-    check_texels(width, height)?;
+    check_image_size(width, height, length)?;
     let image = image::DynamicImage::from_decoder(decoder).map_err(decoding)?;
     let texels = image
         .into_rgb32f()

@@ -78,6 +78,26 @@ pub(super) fn read_primitive(
         let types = [DataType::U8, DataType::U16, DataType::U32];
         check_accessor(&indices, buffers, Dimensions::Scalar, &types)?;
     }
+    // Every attribute has one element per vertex; checked before reading, since a sparse
+    // accessor without a buffer view may declare any count.
+    let per_vertex = [
+        Semantic::Normals,
+        Semantic::Tangents,
+        Semantic::TexCoords(texture_coordinates),
+        Semantic::Colors(0),
+    ];
+    for semantic in per_vertex {
+        if let Some(accessor) = primitive.get(&semantic)
+            && accessor.count() != positions.count()
+        {
+            return Err(format!(
+                "accessor {} has {} elements for {} positions",
+                accessor.index(),
+                accessor.count(),
+                positions.count()
+            ));
+        }
+    }
 
     let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     let unreadable = || "an accessor's data cannot be read".to_string();

@@ -1,7 +1,6 @@
 //! glTF materials and textures → [`Material`] and [`Texture`].
 
 use std::collections::HashMap;
-use std::path::Path;
 
 use glam::{Vec3, Vec4};
 use gltf::json::Value;
@@ -10,16 +9,21 @@ use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 use super::accessors::check_view;
 use super::texture_transform::{EXTENSION, TextureTransform};
 use crate::error::SceneError;
+use crate::image_limits::image_decoder;
 use crate::loader::builder::SceneBuilder;
+use crate::loader::files::{Length, ReadError, SceneFolder};
 use crate::loader::uri::read_uri;
 use crate::material::{AlphaMode, Material};
 use crate::texture::{ColorEncoding, Filter, Texture, TextureRef, WrapMode};
 
-/// Loads each (texture, encoding) pair once and hands out [`TextureRef`]s.
+/// Loads each (texture, encoding) pair once and hands out [`TextureRef`]s. Each image is
+/// decoded once: textures of the same image share its texels.
 pub(super) struct TextureLoader<'a> {
-    base: &'a Path,
+    folder: &'a SceneFolder,
     buffers: &'a [Vec<u8>],
     loaded: HashMap<(usize, bool), usize>,
+    /// Per decoded image, the scene texture first made from it.
+    decoded: HashMap<usize, usize>,
 }
 
 /// The filter of a glTF sampler, for lookups without mipmaps: its magnification filter, or
@@ -57,16 +61,17 @@ fn wrap_mode(mode: WrappingMode) -> WrapMode {
 }
 
 impl<'a> TextureLoader<'a> {
-    pub fn new(base: &'a Path, buffers: &'a [Vec<u8>]) -> Self {
+    pub fn new(folder: &'a SceneFolder, buffers: &'a [Vec<u8>]) -> Self {
         TextureLoader {
-            base,
+            folder,
             buffers,
             loaded: HashMap::new(),
+            decoded: HashMap::new(),
         }
     }
 
     /// The encoded bytes of an image and a name for messages.
-    fn image_bytes(&self, image: &gltf::Image) -> (String, Result<Vec<u8>, String>) {
+    fn image_bytes(&self, image: &gltf::Image) -> (String, Result<Vec<u8>, ReadError>) {
         match image.source() {
             gltf::image::Source::Uri { uri, .. } => {
                 let name = if uri.starts_with("data:") {
@@ -74,14 +79,16 @@ impl<'a> TextureLoader<'a> {
                 } else {
                     format!("'{uri}'")
                 };
-                (name, read_uri(self.base, uri))
+                (name, read_uri(self.folder, uri, Length::Whole))
             }
             gltf::image::Source::View { view, .. } => {
                 let name = format!("image {} (buffer view {})", image.index(), view.index());
-                let bytes = check_view(&view, self.buffers).map(|()| {
-                    let start = view.offset();
-                    self.buffers[view.buffer().index()][start..start + view.length()].to_vec()
-                });
+                let bytes = check_view(&view, self.buffers)
+                    .map(|()| {
+                        let start = view.offset();
+                        self.buffers[view.buffer().index()][start..start + view.length()].to_vec()
+                    })
+                    .map_err(ReadError::Failed);
                 (name, bytes)
             }
         }
@@ -119,24 +126,54 @@ impl<'a> TextureLoader<'a> {
         if let Some(&index) = self.loaded.get(&key) {
             return Ok(index);
         }
-        let (name, bytes) = self.image_bytes(&texture.source());
-        let texture_error = |reason: String| SceneError::Texture {
-            path: builder.path().to_path_buf(),
-            texture: name.clone(),
-            reason,
+        let image = texture.source();
+        let mut tex = match self.decoded.get(&image.index()) {
+            Some(&decoded) => {
+                let first = &builder.textures[decoded];
+                first.sharing_texels(first.name.clone(), encoding)
+            }
+            None => self.decode(builder, &image, encoding)?,
         };
-        let decoded = bytes
-            .and_then(|b| image::load_from_memory(&b).map_err(|e| format!("cannot decode: {e}")))
-            .map_err(texture_error)?;
-        let mut tex = Texture::from_image(name.clone(), decoded, encoding);
         let sampler = texture.sampler();
         tex.wrap_u = wrap_mode(sampler.wrap_s());
         tex.wrap_v = wrap_mode(sampler.wrap_t());
         tex.filter = filter(&sampler);
         let index = builder.textures.len();
+        self.decoded.entry(image.index()).or_insert(index);
         builder.textures.push(tex);
         self.loaded.insert(key, index);
         Ok(index)
+    }
+
+    /// Reads and decodes `image`, within the texels the load options leave.
+    fn decode(
+        &mut self,
+        builder: &mut SceneBuilder,
+        image: &gltf::Image,
+        encoding: ColorEncoding,
+    ) -> Result<Texture, SceneError> {
+        let (name, bytes) = self.image_bytes(image);
+        let path = builder.path().to_path_buf();
+        let texture_error = |reason: String| SceneError::Texture {
+            path: path.clone(),
+            texture: name.clone(),
+            reason,
+        };
+        let bytes = bytes.map_err(|e| match (e, image.source()) {
+            (ReadError::Failed(reason), _) => texture_error(reason),
+            (ReadError::Outside, gltf::image::Source::Uri { uri, .. }) => {
+                SceneError::outside(builder.path(), uri)
+            }
+            (ReadError::Outside, gltf::image::Source::View { .. }) => {
+                texture_error("outside the scene's folder".into())
+            }
+        })?;
+        let decoder = image_decoder(&bytes).map_err(texture_error)?;
+        let (width, height) = image::ImageDecoder::dimensions(&decoder);
+        builder.reserve_texels(&name, width, height)?;
+        let decoded = image::DynamicImage::from_decoder(decoder)
+            .map_err(|e| texture_error(format!("cannot decode: {e}")))?;
+        Ok(Texture::from_image(name, decoded, encoding))
     }
 
     fn load_info(

@@ -4,6 +4,7 @@ mod accessors;
 mod environment;
 mod extension_json;
 mod geometry;
+mod instancing;
 mod materials;
 mod texture_transform;
 
@@ -17,6 +18,8 @@ use crate::camera::{Camera, FileCamera};
 use crate::error::SceneError;
 use crate::light::{Light, PointLight, SpotLight};
 use crate::loader::builder::SceneBuilder;
+use crate::loader::files::{Length, ReadError, SceneFolder};
+use crate::loader::options::LoadOptions;
 use crate::loader::uri::read_uri;
 use crate::material::Material;
 use crate::scene::Scene;
@@ -35,10 +38,14 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
 ];
 
 /// Parses a glTF document from `bytes`; `path` names it in messages and locates external files.
-pub(super) fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene, SceneError> {
+pub(super) fn load_gltf_bytes(
+    path: &Path,
+    bytes: &[u8],
+    options: &LoadOptions,
+) -> Result<Scene, SceneError> {
     let (document, blob) = parse_document(bytes).map_err(|e| SceneError::gltf(path, e))?;
     let document = &document;
-    let mut builder = SceneBuilder::new(path);
+    let mut builder = SceneBuilder::new(path, options);
     for extension in document.extensions_required() {
         if !SUPPORTED_EXTENSIONS.contains(&extension) {
             let reason = format!("requires the unsupported extension {extension}");
@@ -53,10 +60,22 @@ pub(super) fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene, SceneE
             ));
         }
     }
-    let base = path.parent().unwrap_or(Path::new("."));
-    let buffers = load_buffers(path, base, document, blob.as_deref())?;
+    let roots: Vec<usize> = match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(scene) => scene.nodes().map(|n| n.index()).collect(),
+        None => root_nodes(document),
+    };
+    // What the hierarchy expands to is checked before anything is read for it.
+    let instances = instancing::instance_counts(document, &roots)
+        .map_err(|reason| SceneError::gltf(path, reason))?;
+    instancing::check_expansion(document, &instances, options)
+        .map_err(|reason| SceneError::too_large(path, reason))?;
+    let folder = SceneFolder::of(path, options);
+    let buffers = load_buffers(path, &folder, document, blob.as_deref())?;
 
-    let mut textures = TextureLoader::new(base, &buffers);
+    let mut textures = TextureLoader::new(&folder, &buffers);
     let mut texture_coordinate_sets = Vec::new();
     for material in document.materials() {
         let (m, set) = read_material(&mut builder, &mut textures, &material)?;
@@ -68,31 +87,24 @@ pub(super) fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene, SceneE
     builder.materials.push(Material::default());
     texture_coordinate_sets.push(0);
 
-    let roots: Vec<gltf::Node> = match document
-        .default_scene()
-        .or_else(|| document.scenes().next())
-    {
-        Some(scene) => scene.nodes().collect(),
-        None => root_nodes(document),
-    };
     let mut reader = NodeReader {
         builder: &mut builder,
         buffers: &buffers,
         texture_coordinate_sets: &texture_coordinate_sets,
         default_material,
-        max_depth: document.nodes().count(),
     };
-    for node in roots {
-        reader.visit(&node, Mat4::IDENTITY, 0)?;
-    }
+    reader.visit(document, &roots)?;
     let environment = environment::read(document.extension_value(environment::EXTENSION))
         .map_err(|e| SceneError::gltf(path, e))?;
     if let Some(sky) = environment {
         let map = match &sky.image {
             None => None,
-            Some(uri) => Some(Arc::new(
-                environment::load_map(base, uri).map_err(|e| SceneError::gltf(path, e))?,
-            )),
+            Some(uri) => Some(Arc::new(environment::load_map(&folder, uri).map_err(
+                |e| match e {
+                    ReadError::Outside => SceneError::outside(path, uri),
+                    ReadError::Failed(reason) => SceneError::gltf(path, reason),
+                },
+            )?)),
         };
         builder.set_environment(sky.radiance, map);
     }
@@ -135,43 +147,48 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), Str
 }
 
 /// Nodes that are nobody's child (used when the file has no scene).
-fn root_nodes(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
+fn root_nodes(document: &gltf::Document) -> Vec<usize> {
     let mut is_child = vec![false; document.nodes().count()];
     for node in document.nodes() {
         for child in node.children() {
             is_child[child.index()] = true;
         }
     }
-    document.nodes().filter(|n| !is_child[n.index()]).collect()
+    (0..is_child.len()).filter(|&n| !is_child[n]).collect()
 }
 
-/// Loads every buffer: external files, data URIs, or the GLB binary chunk.
+/// Loads every buffer: external files, data URIs, or the GLB binary chunk; each holds its
+/// declared `byteLength`, and no more is read from a file than that.
 fn load_buffers(
     path: &Path,
-    base: &Path,
+    folder: &SceneFolder,
     document: &gltf::Document,
     blob: Option<&[u8]>,
 ) -> Result<Vec<Vec<u8>>, SceneError> {
     document
         .buffers()
         .map(|buffer| {
+            let declared = buffer.length();
+            let failed =
+                |reason| SceneError::gltf(path, format!("buffer {}: {reason}", buffer.index()));
             let data = match buffer.source() {
                 gltf::buffer::Source::Bin => blob
                     .map(<[u8]>::to_vec)
-                    .ok_or_else(|| "refers to a missing GLB binary chunk".to_string()),
-                gltf::buffer::Source::Uri(uri) => read_uri(base, uri),
+                    .ok_or_else(|| failed("refers to a missing GLB binary chunk".to_string()))?,
+                gltf::buffer::Source::Uri(uri) => {
+                    read_uri(folder, uri, Length::Declared(declared as u64)).map_err(
+                        |e| match e {
+                            ReadError::Outside => SceneError::outside(path, uri),
+                            ReadError::Failed(reason) => failed(reason),
+                        },
+                    )?
+                }
             };
-            let data = data.map_err(|reason| {
-                SceneError::gltf(path, format!("buffer {}: {reason}", buffer.index()))
-            })?;
-            if data.len() < buffer.length() {
-                let reason = format!(
-                    "buffer {} holds {} bytes but declares {}",
-                    buffer.index(),
-                    data.len(),
-                    buffer.length()
-                );
-                return Err(SceneError::gltf(path, reason));
+            if data.len() < declared {
+                return Err(failed(format!(
+                    "holds {} bytes but declares {declared}",
+                    data.len()
+                )));
             }
             Ok(data)
         })
@@ -185,36 +202,40 @@ struct NodeReader<'a> {
     /// Per material, the texture coordinate set its primitives are read with.
     texture_coordinate_sets: &'a [u32],
     default_material: u32,
-    /// A tree cannot be deeper than its node count; deeper means a cycle.
-    max_depth: usize,
 }
 
 impl NodeReader<'_> {
-    fn visit(&mut self, node: &gltf::Node, parent: Mat4, depth: usize) -> Result<(), SceneError> {
+    /// Visits every node instance under `roots` depth first, children in order, with an
+    /// explicit stack: a chain of nodes may be deeper than the call stack. The hierarchy has
+    /// no cycle and its expansion is bounded ([`instancing`] checked both).
+    fn visit(&mut self, document: &gltf::Document, roots: &[usize]) -> Result<(), SceneError> {
         let path = self.builder.path().to_path_buf();
-        if depth > self.max_depth {
-            return Err(SceneError::gltf(&path, "the node hierarchy has a cycle"));
-        }
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if !world.is_finite() {
-            let reason = format!("node {} has a non-finite transform", node.index());
-            return Err(SceneError::gltf(&path, reason));
-        }
-        if let Some(mesh) = node.mesh() {
-            if node.skin().is_some() {
-                let feature = "skinning (meshes are rendered in their bind pose)";
-                self.builder.warn_unsupported(feature);
+        let nodes: Vec<gltf::Node> = document.nodes().collect();
+        let mut stack: Vec<(usize, Mat4)> =
+            roots.iter().rev().map(|&n| (n, Mat4::IDENTITY)).collect();
+        while let Some((index, parent)) = stack.pop() {
+            let node = &nodes[index];
+            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            if !world.is_finite() {
+                let reason = format!("node {} has a non-finite transform", node.index());
+                return Err(SceneError::gltf(&path, reason));
             }
-            self.read_mesh(&mesh, world)?;
-        }
-        if let Some(camera) = node.camera() {
-            self.read_camera(&camera, node.name(), world);
-        }
-        if let Some(light) = node.light() {
-            self.read_light(&light, world)?;
-        }
-        for child in node.children() {
-            self.visit(&child, world, depth + 1)?;
+            if let Some(mesh) = node.mesh() {
+                if node.skin().is_some() {
+                    let feature = "skinning (meshes are rendered in their bind pose)";
+                    self.builder.warn_unsupported(feature);
+                }
+                self.read_mesh(&mesh, world)?;
+            }
+            if let Some(camera) = node.camera() {
+                self.read_camera(&camera, node.name(), world);
+            }
+            if let Some(light) = node.light() {
+                self.read_light(&light, world)?;
+            }
+            let first = stack.len();
+            stack.extend(node.children().map(|child| (child.index(), world)));
+            stack[first..].reverse();
         }
         Ok(())
     }
