@@ -14,6 +14,13 @@ use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::texture::Texture;
 
+/// The largest magnitude a vertex coordinate may have: 10¹⁸. Rendering squares distances
+/// and multiplies edge vectors (areas, normals, pdf conversions); with coordinates up to
+/// 10¹⁸, differences stay below 2·10¹⁸ and their squares and cross products below 10³⁸,
+/// within single precision (3.4·10³⁸). Beyond it a triangle's area overflows to infinity,
+/// which no later stage can work with.
+const MAX_COORDINATE: f32 = 1e18;
+
 /// One triangle primitive as read from a file, already in world space.
 pub(crate) struct Primitive {
     /// For messages: e.g. `mesh 'Bottle' primitive 0`.
@@ -165,6 +172,15 @@ impl SceneBuilder {
                 &p.name,
                 format!("vertex {i} has a non-finite position {}", p.positions[i]),
             ));
+        }
+        let huge = |v: &Vec3| v.abs().max_element() > MAX_COORDINATE;
+        if let Some(i) = p.positions.iter().position(huge) {
+            let reason = format!(
+                "vertex {i} has position {}, beyond the ±{MAX_COORDINATE:e} within which \
+                 distances and areas can be computed in single precision",
+                p.positions[i]
+            );
+            return Err(self.geometry_error(&p.name, reason));
         }
         let lengths = [
             ("normals", p.normals.as_ref().map(Vec::len)),

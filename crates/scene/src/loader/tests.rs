@@ -377,6 +377,130 @@ fn declared_counts_beyond_the_data_are_refused_before_reading() {
 }
 
 #[test]
+fn out_of_range_material_factors_are_clamped_with_one_warning_per_material() {
+    let materials = r#", "materials": [
+        {"name": "wild", "pbrMetallicRoughness": {"baseColorFactor": [100, 0.5, -1, 1],
+            "metallicFactor": -5, "roughnessFactor": -1},
+         "emissiveFactor": [2, 0, 0],
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 5},
+                        "KHR_materials_ior": {"ior": 0.5},
+                        "KHR_materials_specular": {"specularFactor": 3,
+                                                   "specularColorFactor": [-1, 2, 1]}}},
+        {"pbrMetallicRoughness": {"roughnessFactor": 7}},
+        {"name": "tame", "pbrMetallicRoughness": {"roughnessFactor": 0.5}}],
+        "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_ior",
+                           "KHR_materials_specular"]"#;
+    let scene = load(&document(r#"[{"mesh": 0}]"#, materials)).unwrap();
+    let wild = &scene.materials[0];
+    assert_eq!(wild.base_color, glam::Vec4::new(1.0, 0.5, 0.0, 1.0));
+    assert_eq!((wild.metallic, wild.roughness), (0.0, 0.0));
+    assert_eq!(
+        (wild.transmission, wild.ior, wild.specular),
+        (1.0, 1.0, 1.0)
+    );
+    assert_eq!(wild.emission, glam::Vec3::X);
+    // specularColorFactor has no upper bound in KHR_materials_specular.
+    assert_eq!(wild.specular_color, glam::Vec3::new(0.0, 2.0, 1.0));
+    assert_eq!(scene.materials[1].roughness, 1.0);
+    assert_eq!(scene.materials[2].roughness, 0.5);
+    let about = |name: &str| {
+        scene
+            .warnings
+            .iter()
+            .filter(|w| w.starts_with(&format!("memory.gltf: {name} has ")))
+            .count()
+    };
+    assert_eq!(about("material 'wild'"), 1, "{:?}", scene.warnings);
+    assert_eq!(about("material 1"), 1, "{:?}", scene.warnings);
+    assert_eq!(about("material 'tame'"), 0, "{:?}", scene.warnings);
+    let wild_warning = scene
+        .warnings
+        .iter()
+        .find(|w| w.contains("'wild'"))
+        .unwrap();
+    for property in [
+        "baseColorFactor",
+        "metallicFactor",
+        "roughnessFactor",
+        "emissiveFactor",
+        "transmissionFactor",
+        "ior",
+        "specularFactor",
+        "specularColorFactor",
+    ] {
+        assert!(
+            wild_warning.contains(property),
+            "{property}: {wild_warning}"
+        );
+    }
+}
+
+#[test]
+fn impossible_camera_aspect_ratios_are_errors_and_extreme_ones_are_ignored() {
+    let with_aspect = |aspect: &str| {
+        let nodes = r#"[{"mesh": 0}, {"camera": 0, "translation": [0, 0, 3]}]"#;
+        let cameras = format!(
+            r#", "cameras": [{{"type": "perspective",
+                "perspective": {{"yfov": 0.8, "znear": 0.1, "aspectRatio": {aspect}}}}}]"#
+        );
+        let json = document(nodes, &cameras).replace(r#""nodes": [0]"#, r#""nodes": [0, 1]"#);
+        load(&json)
+    };
+    for aspect in ["0", "-1.5", "1e39"] {
+        let message = with_aspect(aspect).unwrap_err().to_string();
+        assert!(
+            message.starts_with("memory.gltf: ")
+                && message.contains("camera 0 has aspectRatio")
+                && message.contains("must be a finite number > 0"),
+            "{aspect}: {message}"
+        );
+    }
+    let thin = with_aspect("1e-6").unwrap();
+    assert_eq!(thin.camera.aspect_ratio, None);
+    assert!(
+        thin.warnings
+            .iter()
+            .any(|w| w.contains("aspectRatio 0.000001")),
+        "{:?}",
+        thin.warnings
+    );
+    let wide = with_aspect("1.5").unwrap();
+    assert_eq!(wide.camera.aspect_ratio, Some(1.5));
+    assert!(wide.warnings.is_empty(), "{:?}", wide.warnings);
+}
+
+#[test]
+fn vertices_too_far_out_are_named_as_such_not_as_degenerate() {
+    let mut positions = triangle_bytes();
+    positions[12..16].copy_from_slice(&1e38f32.to_le_bytes());
+    let json = document_with(&data_uri(&positions), "[0]", r#"[{"mesh": 0}]"#, "");
+    let error = load(&json).unwrap_err();
+    assert!(matches!(error, SceneError::Geometry { .. }), "{error}");
+    let message = error.to_string();
+    assert!(
+        message.contains("vertex 1 has position")
+            && message.contains("beyond the ±1e18")
+            && !message.contains("degenerate"),
+        "{message}"
+    );
+    // A transform can carry finite positions out of range too.
+    let scaled = document(r#"[{"mesh": 0, "scale": [1e30, 1e30, 1]}]"#, "");
+    let message = load(&scaled).unwrap_err().to_string();
+    assert!(message.contains("beyond the ±1e18"), "{message}");
+}
+
+#[test]
+fn validation_errors_say_invalid_gltf_once() {
+    let json = document(r#"[{"mesh": 0}]"#, "").replace(r#""bufferView": 0"#, r#""bufferView": 9"#);
+    let message = load(&json).unwrap_err().to_string();
+    assert_eq!(message.matches("invalid glTF").count(), 1, "{message}");
+    assert!(
+        message.starts_with("memory.gltf: invalid glTF: "),
+        "{message}"
+    );
+}
+
+#[test]
 fn textures_decode_each_image_once_within_the_texel_budget() {
     // Three textures of one 2 × 1 image (different samplers, both encodings), and one of a
     // second image: under a budget of 2 texels only the first image fits.

@@ -233,6 +233,7 @@ pub(super) fn read_material(
     m: &gltf::Material,
 ) -> Result<(Material, u32), SceneError> {
     let pbr = m.pbr_metallic_roughness();
+    let mut clamped = Clamped::default();
     let srgb = ColorEncoding::Srgb;
     let linear = ColorEncoding::Linear;
     let base_color_texture = textures.load_info(builder, pbr.base_color_texture(), srgb)?;
@@ -260,7 +261,7 @@ pub(super) fn read_material(
     let alpha_mode = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
         gltf::material::AlphaMode::Mask => AlphaMode::Mask {
-            cutoff: m.alpha_cutoff().unwrap_or(0.5),
+            cutoff: clamped.at_least("alphaCutoff", m.alpha_cutoff().unwrap_or(0.5), 0.0),
         },
         gltf::material::AlphaMode::Blend => {
             builder.warn_unsupported("alphaMode BLEND (rendered as OPAQUE)");
@@ -269,16 +270,16 @@ pub(super) fn read_material(
     };
     let (specular, specular_texture, specular_color, specular_color_texture) = match m.specular() {
         Some(s) => (
-            s.specular_factor(),
+            clamped.unit("specularFactor", s.specular_factor()),
             textures.load_info(builder, s.specular_texture(), linear)?,
-            Vec3::from(s.specular_color_factor()),
+            clamped.at_least3("specularColorFactor", s.specular_color_factor().into(), 0.0),
             textures.load_info(builder, s.specular_color_texture(), srgb)?,
         ),
         None => (1.0, None, Vec3::ONE, None),
     };
     let (transmission, transmission_texture) = match m.transmission() {
         Some(t) => (
-            t.transmission_factor(),
+            clamped.unit("transmissionFactor", t.transmission_factor()),
             textures.load_info(builder, t.transmission_texture(), linear)?,
         ),
         None => (0.0, None),
@@ -302,17 +303,32 @@ pub(super) fn read_material(
                     ),
                 ));
             }
-            absorption(v.attenuation_color(), distance)
+            let color = v.attenuation_color().into();
+            let color = clamped.within3("attenuationColor", color, Vec3::ZERO, Vec3::ONE);
+            absorption(color, distance)
         }
         _ => Vec3::ZERO,
     };
-    let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+    let emissive_factor = m.emissive_factor().into();
+    let emissive_factor = clamped.within3("emissiveFactor", emissive_factor, Vec3::ZERO, Vec3::ONE);
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    let emission = emissive_factor * clamped.at_least("emissiveStrength", strength, 0.0);
+    let base_color = Vec4::from(pbr.base_color_factor());
+    let base_color = if base_color.is_finite()
+        && (base_color.min_element() < 0.0 || base_color.max_element() > 1.0)
+    {
+        let within = base_color.clamp(Vec4::ZERO, Vec4::ONE);
+        clamped.note("baseColorFactor", base_color, within);
+        within
+    } else {
+        base_color
+    };
     let mut material = Material {
         name: m.name().unwrap_or("unnamed").to_string(),
-        base_color: Vec4::from(pbr.base_color_factor()),
+        base_color,
         base_color_texture,
-        metallic: pbr.metallic_factor(),
-        roughness: pbr.roughness_factor(),
+        metallic: clamped.unit("metallicFactor", pbr.metallic_factor()),
+        roughness: clamped.unit("roughnessFactor", pbr.roughness_factor()),
         metallic_roughness_texture,
         normal_texture,
         normal_scale,
@@ -324,25 +340,94 @@ pub(super) fn read_material(
         specular_color_texture,
         transmission,
         transmission_texture,
-        ior: m.ior().unwrap_or(1.5),
+        ior: clamped.at_least("ior", m.ior().unwrap_or(1.5), 1.0),
         thin_walled,
         absorption,
         alpha_mode,
         double_sided: m.double_sided(),
     };
     let set = texture_coordinate_set(builder, &mut material);
-    Ok((validate(builder, material)?, set))
+    let material = validate(builder, material)?;
+    if !clamped.0.is_empty() {
+        let which = match (m.name(), m.index()) {
+            (Some(name), _) => format!("material '{name}'"),
+            (None, Some(index)) => format!("material {index}"),
+            (None, None) => "the default material".to_string(),
+        };
+        let message = format!(
+            "{}: {which} has {} outside the range glTF allows; clamped into it",
+            builder.path().display(),
+            clamped.0.join(", ")
+        );
+        builder.warn(message);
+    }
+    Ok((material, set))
+}
+
+/// The factors of one material that lay outside the glTF specification's range, clamped
+/// into it, for one warning naming them all. Non-finite values are left alone for
+/// [`validate`] to refuse: there is no nearest value to clamp them to that the file meant.
+#[derive(Default)]
+struct Clamped(Vec<String>);
+
+impl Clamped {
+    /// Records that `property` was `value` and is now `within`.
+    fn note(
+        &mut self,
+        property: &str,
+        value: impl std::fmt::Display,
+        within: impl std::fmt::Display,
+    ) {
+        self.0.push(format!("{property} {value} (now {within})"));
+    }
+
+    /// `value` clamped to [`min`, `max`].
+    fn within(&mut self, property: &str, value: f32, min: f32, max: f32) -> f32 {
+        if value.is_finite() && !(min..=max).contains(&value) {
+            let within = value.clamp(min, max);
+            self.note(property, value, within);
+            within
+        } else {
+            value
+        }
+    }
+
+    /// `value` clamped to [0, 1].
+    fn unit(&mut self, property: &str, value: f32) -> f32 {
+        self.within(property, value, 0.0, 1.0)
+    }
+
+    /// `value` raised to at least `min`.
+    fn at_least(&mut self, property: &str, value: f32, min: f32) -> f32 {
+        self.within(property, value, min, f32::INFINITY)
+    }
+
+    /// Each channel of `value` clamped to [`min`, `max`].
+    fn within3(&mut self, property: &str, value: Vec3, min: Vec3, max: Vec3) -> Vec3 {
+        let within = value.clamp(min, max);
+        if value.is_finite() && within != value {
+            self.note(property, value, within);
+            within
+        } else {
+            value
+        }
+    }
+
+    /// Each channel of `value` raised to at least `min`.
+    fn at_least3(&mut self, property: &str, value: Vec3, min: f32) -> Vec3 {
+        self.within3(property, value, Vec3::splat(min), Vec3::INFINITY)
+    }
 }
 
 /// Beer–Lambert absorption coefficient of `KHR_materials_volume`: light keeps the fraction
 /// `color` of itself over `distance` (> 0; infinite: no absorption). A black channel absorbs
 /// all but the smallest positive fraction, so the coefficient stays finite.
-fn absorption(color: [f32; 3], distance: f32) -> Vec3 {
-    let kept = Vec3::from(color).clamp(Vec3::splat(f32::MIN_POSITIVE), Vec3::ONE);
+fn absorption(color: Vec3, distance: f32) -> Vec3 {
+    let kept = color.clamp(Vec3::splat(f32::MIN_POSITIVE), Vec3::ONE);
     -kept.ln() / distance
 }
 
-/// Rejects non-finite or out-of-range factors, naming the material.
+/// Rejects non-finite factors (out-of-range ones were clamped), naming the material.
 fn validate(builder: &SceneBuilder, m: Material) -> Result<Material, SceneError> {
     let finite = m.base_color.is_finite()
         && m.emission.is_finite()
@@ -357,20 +442,10 @@ fn validate(builder: &SceneBuilder, m: Material) -> Result<Material, SceneError>
         ]
         .iter()
         .all(|v| v.is_finite());
-    let reason = if !finite {
-        Some("has a non-finite factor".to_string())
-    } else if !(m.ior.is_finite() && m.ior >= 1.0) {
-        Some(format!("has ior {} (must be ≥ 1)", m.ior))
-    } else if m.emission.min_element() < 0.0 || m.base_color.min_element() < 0.0 {
-        Some("has a negative color or emission".to_string())
+    if finite && m.ior.is_finite() {
+        Ok(m)
     } else {
-        None
-    };
-    match reason {
-        Some(reason) => Err(SceneError::gltf(
-            builder.path(),
-            format!("material '{}' {reason}", m.name),
-        )),
-        None => Ok(m),
+        let reason = format!("material '{}' has a non-finite factor", m.name);
+        Err(SceneError::gltf(builder.path(), reason))
     }
 }

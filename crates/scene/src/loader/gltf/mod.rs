@@ -37,6 +37,13 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     environment::EXTENSION,
 ];
 
+/// The widest and the tallest a camera's `aspectRatio` may make the image: 16 : 1 either
+/// way. An image's height follows from its width and this ratio where the output size gives
+/// none, so a ratio of 10⁻⁶ would ask for an image a million times taller than wide; beyond
+/// 16 : 1 (wider than cinema's 2.76 : 1 and most panoramas) the ratio is ignored, with a
+/// warning, and the output size decides.
+const MAX_ASPECT_RATIO: f32 = 16.0;
+
 /// Parses a glTF document from `bytes`; `path` names it in messages and locates external files.
 pub(super) fn load_gltf_bytes(
     path: &Path,
@@ -117,7 +124,7 @@ pub(super) fn load_gltf_bytes(
 /// and `gltf::Image::source` unwraps an image's `uri` (or, for one in a buffer view, its
 /// `mimeType`) that validation does not require (both found by fuzzing): those are checked here.
 fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), String> {
-    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| e.to_string())?;
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(describe)?;
     let root = gltf.document.into_json();
     let accessor_count = root.accessors.len();
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -142,8 +149,23 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), Str
             _ => {}
         }
     }
-    let document = gltf::Document::from_json(root).map_err(|e| e.to_string())?;
+    let document = gltf::Document::from_json(root).map_err(describe)?;
     Ok((document, gltf.blob))
+}
+
+/// The `gltf` crate's error in words, without the "invalid glTF:" that its validation errors
+/// start with (the caller's [`SceneError::Gltf`] says that already).
+fn describe(error: gltf::Error) -> String {
+    match error {
+        gltf::Error::Validation(errors) => {
+            let errors: Vec<String> = errors
+                .iter()
+                .map(|(path, error)| format!("{path}: {error}"))
+                .collect();
+            errors.join("; ")
+        }
+        other => other.to_string(),
+    }
 }
 
 /// Nodes that are nobody's child (used when the file has no scene).
@@ -228,7 +250,7 @@ impl NodeReader<'_> {
                 self.read_mesh(&mesh, world)?;
             }
             if let Some(camera) = node.camera() {
-                self.read_camera(&camera, node.name(), world);
+                self.read_camera(&camera, node.name(), world)?;
             }
             if let Some(light) = node.light() {
                 self.read_light(&light, world)?;
@@ -278,10 +300,37 @@ impl NodeReader<'_> {
         Ok(())
     }
 
-    fn read_camera(&mut self, camera: &gltf::Camera, node: Option<&str>, world: Mat4) {
+    /// Reads a camera a node places. An `aspectRatio` ≤ 0 or non-finite is an error (no
+    /// image has that shape); one beyond [`MAX_ASPECT_RATIO`] is ignored with a warning.
+    fn read_camera(
+        &mut self,
+        camera: &gltf::Camera,
+        node: Option<&str>,
+        world: Mat4,
+    ) -> Result<(), SceneError> {
         match camera.projection() {
             gltf::camera::Projection::Perspective(p) => {
-                let placed = Camera::from_transform(world, p.yfov(), p.aspect_ratio());
+                let aspect_ratio = match p.aspect_ratio() {
+                    Some(a) if !(a.is_finite() && a > 0.0) => {
+                        let reason = format!(
+                            "camera {} has aspectRatio {a} (must be a finite number > 0)",
+                            camera.index()
+                        );
+                        return Err(SceneError::gltf(self.builder.path(), reason));
+                    }
+                    Some(a) if !(1.0 / MAX_ASPECT_RATIO..=MAX_ASPECT_RATIO).contains(&a) => {
+                        let message = format!(
+                            "{}: camera {} has aspectRatio {a}, beyond {MAX_ASPECT_RATIO} : 1 \
+                             either way; it is ignored (the output size sets the image's shape)",
+                            self.builder.path().display(),
+                            camera.index()
+                        );
+                        self.builder.warn(message);
+                        None
+                    }
+                    a => a,
+                };
+                let placed = Camera::from_transform(world, p.yfov(), aspect_ratio);
                 if let Some(placed) = placed {
                     self.builder.cameras.push(FileCamera {
                         index: camera.index(),
@@ -307,6 +356,7 @@ impl NodeReader<'_> {
                 self.builder.warn(message);
             }
         }
+        Ok(())
     }
 
     fn read_light(
