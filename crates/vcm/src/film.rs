@@ -3,10 +3,19 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::exact_sum::ExactSum;
 use crate::image_io::RgbImage;
 
-/// Radiance samples accumulated per pixel in f64, with a box pixel filter: each sample's
-/// position is uniform over its pixel, so a pixel's value is the plain mean of its samples.
+/// The exact sums of a pixel's red, green and blue samples.
+pub type PixelSum = [ExactSum; 3];
+
+/// Radiance samples accumulated per pixel, with a box pixel filter: each sample's position is
+/// uniform over its pixel, so a pixel's value is the plain mean of its samples.
+///
+/// The sums are exact ([`ExactSum`]): the film a set of samples and splats gives does not
+/// depend on the order they are added in, so frames, resumed renders and merged shards of
+/// the same samples give the same film bit for bit. They are rounded once, to `f64`, when
+/// the mean is read.
 ///
 /// Pixels are indexed row by row from the top-left corner: `pixel = y · width + x`.
 #[derive(Clone, Debug, PartialEq)]
@@ -14,7 +23,7 @@ pub struct Film {
     width: u32,
     height: u32,
     /// Sum of the accepted samples per pixel (radiance, W·sr⁻¹·m⁻² in scene units, RGB).
-    sum: Vec<DVec3>,
+    sum: Vec<PixelSum>,
     /// Number of samples taken per pixel, dropped ones included.
     samples: Vec<u64>,
     /// Samples dropped because a channel was NaN or infinite.
@@ -28,10 +37,39 @@ impl Film {
         Film {
             width,
             height,
-            sum: vec![DVec3::ZERO; pixels],
+            sum: vec![[ExactSum::ZERO; 3]; pixels],
             samples: vec![0; pixels],
             dropped: 0,
         }
+    }
+
+    /// A film of `width` × `height` pixels holding `sum` and `samples` per pixel and
+    /// `dropped` non-finite samples ([`Film::sums`], [`Film::sample_counts`],
+    /// [`Film::dropped`] of another film); `None` when the lengths are not the pixel count.
+    pub fn from_parts(
+        (width, height): (u32, u32),
+        sum: Vec<PixelSum>,
+        samples: Vec<u64>,
+        dropped: u64,
+    ) -> Option<Film> {
+        let pixels = width as usize * height as usize;
+        (sum.len() == pixels && samples.len() == pixels).then_some(Film {
+            width,
+            height,
+            sum,
+            samples,
+            dropped,
+        })
+    }
+
+    /// The exact sum of each pixel's samples and splats, per channel.
+    pub fn sums(&self) -> &[PixelSum] {
+        &self.sum
+    }
+
+    /// The samples taken per pixel (dropped ones included).
+    pub fn sample_counts(&self) -> &[u64] {
+        &self.samples
     }
 
     /// Width in pixels.
@@ -105,11 +143,11 @@ impl Film {
         self.sum
             .iter()
             .zip(&self.samples)
-            .map(|(&sum, &n)| {
+            .map(|(sum, &n)| {
                 if n == 0 {
                     Vec3::ZERO
                 } else {
-                    (sum / n as f64).as_vec3()
+                    (rounded_sum(sum) / n as f64).as_vec3()
                 }
             })
             .collect()
@@ -124,7 +162,8 @@ impl Film {
         }
     }
 
-    /// Adds the samples of `other`, a film of the same size (panics otherwise).
+    /// Adds the samples of `other`, a film of the same size (panics otherwise). The sums are
+    /// exact, so merging films is associative and commutative.
     pub fn merge(&mut self, other: &Film) {
         assert_eq!(
             (self.width, self.height),
@@ -132,7 +171,9 @@ impl Film {
             "merging films of different sizes"
         );
         for (sum, o) in self.sum.iter_mut().zip(&other.sum) {
-            *sum += *o;
+            for (channel, o) in sum.iter_mut().zip(o) {
+                channel.add(o);
+            }
         }
         for (n, o) in self.samples.iter_mut().zip(&other.samples) {
             *n += o;
@@ -148,7 +189,7 @@ pub struct FilmBand<'a> {
     first: usize,
     /// Pixels in the whole image.
     pixels: usize,
-    sum: &'a mut [DVec3],
+    sum: &'a mut [PixelSum],
     samples: &'a mut [u64],
     dropped: u64,
 }
@@ -183,12 +224,19 @@ impl FilmBand<'_> {
 
 /// Adds `rgb` to `sum` if every channel is finite, else counts it in `dropped`.
 #[inline]
-fn accumulate(sum: &mut DVec3, dropped: &mut u64, rgb: Vec3) {
+fn accumulate(sum: &mut PixelSum, dropped: &mut u64, rgb: Vec3) {
     if rgb.is_finite() {
-        *sum += rgb.as_dvec3();
+        for (channel, value) in sum.iter_mut().zip(rgb.to_array()) {
+            channel.add_f32(value);
+        }
     } else {
         *dropped += 1;
     }
+}
+
+/// A pixel's sums, each rounded to the nearest `f64`.
+pub fn rounded_sum(sum: &PixelSum) -> DVec3 {
+    DVec3::from_array(sum.each_ref().map(ExactSum::to_f64))
 }
 
 #[cfg(test)]

@@ -9,8 +9,8 @@
 //! - [`Vcm`]: vertex connection and merging, and each of its sub-algorithms ([`Algorithm`]:
 //!   light tracing, BPT, PPM, BPM, VCM): a light pass fills the [`light_vertex_cache`], a
 //!   [`hash_grid`] is built over it for merging, then a camera pass connects and merges.
-//! - [`Film`]: per-pixel f64 accumulation (box filter), light tracing splats, non-finite
-//!   samples dropped and counted.
+//! - [`Film`]: per-pixel exact accumulation ([`exact_sum`], box filter), light tracing
+//!   splats, non-finite samples dropped and counted.
 //! - [`ray_offset`]: ray origins offset by floating-point error bounds (pbrt-v4), so that
 //!   spawned rays neither re-hit their own surface nor depend on the scene's scale.
 //!
@@ -45,6 +45,7 @@ pub mod atomic_write;
 mod bidir;
 mod camera_rays;
 mod error;
+pub mod exact_sum;
 mod film;
 pub mod hash_grid;
 mod huge_pages;
@@ -67,7 +68,7 @@ mod wave;
 
 pub use bidir::{Algorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Vcm, VcmSettings};
 pub use error::RenderError;
-pub use film::{Film, FilmBand};
+pub use film::{Film, FilmBand, PixelSum, rounded_sum};
 pub use integrator::{FrameStats, Integrator, Schedule};
 pub use path_tracer::{PathTracer, PtSettings};
-pub use vcm_scheduler::{Scheduler, SchedulerStats};
+pub use vcm_scheduler::{Scheduler, SchedulerStats, StopFlag};
