@@ -5,6 +5,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use vcm_traversal::{HitBatch, RayBatch, Traversal};
 
+use crate::StopFlag;
 use crate::stats::{SchedulerStats, time};
 use crate::tiles::{TileCounter, TileGrid};
 use crate::wavefront::{Wavefront, note_queue_memory, top_up};
@@ -72,7 +73,8 @@ impl Default for Scheduler {
 
 /// Traces the camera paths of every pixel of a `width × height` image with wavefronts from
 /// `new_wavefront` (one per worker or queue), as `scheduler` says. Returns each wavefront's
-/// output, in no particular order, and what the pass measured.
+/// output, in no particular order, and what the pass measured. Once `stop` is raised no tile
+/// starts and the workers end between passes: the outputs are then incomplete.
 ///
 /// Call it from any thread, a rayon worker included: the work runs on the caller's rayon
 /// pool (the global pool when the caller belongs to none).
@@ -80,6 +82,7 @@ pub fn run<W: Wavefront>(
     scheduler: Scheduler,
     (width, height): (u32, u32),
     traversal: &dyn Traversal,
+    stop: &StopFlag,
     new_wavefront: impl Fn() -> W + Sync,
 ) -> (Vec<W::Output>, SchedulerStats) {
     let (size, merge_below) = match scheduler {
@@ -90,12 +93,12 @@ pub fn run<W: Wavefront>(
             size,
             merge_below,
         } => {
-            let tiles = TileCounter::new(TileGrid::new(width, height, size));
+            let tiles = TileCounter::new(TileGrid::new(width, height, size), stop);
             return crate::queue::run(queues, &tiles, merge_below, traversal, new_wavefront);
         }
     };
     let start = Instant::now();
-    let tiles = TileCounter::new(TileGrid::new(width, height, size));
+    let tiles = TileCounter::new(TileGrid::new(width, height, size), stop);
     let workers = match scheduler {
         Scheduler::None => 1,
         _ => rayon::current_num_threads().min(tiles.len()).max(1),
@@ -128,7 +131,7 @@ pub fn run<W: Wavefront>(
 }
 
 /// One worker's loop: start a tile whenever fewer than `merge_at` paths run (and when none
-/// do), then advance all paths by one segment.
+/// do), then advance all paths by one segment; until no path is left, or a stop is requested.
 fn drive<W: Wavefront>(
     wave: &mut W,
     traversal: &dyn Traversal,
@@ -138,7 +141,7 @@ fn drive<W: Wavefront>(
 ) {
     let (mut rays, mut hits) = (RayBatch::default(), HitBatch::default());
     let (mut shadow_rays, mut occluded) = (RayBatch::default(), Vec::new());
-    while top_up(wave, tiles, merge_at, stats) {
+    while !tiles.stopped() && top_up(wave, tiles, merge_at, stats) {
         time(&mut stats.shading, || wave.extension_rays(&mut rays));
         time(&mut stats.traversal, || {
             traversal.intersect(&rays, &mut hits)

@@ -14,6 +14,10 @@
 //!   ([`Traversal::submit`](vcm_traversal::Traversal::submit)) while the others shade (and,
 //!   on an asynchronous backend, submit), so shading overlaps traversal on a GPU.
 //!
+//! A [`StopFlag`] ends a pass early: no tile starts once it is raised, and the `none` and
+//! `tile` workers stop between passes; what the pass returns then is incomplete, and the
+//! caller drops it.
+//!
 //! Paths' random numbers must not depend on which wavefront traces them (the integrators seed
 //! them from the pixel and sample), and results are gathered per path and added in a fixed
 //! order, so every scheduler and thread count gives the same image.
@@ -23,6 +27,7 @@
 mod drive;
 mod queue;
 mod stats;
+mod stop;
 #[cfg(test)]
 mod tests;
 mod tiles;
@@ -30,5 +35,6 @@ mod wavefront;
 
 pub use drive::{Scheduler, run};
 pub use stats::SchedulerStats;
+pub use stop::StopFlag;
 pub use tiles::{Tile, TileGrid};
 pub use wavefront::Wavefront;

@@ -8,7 +8,7 @@ use std::time::Duration;
 use glam::Vec3;
 use vcm_traversal::{HitBatch, PendingTraversal, RayBatch, Traversal, TraversalJob};
 
-use crate::{Scheduler, Tile, TileGrid, Wavefront, run};
+use crate::{Scheduler, StopFlag, Tile, TileGrid, Wavefront, run};
 
 /// Segments of pixel `p`'s path: 0 (no path at all) to 6.
 fn length(pixel: u32) -> u32 {
@@ -210,7 +210,15 @@ fn check(
 ) -> usize {
     let traversal = FakeTraversal::new(delay.then(|| Duration::from_micros(200)));
     let new_wave = || FakeWave::new(width, None);
-    let go = || run(scheduler, (width, height), &traversal, new_wave);
+    let go = || {
+        run(
+            scheduler,
+            (width, height),
+            &traversal,
+            &StopFlag::new(),
+            new_wave,
+        )
+    };
     let (outputs, stats) = match threads {
         Some(threads) => pool(threads).install(go),
         None => go(),
@@ -326,7 +334,8 @@ fn queue_counts_its_threads_and_queues() {
         merge_below: 0.5,
     };
     let new_wave = || FakeWave::new(16, None);
-    let (_, stats) = pool(2).install(|| run(scheduler, (16, 16), &traversal, new_wave));
+    let (_, stats) =
+        pool(2).install(|| run(scheduler, (16, 16), &traversal, &StopFlag::new(), new_wave));
     assert_eq!((stats.workers, stats.queues), (2, 3));
     assert!(stats.traversal <= stats.wall && stats.traversal_share() == stats.traversal);
     assert!(stats.peak_paths > 0 && stats.peak_paths <= 2 * 16);
@@ -343,7 +352,7 @@ fn a_panicking_wavefront_stops_the_queue_scheduler() {
         };
         let new_wave = || FakeWave::new(8, Some(37));
         let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            pool(threads).install(|| run(scheduler, (8, 8), &traversal, new_wave))
+            pool(threads).install(|| run(scheduler, (8, 8), &traversal, &StopFlag::new(), new_wave))
         }));
         let panic = result.expect_err("the panic comes out of run");
         let message = panic
@@ -360,7 +369,8 @@ fn queue_memory_follows_the_paths_in_flight() {
     let traversal = FakeTraversal::new(None);
     let new_wave = || FakeWave::new(32, None);
     let memory = |scheduler| {
-        let (_, stats) = pool(2).install(|| run(scheduler, (32, 32), &traversal, new_wave));
+        let (_, stats) =
+            pool(2).install(|| run(scheduler, (32, 32), &traversal, &StopFlag::new(), new_wave));
         assert!(stats.peak_queue_bytes > 0, "{scheduler:?}");
         assert!(stats.queue_memory() >= stats.peak_queue_bytes);
         stats.queue_memory()
@@ -420,8 +430,77 @@ fn none_and_tile_workers_run_on_the_pool_when_called_from_outside_it() {
     };
     for scheduler in [Scheduler::None, tile] {
         let traversal = OffPoolCalls(FakeTraversal::new(None), AtomicUsize::new(0));
-        let (outputs, _) = run(scheduler, (13, 7), &traversal, || FakeWave::new(13, None));
+        let (outputs, _) = run(scheduler, (13, 7), &traversal, &StopFlag::new(), || {
+            FakeWave::new(13, None)
+        });
         assert_eq!(outputs.len(), 1, "{scheduler:?}: one worker for one tile");
         assert_eq!(traversal.1.into_inner(), 0, "{scheduler:?}");
+    }
+}
+
+#[test]
+fn a_stop_request_ends_a_pass_between_tiles_and_passes() {
+    let tile = Scheduler::Tile {
+        size: 4,
+        merge_below: 0.5,
+    };
+    let queue = Scheduler::Queue {
+        queues: 3,
+        size: 4,
+        merge_below: 0.5,
+    };
+    for scheduler in [Scheduler::None, tile, queue] {
+        let traversal = FakeTraversal::new(None);
+        let new_wave = || FakeWave::new(64, None);
+        // Raised before the pass: no tile starts.
+        let stop = StopFlag::new();
+        stop.raise();
+        let (_, stats) = pool(2).install(|| run(scheduler, (64, 64), &traversal, &stop, new_wave));
+        assert_eq!(stats.tiles, 0, "{scheduler:?}");
+        // Raised by the first shading call: the pass ends without starting every tile (the
+        // `none` scheduler's one tile is the image, so it ends after that pass instead).
+        let stop = StopFlag::new();
+        let raising_wave = || StopAfterShading(FakeWave::new(64, None), stop.clone());
+        let (_, stats) =
+            pool(2).install(|| run(scheduler, (64, 64), &traversal, &stop, raising_wave));
+        let passes = stats.closest_rays;
+        assert!(stats.tiles < 256, "{scheduler:?}: {} tiles", stats.tiles);
+        assert!(passes > 0, "{scheduler:?}");
+    }
+}
+
+/// A wavefront that raises a stop flag when it first shades.
+struct StopAfterShading(FakeWave, StopFlag);
+
+impl Wavefront for StopAfterShading {
+    type Output = Output;
+
+    fn start(&mut self, tile: Tile) {
+        self.0.start(tile)
+    }
+
+    fn active(&self) -> usize {
+        self.0.active()
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+
+    fn extension_rays(&self, rays: &mut RayBatch) {
+        self.0.extension_rays(rays)
+    }
+
+    fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch) {
+        self.1.raise();
+        self.0.shade(hits, shadow_rays)
+    }
+
+    fn resolve(&mut self, occluded: &[bool]) {
+        self.0.resolve(occluded)
+    }
+
+    fn finish(self) -> Output {
+        self.0.finish()
     }
 }

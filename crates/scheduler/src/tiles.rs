@@ -2,6 +2,8 @@
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use crate::StopFlag;
+
 /// A rectangle of pixels `[x0, x1) × [y0, y1)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Tile {
@@ -82,30 +84,41 @@ impl TileGrid {
     }
 }
 
-/// The tiles of a [`TileGrid`] taken one by one, in order, from a shared counter.
-pub(crate) struct TileCounter {
+/// The tiles of a [`TileGrid`] taken one by one, in order, from a shared counter, until the
+/// last is taken or a stop is requested.
+pub(crate) struct TileCounter<'a> {
     grid: TileGrid,
     next: AtomicUsize,
+    stop: &'a StopFlag,
 }
 
-impl TileCounter {
-    /// Every tile of `grid`, none taken yet.
-    pub fn new(grid: TileGrid) -> Self {
+impl<'a> TileCounter<'a> {
+    /// Every tile of `grid`, none taken yet; none is handed out once `stop` is raised.
+    pub fn new(grid: TileGrid, stop: &'a StopFlag) -> Self {
         Self {
             grid,
             next: AtomicUsize::new(0),
+            stop,
         }
     }
 
-    /// The next tile nobody has taken, if any is left.
+    /// The next tile nobody has taken, if any is left and no stop is requested.
     pub fn take(&self) -> Option<Tile> {
+        if self.stop.is_raised() {
+            return None;
+        }
         let index = self.next.fetch_add(1, Ordering::Relaxed);
         (index < self.grid.len()).then(|| self.grid.tile(index))
     }
 
-    /// Whether every tile has been taken.
+    /// Whether every tile has been taken, or a stop is requested.
     pub fn exhausted(&self) -> bool {
-        self.next.load(Ordering::Relaxed) >= self.grid.len()
+        self.stop.is_raised() || self.next.load(Ordering::Relaxed) >= self.grid.len()
+    }
+
+    /// Whether a stop is requested.
+    pub fn stopped(&self) -> bool {
+        self.stop.is_raised()
     }
 
     /// Number of tiles, taken or not.

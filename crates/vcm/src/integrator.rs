@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use vcm_scene::Decision;
-use vcm_scheduler::Scheduler;
+use vcm_scheduler::{Scheduler, StopFlag};
 
 use crate::error::RenderError;
 use crate::film::Film;
@@ -20,7 +20,15 @@ pub trait Integrator: Send {
     ///
     /// The result depends only on the scene, the settings and the samples, not on the number
     /// of threads or the schedule. Panics if `film` does not have the integrator's image size.
+    ///
+    /// When the [stop flag](Integrator::set_stop) is raised during the frame, the frame ends
+    /// early and is dropped whole: the film is left as it was, and the stats say
+    /// [`interrupted`](FrameStats::interrupted).
     fn render_frame(&mut self, film: &mut Film, first_sample: u32) -> FrameStats;
+
+    /// Ends frames early once `stop` is raised (checked between tiles and between passes,
+    /// so within a fraction of a second on any frame size). No flag is raised by default.
+    fn set_stop(&mut self, stop: StopFlag);
 
     /// (width, height) of the image in pixels: the size of the films it renders into.
     fn image_size(&self) -> (u32, u32);
@@ -123,9 +131,26 @@ pub struct FrameStats {
     /// High-water mark of the scheduler's queues (paths in flight and their ray buffers) in
     /// bytes, over the frame's passes ([`vcm_scheduler::SchedulerStats::queue_memory`]).
     pub queue_memory: usize,
+    /// The frame was cut short by a stop request and dropped: it added nothing to the film.
+    pub interrupted: bool,
 }
 
 impl FrameStats {
+    /// What a frame that a stop request cut short reports.
+    pub const INTERRUPTED: FrameStats = FrameStats {
+        camera_rays: 0,
+        continuation_rays: 0,
+        light_rays: 0,
+        shadow_rays: 0,
+        light_vertices: 0,
+        discarded_light_vertices: 0,
+        traversal_time: Duration::ZERO,
+        grid_build_time: Duration::ZERO,
+        shading_time: Duration::ZERO,
+        queue_memory: 0,
+        interrupted: true,
+    };
+
     /// Adds the counts and times of `other`.
     pub fn accumulate(&mut self, other: &FrameStats) {
         self.camera_rays += other.camera_rays;

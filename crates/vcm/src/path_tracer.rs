@@ -7,7 +7,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Decision, Scene};
-use vcm_scheduler::{SchedulerStats, Tile, Wavefront};
+use vcm_scheduler::{SchedulerStats, StopFlag, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch, Traversal};
 
 use crate::camera_rays::jittered_directions;
@@ -62,6 +62,8 @@ pub struct PathTracer {
     lambert_lanes: Result<LambertLanes, &'static str>,
     schedule: Schedule,
     last_schedule_stats: SchedulerStats,
+    /// Raised to end the frame in progress early ([`Integrator::set_stop`]).
+    stop: StopFlag,
 }
 
 impl PathTracer {
@@ -81,6 +83,7 @@ impl PathTracer {
             settings,
             schedule: Schedule::default(),
             last_schedule_stats: SchedulerStats::default(),
+            stop: StopFlag::new(),
         })
     }
 
@@ -119,8 +122,14 @@ impl Integrator for PathTracer {
             self.schedule.scheduler,
             (width, height),
             self.traversal.as_ref(),
+            &self.stop,
             new_wavefront,
         );
+        self.last_schedule_stats = stats;
+        if self.stop.is_raised() {
+            // Cut short: drop the frame whole, leaving the film as it was.
+            return FrameStats::INTERRUPTED;
+        }
         // With several samples per pixel, the order of a pixel's additions must not depend
         // on the scheduler; with one, every pixel gets a single addition anyway.
         let finished = if samples > 1 {
@@ -135,7 +144,6 @@ impl Integrator for PathTracer {
                 band.add((key / u64::from(samples)) as usize, radiance);
             }
         });
-        self.last_schedule_stats = stats;
         let camera_rays = u64::from(width) * u64::from(height) * u64::from(samples);
         let traversal_time = stats.traversal_share();
         FrameStats {
@@ -156,6 +164,10 @@ impl Integrator for PathTracer {
     fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
         self.schedule = schedule.validated()?;
         Ok(())
+    }
+
+    fn set_stop(&mut self, stop: StopFlag) {
+        self.stop = stop;
     }
 
     fn decisions(&self) -> Vec<Decision> {

@@ -221,7 +221,7 @@ impl<'t, W: Wavefront + 't> Flight<'t, W> {
 /// traversal thread finds it. Returns what its steps measured.
 fn shade<'s, W: Wavefront + 's>(
     pool: &Pool<W>,
-    tiles: &'s TileCounter,
+    tiles: &'s TileCounter<'s>,
     merge_at: usize,
     jobs: &Jobs<'_, 's>,
     submitter: Option<(mpsc::Sender<Flight<'s, W>>, &'s dyn Traversal)>,

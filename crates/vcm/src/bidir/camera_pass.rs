@@ -88,12 +88,13 @@ pub(crate) fn run(
         paths: Vec::new(),
         finished: Vec::new(),
     };
-    let traversal = iterations[0].traversal;
+    let (traversal, stop) = (iterations[0].frame.traversal, iterations[0].frame.stop);
     let (outputs, scheduled) =
-        vcm_scheduler::run(scheduler, (width, height), traversal, new_wavefront);
+        vcm_scheduler::run(scheduler, (width, height), traversal, stop, new_wavefront);
     let camera_rays = u64::from(width) * u64::from(height) * iterations.len() as u64;
     stats.camera_rays += camera_rays;
-    stats.continuation_rays += scheduled.closest_rays - camera_rays;
+    // Fewer than one ray per camera path only where a stop request cut the pass short.
+    stats.continuation_rays += scheduled.closest_rays.saturating_sub(camera_rays);
     add_scheduled(stats, &scheduled);
     // `vec![v; n]` would clone the empty vector, dropping the reserved room of all but one.
     let pixels = width as usize * height as usize;

@@ -217,8 +217,8 @@ fn trace(
         paths: Vec::new(),
         results: per_iteration(),
     };
-    let traversal = iterations[0].traversal;
-    let (outputs, scheduled) = vcm_scheduler::run(scheduler, size, traversal, new_wavefront);
+    let (traversal, stop) = (iterations[0].traversal, iterations[0].stop);
+    let (outputs, scheduled) = vcm_scheduler::run(scheduler, size, traversal, stop, new_wavefront);
     stats.light_rays += scheduled.closest_rays;
     add_scheduled(stats, &scheduled);
     let mut parts: Vec<Vec<WorkerResults>> = iterations.iter().map(|_| Vec::new()).collect();

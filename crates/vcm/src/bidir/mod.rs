@@ -38,7 +38,7 @@ use rayon::prelude::*;
 
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Decision, Projection, Scene};
-use vcm_scheduler::SchedulerStats;
+use vcm_scheduler::{SchedulerStats, StopFlag};
 use vcm_traversal::Traversal;
 
 use crate::error::RenderError;
@@ -175,6 +175,8 @@ pub(crate) struct FrameContext<'a> {
     pub plan: &'a BidirPlan,
     /// Shading in SIMD lanes at plain Lambert vertices, where the scene allows it.
     pub lanes: Option<&'a LambertLanes>,
+    /// Ends the passes early when raised (the frame is then dropped).
+    pub stop: &'a StopFlag,
 }
 
 impl FrameContext<'_> {
@@ -204,6 +206,8 @@ pub struct Vcm {
     light_buffers: ResultBuffers,
     /// Shading in SIMD lanes at plain Lambert vertices, or why the scene allows none.
     lambert_lanes: Result<LambertLanes, &'static str>,
+    /// Raised to end the frame in progress early ([`Integrator::set_stop`]).
+    stop: StopFlag,
 }
 
 impl Vcm {
@@ -247,6 +251,7 @@ impl Vcm {
             caches: Vec::new(),
             grids: Vec::new(),
             light_buffers: ResultBuffers::default(),
+            stop: StopFlag::new(),
         };
         if plan.cache {
             vcm.cache_capacity = vcm.estimate_cache_capacity();
@@ -311,6 +316,7 @@ impl Vcm {
                     ),
                     plan: &self.plan,
                     lanes: self.lambert_lanes.as_ref().ok(),
+                    stop: &self.stop,
                 }
             })
             .collect()
@@ -330,6 +336,8 @@ impl Vcm {
             factors: MisFactors::new(false, false, 1.0, 1.0),
             plan: &self.plan,
             lanes: self.lambert_lanes.as_ref().ok(),
+            // The preprocess always runs to its end.
+            stop: &StopFlag::new(),
         };
         let scheduler = self.schedule.scheduler;
         let vertices = light_pass::count_vertices(ctx, scheduler, PREPROCESS_LIGHT_PATHS);
@@ -394,6 +402,12 @@ impl Integrator for Vcm {
             .map(|(frame, (cache, grid))| camera_pass::CameraContext { frame, cache, grid })
             .collect();
         let camera = camera_pass::run(&samples, scheduler, &mut stats);
+        if self.stop.is_raised() {
+            // Cut short: drop the frame whole, leaving the film as it was.
+            self.light_buffers.recycle(light);
+            (self.caches, self.grids) = (caches, grids);
+            return FrameStats::INTERRUPTED;
+        }
         film.add_in_bands(|band| {
             for (sample, radiance) in camera.iter().enumerate() {
                 if let Some(results) = light.get(sample).filter(|_| plan.splats) {
@@ -428,6 +442,10 @@ impl Integrator for Vcm {
             Err(why) => Decision::left_out(LANES_PART, *why),
         });
         decisions
+    }
+
+    fn set_stop(&mut self, stop: StopFlag) {
+        self.stop = stop;
     }
 
     /// Both passes run under `schedule.scheduler`; `schedule.samples_per_frame` iterations
