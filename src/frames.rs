@@ -40,6 +40,8 @@ pub struct Frames {
     options: ScheduleOptions,
     backend: Backend,
     pacer: Pacer,
+    /// The global index of the first sample rendered.
+    first: u32,
     samples: u32,
     counts: FrameCounts,
 }
@@ -78,9 +80,21 @@ impl Frames {
             options,
             backend,
             pacer: Pacer::new(options.frame_sizes(backend), Self::TARGET),
+            first: 0,
             samples: 0,
             counts: FrameCounts::default(),
         }
+    }
+
+    /// These frames, rendering global samples from `first` on (a resumed render or a shard)
+    /// instead of from 0.
+    pub fn starting_at(self, first: u32) -> Frames {
+        Frames { first, ..self }
+    }
+
+    /// The global index of the next sample to render.
+    pub fn next_sample(&self) -> u32 {
+        self.first + self.samples
     }
 
     /// The frames rendered so far.
@@ -95,7 +109,8 @@ impl Frames {
 
     /// Renders the next frame into `film` within `remaining` (which must leave at least one
     /// sample), with the schedule its size asks for, and returns what it did; an invalid
-    /// schedule (a frame size or tile size of 0) is an error.
+    /// schedule (a frame size or tile size of 0) is an error. A frame that a stop request
+    /// cuts short adds nothing and counts for nothing ([`FrameStats::interrupted`]).
     pub fn render_next(
         &mut self,
         integrator: &mut dyn Integrator,
@@ -108,7 +123,10 @@ impl Frames {
             integrator.set_schedule(schedule)?;
         }
         let start = Instant::now();
-        let stats = integrator.render_frame(film, self.samples);
+        let stats = integrator.render_frame(film, self.next_sample());
+        if stats.interrupted {
+            return Ok(stats);
+        }
         self.pacer.record(samples, start.elapsed());
         self.samples += samples;
         let counts = &mut self.counts;

@@ -10,6 +10,7 @@
 //! - [`Backend`]: the traversal backends, chosen at run time.
 //! - [`integrators`]: the light transport algorithms, their options and one builder for all.
 //! - [`plot`]: PNG plots of error, CPU utilization and scheduler speed-ups.
+//! - [`state`]: a render's state as a value and a file: checkpoint, resume, shards, merge.
 //!
 //! Rendering an image: a scene, a traversal backend, an integrator from the builder, frames
 //! into a film (one sample per pixel per frame by default; frame `i` renders sample `i`, and
@@ -64,6 +65,7 @@ mod backend;
 pub mod frames;
 pub mod integrators;
 pub mod plot;
+pub mod state;
 
 pub use vcm;
 pub use vcm_scene as scene;

@@ -4,14 +4,13 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::Ordering;
 
 use vcm::Film;
 
 use crate::progressive::{self, Budget, Outcome};
 use crate::render::{
-    RenderSetup, build_traversal, check_outputs, interrupt_flag, load_scene, read_reference,
-    relmse_points, set_threads, write_text,
+    RenderSetup, build_traversal, check_outputs, load_scene, read_reference, relmse_points,
+    set_threads, stop_flag, write_text,
 };
 use vcm_rs::integrators::{Algorithm, image_size};
 use vcm_rs::plot::{Series, plot_relmse};
@@ -57,12 +56,15 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
     let size = image_size(&scene, args.setup.width, args.setup.height);
     let reference = read_reference(&args.reference, size)?;
     let traversal = build_traversal(args.setup.backend, &scene)?;
-    let interrupted = interrupt_flag()?;
+    let interrupted = stop_flag()?;
     let mut outcomes = Vec::new();
     for &algorithm in &args.algos {
         tell!("rendering with {} for {} s", algorithm.name(), args.time);
         let traversal = Arc::clone(&traversal) as _;
-        let mut integrator = args.setup.integrator(algorithm, &scene, traversal, size)?;
+        let options = &args.setup.integrator;
+        let mut integrator = args
+            .setup
+            .integrator(algorithm, &scene, traversal, size, options)?;
         let mut film = Film::new(size.0, size.1);
         let outcome = progressive::render(
             integrator.as_mut(),
@@ -71,9 +73,10 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
             budget,
             Some(&reference),
             &interrupted,
+            None,
         )?;
         outcomes.push((algorithm, outcome));
-        if interrupted.load(Ordering::SeqCst) {
+        if interrupted.is_raised() {
             tell!("interrupted: writing the results so far");
             break;
         }

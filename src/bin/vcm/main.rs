@@ -7,11 +7,12 @@ mod say;
 mod compare;
 mod convergence;
 mod info;
+mod merge;
 mod process;
 mod progressive;
 mod render;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// vcm-rs: a physically based renderer built around Vertex Connection and Merging.
 #[derive(Parser)]
@@ -28,6 +29,9 @@ enum Command {
     /// Render a scene with several algorithms for the same time each and compare their error
     /// against a reference over time: one relMSE plot, a CSV and a throughput table.
     Convergence(convergence::ConvergenceArgs),
+    /// Merge render states of one image (shards from `vcm render --samples A..B --state`)
+    /// into an EXR, a PNG and, if asked, one state.
+    Merge(merge::MergeArgs),
     /// Error metrics (RMSE, relMSE, MAE) between two EXR images, and a false-colour error image.
     Compare(compare::CompareArgs),
     /// Load a scene and print what it contains (geometry, materials, lights, features,
@@ -36,10 +40,15 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     let result = match cli.command {
-        Command::Render(args) => render::run(&args),
+        Command::Render(args) => {
+            let render = matches.subcommand_matches("render").unwrap_or(&matches);
+            render::run(&args, render)
+        }
         Command::Compare(args) => compare::run(&args),
+        Command::Merge(args) => merge::run(&args),
         Command::Convergence(args) => convergence::run(&args),
         Command::Info(args) => info::run(&args),
     };

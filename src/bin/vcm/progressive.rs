@@ -1,13 +1,12 @@
 //! The progressive render loop: frames until a sample count or a time budget is reached, with
 //! the error against a reference recorded at 1, 2, 4, … seconds and at the end.
 
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::bail;
 use glam::Vec3;
 use vcm::metrics::{ErrorMetrics, compare};
-use vcm::{Film, FrameStats, Integrator};
+use vcm::{Film, FrameStats, Integrator, StopFlag};
 use vcm_rs::frames::{FrameCounts, Frames, Remaining};
 
 use crate::process::cpu_seconds;
@@ -116,15 +115,26 @@ pub struct Outcome {
     pub mean_utilization: Option<f64>,
 }
 
-/// Renders `frames` into `film` until `budget` is spent or `interrupted` is set.
+/// Something to do with the film every so often while rendering (write a checkpoint).
+pub struct Periodic<'a> {
+    /// At least this long between two calls.
+    pub every: Duration,
+    /// Called after a whole frame with the film and the samples per pixel rendered so far.
+    pub action: &'a mut dyn FnMut(&Film, u32) -> anyhow::Result<()>,
+}
+
+/// Renders `frames` into `film` until `budget` is spent or `stop` is raised (which also cuts
+/// the frame in progress short, dropping it whole), calling `periodic` between frames.
 pub fn render(
     integrator: &mut dyn Integrator,
     mut frames: Frames,
     film: &mut Film,
     budget: Budget,
     reference: Option<&[Vec3]>,
-    interrupted: &AtomicBool,
+    stop: &StopFlag,
+    mut periodic: Option<Periodic<'_>>,
 ) -> anyhow::Result<Outcome> {
+    integrator.set_stop(stop.clone());
     let progress = budget.progress_bar();
     let mut totals = FrameStats::default();
     let mut checkpoints = Vec::new();
@@ -134,10 +144,21 @@ pub fn render(
     let start = Instant::now();
     let cpu_start = cpu_seconds();
     let mut frame_start = (0.0, cpu_start);
-    while !budget.done(frames.samples(), start.elapsed()) && !interrupted.load(Ordering::SeqCst) {
+    let mut last_periodic = Instant::now();
+    while !budget.done(frames.samples(), start.elapsed()) && !stop.is_raised() {
         let remaining = budget.remaining(frames.samples(), start.elapsed());
-        totals.accumulate(&frames.render_next(integrator, film, remaining)?);
+        let stats = frames.render_next(integrator, film, remaining)?;
+        if stats.interrupted {
+            break;
+        }
+        totals.accumulate(&stats);
         let spp = frames.samples();
+        if let Some(periodic) = &mut periodic
+            && last_periodic.elapsed() >= periodic.every
+        {
+            (periodic.action)(film, spp)?;
+            last_periodic = Instant::now();
+        }
         let seconds = start.elapsed().as_secs_f64();
         if seconds - frame_start.0 >= UTILIZATION_INTERVAL {
             let frame_end = (seconds, cpu_seconds());

@@ -1,21 +1,25 @@
 //! `vcm render`: render a scene progressively, write linear EXR plus a tone-mapped PNG, and
 //! optionally record the error against a reference over time.
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 use anyhow::{Context, bail};
+use clap::ArgMatches;
+use clap::parser::ValueSource;
 use glam::Vec3;
 use vcm::atomic_write::write_atomically;
 use vcm::image_io::RgbImage;
-use vcm::{Film, Integrator};
+use vcm::{Film, Integrator, StopFlag};
 use vcm_rs::Backend;
 use vcm_rs::frames::Frames;
-use vcm_rs::scene::Scene;
+use vcm_rs::scene::{Scene, ShadingPlan};
+use vcm_rs::state::{RenderSettings, RenderState, parse_range, scene_hash};
 use vcm_rs::traversal::Traversal;
 
-use crate::progressive::{self, Budget, Checkpoint, Outcome};
+use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic};
 use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, ScheduleOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 
@@ -45,17 +49,18 @@ pub struct RenderSetup {
 }
 
 impl RenderSetup {
-    /// The integrator of `algorithm` for `scene` at `size`, traced by `traversal`, with the
-    /// schedule of the first frame these options ask for on their backend (which checks it).
+    /// The integrator of `algorithm` with `options` for `scene` at `size`, traced by
+    /// `traversal`, with the schedule of the first frame these options ask for on their
+    /// backend (which checks it).
     pub fn integrator(
         &self,
         algorithm: Algorithm,
         scene: &Arc<Scene>,
         traversal: Arc<dyn Traversal>,
         size: (u32, u32),
+        options: &IntegratorOptions,
     ) -> anyhow::Result<Box<dyn Integrator>> {
-        let mut integrator =
-            integrators::build(algorithm, scene, traversal, size, &self.integrator)?;
+        let mut integrator = integrators::build(algorithm, scene, traversal, size, options)?;
         integrator.set_schedule(self.schedule.first_schedule_on(self.backend))?;
         Ok(integrator)
     }
@@ -75,17 +80,38 @@ pub struct RenderArgs {
     /// The light transport algorithm.
     #[arg(long, value_enum, default_value_t = Algorithm::Pt)]
     algo: Algorithm,
-    /// Samples per pixel to render (default 16 unless --time is given).
+    /// Samples per pixel to render (default 16 unless --time is given; with --resume, the
+    /// total the resumed render reaches, by default the count it was first asked for).
     #[arg(long, conflicts_with = "time")]
     spp: Option<u32>,
-    /// Render for this many seconds instead of a fixed sample count.
+    /// Render for this many seconds instead of a fixed sample count (with --resume: this
+    /// many more seconds).
     #[arg(long, allow_negative_numbers = true)]
     time: Option<f64>,
+    /// Render exactly the global samples A to B − 1 (iterations, for the VCM family): one
+    /// shard of an image that `vcm merge` puts together.
+    #[arg(long, value_name = "A..B", value_parser = parse_range,
+          conflicts_with_all = ["spp", "time", "resume"])]
+    samples: Option<Range<u32>>,
+    /// Write the render's state (film sums, samples held, settings) to this file at the end,
+    /// to resume or merge later (a safetensors file, see docs/render-state.md).
+    #[arg(long, value_name = "FILE")]
+    state: Option<PathBuf>,
+    /// Also write the state every this many seconds while rendering (with --state or
+    /// --resume).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    checkpoint_every: Option<f64>,
+    /// Continue the render whose state is in this file: its scene and settings (options given
+    /// as well must agree with them), its output unless -o is given; the state is written
+    /// back to it unless --state names another file.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
     #[command(flatten)]
     setup: RenderSetup,
-    /// Output EXR (linear radiance); a tone-mapped PNG is written beside it.
-    #[arg(short, long, default_value = "out.exr")]
-    output: PathBuf,
+    /// Output EXR (linear radiance); a tone-mapped PNG is written beside it (default out.exr,
+    /// or with --resume the resumed render's).
+    #[arg(short, long)]
+    output: Option<PathBuf>,
     /// Reference EXR to measure the error against while rendering.
     #[arg(long)]
     reference: Option<PathBuf>,
@@ -103,13 +129,45 @@ pub struct RenderArgs {
     explain: bool,
 }
 
+/// The command-line arguments behind each estimator setting ([`SETTING_KEYS`]).
+const SETTING_ARGUMENTS: [(&str, &str); 11] = [
+    ("algorithm", "algo"),
+    ("width", "width"),
+    ("height", "height"),
+    ("camera", "camera"),
+    ("seed", "seed"),
+    ("sampler", "sampler"),
+    ("max_depth", "max_depth"),
+    ("connections", "connections"),
+    ("radius", "radius"),
+    ("alpha", "alpha"),
+    ("no_prune", "no_prune"),
+];
+
+/// The output EXR when none is given.
+const DEFAULT_OUTPUT: &str = "out.exr";
+
+/// A render resolved from the arguments and, with `--resume`, the state it continues.
+struct Plan {
+    scene_path: PathBuf,
+    settings: RenderSettings,
+    output: PathBuf,
+    /// Where the state is written, if anywhere.
+    state_path: Option<PathBuf>,
+    /// The state so far (empty for a new render), when one is written or resumed.
+    state: Option<RenderState>,
+    /// The first global sample to render.
+    first_sample: u32,
+    budget: Budget,
+}
+
 impl RenderArgs {
     /// Every file the render writes, with what it is: the EXR, and beside it the PNG; the
-    /// report and the utilization CSVs and their plots when asked for.
-    fn outputs(&self) -> Vec<(&'static str, PathBuf)> {
+    /// report and the utilization CSVs and their plots, and the state, when asked for.
+    fn outputs(&self, plan: &Plan) -> Vec<(&'static str, PathBuf)> {
         let mut outputs = vec![
-            ("the EXR image", self.output.clone()),
-            ("the tone-mapped PNG", png_beside(&self.output)),
+            ("the EXR image", plan.output.clone()),
+            ("the tone-mapped PNG", png_beside(&plan.output)),
         ];
         if let Some(csv) = &self.report {
             outputs.push(("the error report", csv.clone()));
@@ -119,70 +177,204 @@ impl RenderArgs {
             outputs.push(("the utilization CSV", csv.clone()));
             outputs.push(("the utilization plot", png_beside(csv)));
         }
+        if let Some(state) = &plan.state_path {
+            outputs.push(("the render state", state.clone()));
+        }
         outputs
     }
 
-    /// Every file the render reads.
-    fn inputs(&self) -> Vec<&Path> {
-        let mut inputs = vec![self.scene.as_path()];
+    /// Every file the render reads (the resumed state is rewritten, so it is not listed).
+    fn inputs<'a>(&'a self, plan: &'a Plan) -> Vec<&'a Path> {
+        let mut inputs = vec![plan.scene_path.as_path()];
         inputs.extend(self.reference.as_deref());
         inputs
     }
+
+    /// The estimator settings the arguments give, with the image height `height`.
+    fn settings(&self, height: u32) -> RenderSettings {
+        RenderSettings {
+            algorithm: self.algo,
+            width: self.setup.width,
+            height,
+            camera: self.setup.camera.clone(),
+            options: self.setup.integrator.clone(),
+        }
+    }
+
+    /// The render the arguments ask for: a new one, a shard (`--samples`) or the
+    /// continuation of a state (`--resume`), whose settings `matches` may only repeat.
+    fn plan(&self, matches: &ArgMatches) -> anyhow::Result<Plan> {
+        let given = |id: &str| matches.value_source(id) == Some(ValueSource::CommandLine);
+        if self.checkpoint_every.is_some() && self.state.is_none() && self.resume.is_none() {
+            bail!("--checkpoint-every needs a file to write the state to: add --state FILE");
+        }
+        let Some(resume) = &self.resume else {
+            let (first_sample, budget) = match &self.samples {
+                Some(range) => (range.start, Budget::Samples(range.end - range.start)),
+                None => (0, Budget::from_options(self.spp, self.time)?),
+            };
+            return Ok(Plan {
+                scene_path: self.scene.clone(),
+                // The height is settled once the scene's camera is known.
+                settings: self.settings(self.setup.height.unwrap_or(0)),
+                output: self.output.clone().unwrap_or_else(|| DEFAULT_OUTPUT.into()),
+                state_path: self.state.clone(),
+                state: None,
+                first_sample,
+                budget,
+            });
+        };
+        let state = RenderState::load(resume)?;
+        let requested = self.settings(self.setup.height.unwrap_or(0)).to_metadata();
+        let recorded = state.settings.to_metadata();
+        for (key, argument) in SETTING_ARGUMENTS {
+            if given(argument) && requested[key] != recorded[key] {
+                bail!(
+                    "{}: the render was made with {key} {}, and --resume cannot change it \
+                     (the command asks for {}); leave the option out to keep it",
+                    resume.display(),
+                    recorded[key],
+                    requested[key]
+                );
+            }
+        }
+        let done = state.samples.count();
+        let budget = match (self.spp, self.time, state.target_spp) {
+            (_, Some(_), _) => Budget::from_options(None, self.time)?,
+            (Some(total), None, _) | (None, None, Some(total)) => {
+                if u64::from(total) <= done {
+                    bail!(
+                        "{}: already holds {done} samples per pixel; ask for more with --spp \
+                         N (the total to reach) or --time SECONDS",
+                        resume.display()
+                    );
+                }
+                Budget::Samples(total - done as u32)
+            }
+            (None, None, None) => bail!(
+                "{}: the render was given a time, not a sample count: say how much more to \
+                 render with --spp N (the total to reach) or --time SECONDS",
+                resume.display()
+            ),
+        };
+        let output = match (&self.output, &state.output) {
+            (Some(output), _) | (None, Some(output)) => output.clone(),
+            (None, None) => DEFAULT_OUTPUT.into(),
+        };
+        Ok(Plan {
+            scene_path: if given("scene") {
+                self.scene.clone()
+            } else {
+                state.scene_path.clone()
+            },
+            settings: state.settings.clone(),
+            output,
+            state_path: Some(self.state.clone().unwrap_or_else(|| resume.clone())),
+            first_sample: state.samples.end(),
+            budget,
+            state: Some(state),
+        })
+    }
 }
 
-/// Renders as the arguments say.
-pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+/// Renders as the arguments say; `matches` tells which options the command line gave.
+pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     set_threads(args.setup.threads)?;
-    let budget = Budget::from_options(args.spp, args.time)?;
-    check_outputs(&args.outputs(), &args.inputs())?;
-    let scene = load_scene(&args.scene, args.setup.camera.as_deref())?;
-    let (width, height) = image_size(&scene, args.setup.width, args.setup.height);
+    let mut plan = args.plan(matches)?;
+    check_outputs(&args.outputs(&plan), &args.inputs(&plan))?;
+    let scene = load_scene(&plan.scene_path, plan.settings.camera.as_deref())?;
+    let settings = &mut plan.settings;
+    if settings.height == 0 {
+        settings.height = image_size(&scene, settings.width, None).1;
+    }
+    let (width, height) = (settings.width, settings.height);
+    let mut state = prepare_state(&mut plan, &scene, args)?;
     let reference = match &args.reference {
         Some(path) => Some(read_reference(path, (width, height))?),
         None => None,
     };
     let traversal = build_traversal(args.setup.backend, &scene)?;
-    let mut integrator = args
-        .setup
-        .integrator(args.algo, &scene, traversal, (width, height))?;
+    let mut integrator = args.setup.integrator(
+        plan.settings.algorithm,
+        &scene,
+        traversal,
+        (width, height),
+        &plan.settings.options,
+    )?;
     if args.explain {
-        print_explanation(&scene, &args.setup, integrator.as_ref());
+        let shading = plan.settings.options.shading_plan(&scene);
+        print_explanation(&scene, shading, args.setup.backend, integrator.as_ref());
     }
-    let interrupted = interrupt_flag()?;
-    let mut film = Film::new(width, height);
+    let stop = stop_flag()?;
+    let mut film = match &mut state {
+        Some(state) => std::mem::replace(&mut state.film, Film::new(1, 1)),
+        None => Film::new(width, height),
+    };
+    let first = plan.first_sample;
+    let mut write_checkpoint = |film: &Film, spp: u32| -> anyhow::Result<()> {
+        if let (Some(state), Some(path)) = (&state, &plan.state_path) {
+            let mut checkpoint = state.clone();
+            checkpoint.film = film.clone();
+            checkpoint.samples.insert(first..first + spp);
+            checkpoint.save(path)?;
+        }
+        Ok(())
+    };
+    let periodic = match args.checkpoint_every {
+        Some(seconds) if !(seconds.is_finite() && seconds > 0.0) => {
+            bail!("--checkpoint-every must be a positive number of seconds")
+        }
+        Some(seconds) => Some(Periodic {
+            every: Duration::from_secs_f64(seconds),
+            action: &mut write_checkpoint,
+        }),
+        None => None,
+    };
+    let frames = args.setup.frames().starting_at(first);
     let outcome = progressive::render(
         integrator.as_mut(),
-        args.setup.frames(),
+        frames,
         &mut film,
-        budget,
+        plan.budget,
         reference.as_deref(),
-        &interrupted,
+        &stop,
+        periodic,
     )?;
-    if interrupted.load(Ordering::SeqCst) {
+    if stop.is_raised() {
         tell!(
             "interrupted: writing the {} samples per pixel rendered so far",
             outcome.spp
         );
     }
     let image = film.image();
-    image.write_exr(&args.output)?;
-    let png = png_beside(&args.output);
+    image.write_exr(&plan.output)?;
+    let png = png_beside(&plan.output);
     image.write_png(&png, 0.0)?;
+    if let (Some(mut state), Some(path)) = (state, &plan.state_path) {
+        state.film = film.clone();
+        state.samples.insert(first..first + outcome.spp);
+        state.save(path)?;
+        say!(
+            "wrote the render state {} (samples {})",
+            path.display(),
+            state.samples
+        );
+    }
     if let Some(report) = &args.report {
         write_report(report, &outcome.checkpoints)?;
         let plot = png_beside(report);
         let series = Series {
-            label: args.algo.name().to_string(),
+            label: plan.settings.algorithm.name().to_string(),
             points: relmse_points(&outcome.checkpoints),
         };
-        let title = format!("relMSE over time: {}", args.scene.display());
+        let title = format!("relMSE over time: {}", plan.scene_path.display());
         plot_relmse(&plot, &title, &[series])?;
         say!("wrote {} and {}", report.display(), plot.display());
     }
     if let Some(path) = &args.utilization {
         write_utilization(path, &outcome.utilization)?;
         let series = Series {
-            label: args.algo.name().to_string(),
+            label: plan.settings.algorithm.name().to_string(),
             points: outcome
                 .utilization
                 .iter()
@@ -190,27 +382,68 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 .collect(),
         };
         let plot = png_beside(path);
-        let title = format!("CPU utilization: {}", args.scene.display());
+        let title = format!("CPU utilization: {}", plan.scene_path.display());
         plot_utilization(&plot, &title, &[series])?;
         say!("wrote {} and {}", path.display(), plot.display());
     }
     print_summary(&film, &outcome);
-    say!("wrote {} and {}", args.output.display(), png.display());
+    say!("wrote {} and {}", plan.output.display(), png.display());
     Ok(())
 }
 
+/// The state the render adds to, when one is written: the resumed one, checked against
+/// `scene`, or a new one. `None` when no state is asked for.
+fn prepare_state(
+    plan: &mut Plan,
+    scene: &Scene,
+    args: &RenderArgs,
+) -> anyhow::Result<Option<RenderState>> {
+    if plan.state_path.is_none() {
+        return Ok(None);
+    }
+    let hash = scene_hash(scene);
+    let mut state = match plan.state.take() {
+        Some(state) => {
+            if state.scene_hash != hash {
+                bail!(
+                    "{}: its content differs from the scene the resumed render was made from \
+                     ({}); give the same scene",
+                    plan.scene_path.display(),
+                    state.scene_path.display()
+                );
+            }
+            state
+        }
+        None => {
+            let mut state = RenderState::new(plan.settings.clone(), hash, plan.scene_path.clone());
+            if let Budget::Samples(spp) = plan.budget
+                && args.samples.is_none()
+            {
+                state.target_spp = Some(spp);
+            }
+            state
+        }
+    };
+    state.output = Some(plan.output.clone());
+    Ok(Some(state))
+}
+
 /// Prints the scene's features and every part of the render with whether it runs and why.
-fn print_explanation(scene: &Scene, setup: &RenderSetup, integrator: &dyn Integrator) {
+fn print_explanation(
+    scene: &Scene,
+    shading: ShadingPlan,
+    backend: Backend,
+    integrator: &dyn Integrator,
+) {
     say!("scene {}:", scene.path.display());
     for line in scene.features.to_string().lines() {
         say!("  {line}");
     }
-    let shading = setup.integrator.shading_plan(scene);
     let decisions = integrator
         .decisions()
         .into_iter()
         .chain(shading.decisions(&scene.features))
-        .chain(setup.backend.decisions(scene));
+        .chain(backend.decisions(scene));
     say!("plan:");
     for decision in decisions {
         say!("  {decision}");
@@ -264,13 +497,13 @@ pub fn read_reference(path: &Path, (width, height): (u32, u32)) -> anyhow::Resul
     Ok(image.pixels)
 }
 
-/// A flag that Ctrl-C sets (installed once per process).
-pub fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
-    let interrupted = Arc::new(AtomicBool::new(false));
-    let flag = Arc::clone(&interrupted);
-    ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))
-        .context("installing the Ctrl-C handler")?;
-    Ok(interrupted)
+/// A flag that Ctrl-C (SIGINT), SIGTERM and SIGHUP raise (installed once per process): the
+/// render stops within a frame's tile or pass and writes what it has.
+pub fn stop_flag() -> anyhow::Result<StopFlag> {
+    let stop = StopFlag::new();
+    let flag = stop.clone();
+    ctrlc::set_handler(move || flag.raise()).context("installing the signal handler")?;
+    Ok(stop)
 }
 
 /// (seconds, relMSE) of each checkpoint, for plotting.
