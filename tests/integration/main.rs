@@ -7,4 +7,5 @@
 mod cli;
 mod gpu_backend;
 mod mitsuba_crosscheck;
+mod render_state;
 mod scenes;
