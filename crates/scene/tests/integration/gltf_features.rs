@@ -277,8 +277,12 @@ fn bad_documents_are_errors_not_panics() {
         error.to_string().contains("KHR_draco_mesh_compression"),
         "{error}"
     );
+    // An ior below 1 is outside the extension's range: clamped to 1, with a warning.
     let bad_ior = r#"[{"extensions": {"KHR_materials_ior": {"ior": 0.5}}}]"#;
-    assert!(load(&document(r#"[{"mesh": 0}]"#, bad_ior, "")).is_err());
+    let scene = load(&document(r#"[{"mesh": 0}]"#, bad_ior, "")).unwrap();
+    assert_eq!(scene.materials[0].ior, 1.0);
+    let warned = scene.warnings.iter().any(|w| w.contains("ior 0.5 (now 1)"));
+    assert!(warned, "{:?}", scene.warnings);
 }
 
 /// An image needs a `uri` or a `bufferView`, and one in a buffer view needs a `mimeType`
