@@ -518,3 +518,44 @@ fn readers_that_leave_early_do_not_break_the_commands() {
     let status = vcm_into_closed_pipes(&["info"]);
     assert!(status.success(), "info: {status}");
 }
+
+#[test]
+fn outputs_that_are_not_regular_files_are_refused_and_left_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe.exr");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let mut targets = vec![fifo];
+    // A character device like /dev/null, made here (only root may): never the real one.
+    let device = dir.path().join("null.exr");
+    let mknod = Command::new("mknod")
+        .arg(&device)
+        .args(["c", "1", "3"])
+        .output();
+    if mknod.is_ok_and(|o| o.status.success()) {
+        targets.push(device);
+    }
+    for target in &targets {
+        let arg = target.to_str().unwrap();
+        let render = vcm(&["render", "--spp", "1", "--width", "8", "-o", arg]);
+        let compare = vcm(&[
+            "compare",
+            "tests/data/missing.exr",
+            "tests/data/missing.exr",
+            "--diff",
+            arg,
+        ]);
+        for output in [render, compare] {
+            assert!(!output.status.success(), "{arg}");
+            assert!(
+                stderr(&output).contains("not a regular file"),
+                "{}",
+                stderr(&output)
+            );
+        }
+        let kind = std::fs::symlink_metadata(target).unwrap().file_type();
+        assert!(!kind.is_file(), "{arg} is still what it was");
+    }
+    let names = std::fs::read_dir(dir.path()).unwrap().count();
+    assert_eq!(names, targets.len(), "no temporary file is left");
+}

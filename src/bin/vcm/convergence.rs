@@ -52,7 +52,8 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
         ("the CSV", csv_path.clone()),
     ];
     check_outputs(&outputs, &[&args.scene, &args.reference])?;
-    let scene = load_scene(&args.scene, args.setup.camera.as_deref())?;
+    let camera = args.setup.camera.as_deref();
+    let scene = load_scene(&args.scene, camera, &args.setup.limits)?;
     let size = image_size(&scene, args.setup.width, args.setup.height);
     let reference = read_reference(&args.reference, size)?;
     let traversal = build_traversal(args.setup.backend, &scene)?;

@@ -5,18 +5,23 @@ use std::path::PathBuf;
 use anyhow::Context;
 use vcm_rs::scene::Scene;
 
+use crate::render::SceneLimits;
+
 /// Arguments of `vcm info`.
 #[derive(clap::Args)]
 pub struct InfoArgs {
     /// The scene file (.gltf, .glb or .obj).
     #[arg(default_value = "scenes/cornell-box.gltf")]
     scene: PathBuf,
+    #[command(flatten)]
+    limits: SceneLimits,
 }
 
 /// Loads the scene, prints its summary and builds the CPU BVH.
 pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
-    let scene = std::sync::Arc::new(Scene::load(&args.scene)?);
+    let scene = Scene::load_with(&args.scene, &args.limits.load_options())?;
+    let scene = std::sync::Arc::new(scene);
     let load_time = start.elapsed();
     for warning in &scene.warnings {
         tell!("warning: {warning}");

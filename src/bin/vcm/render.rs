@@ -10,12 +10,12 @@ use anyhow::{Context, bail};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
 use glam::Vec3;
-use vcm::atomic_write::write_atomically;
+use vcm::atomic_write::{writable_target, write_atomically};
 use vcm::image_io::RgbImage;
 use vcm::{Film, Integrator, StopFlag};
 use vcm_rs::Backend;
 use vcm_rs::frames::Frames;
-use vcm_rs::scene::{Scene, ShadingPlan};
+use vcm_rs::scene::{LoadOptions, Scene, ShadingPlan};
 use vcm_rs::state::{RenderSettings, RenderState, parse_range, scene_hash};
 use vcm_rs::traversal::Traversal;
 
@@ -46,6 +46,33 @@ pub struct RenderSetup {
     pub integrator: IntegratorOptions,
     #[command(flatten)]
     pub schedule: ScheduleOptions,
+    #[command(flatten)]
+    pub limits: SceneLimits,
+}
+
+/// What a scene file may make the loader allocate and read (scene files are untrusted input).
+#[derive(clap::Args, Clone, Debug)]
+pub struct SceneLimits {
+    /// Most triangles a scene may expand to, every instance counted (checked before loading).
+    #[arg(long, value_name = "N", default_value_t = LoadOptions::DEFAULT_MAX_TRIANGLES)]
+    pub max_triangles: u64,
+    /// Most texels all of a scene's textures may decode to.
+    #[arg(long, value_name = "N", default_value_t = LoadOptions::DEFAULT_MAX_TEXELS)]
+    pub max_texels: u64,
+    /// Let the scene's URIs and file names lead outside its folder (absolute paths, `..`).
+    #[arg(long)]
+    pub allow_outside_files: bool,
+}
+
+impl SceneLimits {
+    /// The loader's options these limits give.
+    pub fn load_options(&self) -> LoadOptions {
+        LoadOptions {
+            max_triangles: self.max_triangles,
+            max_texels: self.max_texels,
+            allow_outside_files: self.allow_outside_files,
+        }
+    }
 }
 
 impl RenderSetup {
@@ -282,7 +309,8 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     set_threads(args.setup.threads)?;
     let mut plan = args.plan(matches)?;
     check_outputs(&args.outputs(&plan), &args.inputs(&plan))?;
-    let scene = load_scene(&plan.scene_path, plan.settings.camera.as_deref())?;
+    let camera = plan.settings.camera.as_deref();
+    let scene = load_scene(&plan.scene_path, camera, &args.setup.limits)?;
     let settings = &mut plan.settings;
     if settings.height == 0 {
         settings.height = image_size(&scene, settings.width, None).1;
@@ -470,10 +498,14 @@ pub fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Loads a scene, prints its warnings and renders it from the file's camera `camera`, if
-/// given.
-pub fn load_scene(path: &Path, camera: Option<&str>) -> anyhow::Result<Arc<Scene>> {
-    let mut scene = Scene::load(path)?;
+/// Loads a scene within `limits`, prints its warnings and renders it from the file's camera
+/// `camera`, if given.
+pub fn load_scene(
+    path: &Path,
+    camera: Option<&str>,
+    limits: &SceneLimits,
+) -> anyhow::Result<Arc<Scene>> {
+    let mut scene = Scene::load_with(path, &limits.load_options())?;
     for warning in &scene.warnings {
         tell!("warning: {warning}");
     }
@@ -515,7 +547,8 @@ pub fn relmse_points(checkpoints: &[Checkpoint]) -> Vec<(f64, f64)> {
 }
 
 /// Fails early, before rendering, when an output cannot be written where it is asked for:
-/// its folder does not exist, it names a folder, two outputs are the same file (an EXR named
+/// its folder does not exist, it names a folder or another file that is not a regular one (a
+/// device, a FIFO: a write would replace it), two outputs are the same file (an EXR named
 /// `.png` would be replaced by its own PNG) or an output would replace one of the `inputs`.
 /// Each output comes with what it is, for the message.
 pub fn check_outputs(outputs: &[(&str, PathBuf)], inputs: &[&Path]) -> anyhow::Result<()> {
@@ -526,6 +559,9 @@ pub fn check_outputs(outputs: &[(&str, PathBuf)], inputs: &[&Path]) -> anyhow::R
         }
         if output.is_dir() {
             bail!("{}: is a folder, not a file to write", output.display());
+        }
+        if let Err(e) = writable_target(output) {
+            bail!("{}: {e}", output.display());
         }
         let file = same_file_key(output);
         if let Some((_, first)) = written.iter().find(|(key, _)| *key == file) {
