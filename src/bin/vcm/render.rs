@@ -381,11 +381,15 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     if let (Some(mut state), Some(path)) = (state, &plan.state_path) {
         state.film = film.clone();
         state.samples.insert(first..first + outcome.spp);
+        let start = std::time::Instant::now();
         state.save(path)?;
+        let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
         say!(
-            "wrote the render state {} (samples {})",
+            "wrote the render state {} (samples {}, {:.1} MiB in {:.2} s)",
             path.display(),
-            state.samples
+            state.samples,
+            bytes as f64 / f64::from(1 << 20),
+            start.elapsed().as_secs_f64()
         );
     }
     if let Some(report) = &args.report {
