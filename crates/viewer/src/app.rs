@@ -8,12 +8,14 @@ use std::time::Instant;
 use eframe::egui;
 use vcm::image_io::RgbImage;
 use vcm_rs::integrators::image_size;
+use vcm_rs::state::RenderState;
 use vcm_scene::{Camera, Scene};
 
 use crate::camera_controller::CameraController;
 use crate::image_out::tone_map;
-use crate::loader::SceneLoad;
-use crate::renderer::{Job, Renderer, Snapshot, Update};
+use crate::loader::{Loaded, SceneLoad};
+use crate::render_state::{Opened, Origin, PendingSave};
+use crate::renderer::{Job, Renderer, Resume, Snapshot, Update};
 use crate::resolution::ResolutionSwitch;
 use crate::screenshot::ScreenshotScript;
 use crate::session::{Session, View};
@@ -22,8 +24,10 @@ use crate::stats::ErrorHistory;
 
 /// What the app starts with.
 pub struct Startup {
-    /// The first scene to open.
-    pub scene: PathBuf,
+    /// The first scene to open; with `resume`, the scene to continue it with, if given.
+    pub scene: Option<PathBuf>,
+    /// The render state to continue (`--resume`), already read: its file and contents.
+    pub resume: Option<Opened>,
     /// The camera of the first scene to start from (`--camera`), if not its first.
     pub camera: Option<String>,
     /// Render settings.
@@ -42,8 +46,13 @@ pub struct Startup {
 
 /// A loaded scene and the interactive state that belongs to it.
 pub struct LoadedScene {
-    /// The scene as loaded (its camera is the controller's starting point).
+    /// The scene as loaded.
     pub scene: Arc<Scene>,
+    /// Its content hash, for the render states saved from it.
+    pub hash: u64,
+    /// The file camera the view started from (`--camera`, a state's camera), `None` for
+    /// the file's default: the choice a saved state records when the camera is there.
+    pub choice: Option<String>,
     /// Serial number of this load: every opened scene is a new one.
     pub serial: u64,
     /// The interactive camera.
@@ -64,6 +73,22 @@ pub struct Shown {
     /// The exposure the texture was tone mapped with.
     pub exposure: f32,
 }
+
+/// An opened render state, ready to continue.
+pub struct PendingResume {
+    /// The view the state was rendered with.
+    pub view: View,
+    /// Its film and samples.
+    pub resume: Resume,
+    /// What else it came with.
+    pub origin: Origin,
+}
+
+/// The extension of render state files (`vcm render --state` takes any name).
+pub const STATE_EXTENSION: &str = "state";
+
+/// The scene file opened when none is given.
+pub const DEFAULT_SCENE: &str = "scenes/cornell-box.gltf";
 
 /// The viewer.
 pub struct ViewerApp {
@@ -87,6 +112,13 @@ pub struct ViewerApp {
     pub session: Session,
     /// The image on screen.
     pub shown: Option<Shown>,
+    /// An opened render state waiting for its first render: its film continues when that
+    /// render's view is the state's.
+    pub pending_resume: Option<PendingResume>,
+    /// The render that continues an opened state (its generation), and what it came with.
+    pub continued: Option<(u64, Origin)>,
+    /// A render state being saved.
+    pub saving: Option<PendingSave>,
     /// relMSE over time of the current render.
     pub history: ErrorHistory,
     /// The last error (failed load, render or save), shown until the next success.
@@ -126,6 +158,9 @@ impl ViewerApp {
             scenes_loaded: 0,
             session: Session::default(),
             shown: None,
+            pending_resume: None,
+            continued: None,
+            saving: None,
             history: ErrorHistory::default(),
             error: None,
             note: None,
@@ -133,7 +168,13 @@ impl ViewerApp {
             screenshot: startup.screenshot,
             adapter,
         };
-        app.open(ctx, &startup.scene, startup.camera);
+        match startup.resume {
+            Some(Opened { path, state }) => app.open_state(ctx, &path, Some(state), startup.scene),
+            None => {
+                let scene = startup.scene.unwrap_or_else(|| DEFAULT_SCENE.into());
+                app.open(ctx, &scene, startup.camera);
+            }
+        }
         Ok(app)
     }
 
@@ -146,23 +187,127 @@ impl ViewerApp {
         }));
     }
 
-    /// Takes a finished load: a new scene replaces the current one, an error is shown.
+    /// Starts opening the render state `file` (read already when `state` holds it) to
+    /// continue it: with the scene `scene` if given, else the current scene if it has the
+    /// state's content, else the scene the state names. The current scene keeps rendering
+    /// until it is ready.
+    pub fn open_state(
+        &mut self,
+        ctx: &egui::Context,
+        file: &Path,
+        state: Option<RenderState>,
+        scene: Option<PathBuf>,
+    ) {
+        let current = self
+            .scene
+            .as_ref()
+            .map(|loaded| (Arc::clone(&loaded.scene), loaded.hash));
+        let waker = ctx.clone();
+        self.loading = Some(SceneLoad::open_state(
+            file,
+            state,
+            scene,
+            current,
+            move || waker.request_repaint(),
+        ));
+    }
+
+    /// Starts saving the current render as a render state to `path`; the panel shows why
+    /// when it cannot be saved.
+    pub fn save_state(&mut self, ctx: &egui::Context, path: PathBuf) {
+        let generation = self.session.generation();
+        let state = match (&self.scene, self.session.view()) {
+            (Some(loaded), Some(view)) => {
+                let origin = self
+                    .continued
+                    .as_ref()
+                    .filter(|(continued, _)| *continued == generation)
+                    .map(|(_, origin)| origin);
+                crate::render_state::state_to_save(loaded, view, origin)
+            }
+            _ => Err("cannot save the render state: nothing is rendering".into()),
+        };
+        match state {
+            Ok(state) => {
+                let waker = ctx.clone();
+                self.saving = Some(PendingSave::start(
+                    &self.renderer,
+                    generation,
+                    state,
+                    path,
+                    move || waker.request_repaint(),
+                ));
+            }
+            Err(message) => self.error = Some(message),
+        }
+    }
+
+    /// Takes the outcome of a save, once there is one.
+    fn poll_save(&mut self) {
+        let Some(outcome) = self.saving.as_mut().and_then(PendingSave::poll) else {
+            return;
+        };
+        self.saving = None;
+        match outcome {
+            Ok(note) => self.note = Some(note),
+            Err(message) => self.error = Some(message),
+        }
+    }
+
+    /// Takes a finished load: a new scene replaces the current one (with an opened state's
+    /// settings, camera and size, ready to continue it), an error is shown.
     fn poll_load(&mut self) {
         let Some(result) = self.loading.as_ref().and_then(SceneLoad::poll) else {
             return;
         };
         self.loading = None;
         match result {
-            Ok(scene) => {
-                let (width, height) = self.size_option;
-                let full = image_size(&scene, width, height);
+            Ok(Loaded {
+                scene,
+                hash,
+                camera,
+                choice,
+                state,
+            }) => {
+                let full = match &state {
+                    Some(opened) => (opened.state.settings.width, opened.state.settings.height),
+                    None => image_size(&scene, self.size_option.0, self.size_option.1),
+                };
                 self.scenes_loaded += 1;
+                let serial = self.scenes_loaded;
                 self.scene = Some(LoadedScene {
-                    controller: CameraController::new(scene.camera, &scene.features.bounds),
-                    home: scene.camera,
+                    controller: CameraController::new(camera, &scene.features.bounds),
+                    home: camera,
                     resolution: ResolutionSwitch::new(full),
-                    serial: self.scenes_loaded,
+                    serial,
                     scene,
+                    hash,
+                    choice,
+                });
+                self.pending_resume = state.map(|Opened { path, state }| {
+                    self.settings.algorithm = state.settings.algorithm;
+                    self.settings.integrator = state.settings.options.clone();
+                    self.note = Some(format!(
+                        "continuing {} (samples {})",
+                        path.display(),
+                        state.samples
+                    ));
+                    PendingResume {
+                        view: View {
+                            scene: serial,
+                            settings: self.settings.clone(),
+                            camera,
+                            size: full,
+                        },
+                        resume: Resume {
+                            film: state.film,
+                            samples: state.samples,
+                        },
+                        origin: Origin {
+                            output: state.output,
+                            target_spp: state.target_spp,
+                        },
+                    }
                 });
                 self.error = None;
             }
@@ -238,11 +383,16 @@ impl ViewerApp {
         };
         if let Some(generation) = self.session.restart_if_changed(&view) {
             self.error = None;
+            // An opened state continues in the first render of its view; any other render
+            // starts afresh, and the state's film is dropped.
+            let resume = self.pending_resume.take().filter(|r| r.view == view);
+            self.continued = resume.as_ref().map(|r| (generation, r.origin.clone()));
             self.renderer.submit(Job {
                 generation,
                 scene: Arc::clone(&loaded.scene),
                 view,
                 frame_limit: self.screenshot.as_ref().map(ScreenshotScript::frames),
+                resume: resume.map(|r| Box::new(r.resume)),
             });
         }
     }
@@ -256,11 +406,16 @@ impl ViewerApp {
         current.then_some(&shown.snapshot)
     }
 
-    /// Opens the first file dropped on the window.
+    /// Opens the first file dropped on the window: a render state (`.state`) to continue,
+    /// else a scene.
     fn take_dropped_file(&mut self, ctx: &egui::Context) {
         let dropped = ctx.input(|i| i.raw.dropped_files.first().map(|f| f.path().to_path_buf()));
-        if let Some(path) = dropped {
-            self.open(ctx, &path, None);
+        match dropped {
+            Some(path) if path.extension().is_some_and(|e| e == STATE_EXTENSION) => {
+                self.open_state(ctx, &path, None, None);
+            }
+            Some(path) => self.open(ctx, &path, None),
+            None => {}
         }
     }
 }
@@ -271,6 +426,7 @@ impl eframe::App for ViewerApp {
         let now = Instant::now();
         self.poll_load();
         self.poll_renderer(&ctx);
+        self.poll_save();
         self.take_dropped_file(&ctx);
         crate::panels::controls(self, ui);
         crate::viewport::show(self, ui, now);

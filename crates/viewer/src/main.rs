@@ -7,6 +7,7 @@ mod image_out;
 mod loader;
 mod options;
 mod panels;
+mod render_state;
 mod renderer;
 mod resolution;
 mod screenshot;
@@ -26,6 +27,7 @@ use vcm::image_io::RgbImage;
 
 use crate::app::{Startup, ViewerApp};
 use crate::options::Options;
+use crate::render_state::Opened;
 use crate::screenshot::ScreenshotScript;
 
 /// Exit status when no window could be opened: no display, or no graphics adapter.
@@ -56,6 +58,14 @@ fn run(options: Options) -> Result<(), Failure> {
         Some(path) => Some(RgbImage::read_exr(path).map_err(|e| Failure::Other(e.into()))?),
         None => None,
     };
+    // The state is read (and checked) before the window opens; its scene loads in the window.
+    let resume = match &options.resume {
+        Some(path) => Some(Opened {
+            state: crate::render_state::read(path).map_err(|e| Failure::Other(anyhow!(e)))?,
+            path: path.clone(),
+        }),
+        None => None,
+    };
     let (script, outcome) = match options.screenshot() {
         Some((frames, path)) => {
             let (script, outcome) = ScreenshotScript::new(frames, path);
@@ -65,6 +75,7 @@ fn run(options: Options) -> Result<(), Failure> {
     };
     let startup = Startup {
         scene: options.scene.clone(),
+        resume,
         camera: options.camera.clone(),
         settings: options.settings(),
         width: options.width,

@@ -8,17 +8,37 @@ use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
 
 use crate::settings::RenderSettings;
 
+/// The options a render state sets (its settings, `vcm_rs::state::SETTING_KEYS`).
+const STATE_SETTINGS: [&str; 11] = [
+    "algo",
+    "width",
+    "height",
+    "camera",
+    "seed",
+    "sampler",
+    "max_depth",
+    "connections",
+    "radius",
+    "alpha",
+    "no_prune",
+];
+
 /// vcm-viewer: watch a scene converge, move the camera, switch algorithms.
 #[derive(Debug, Parser)]
 #[command(name = "vcm-viewer", version, about)]
 pub struct Options {
-    /// The scene file (.gltf, .glb or .obj).
-    #[arg(default_value = "scenes/cornell-box.gltf")]
-    pub scene: PathBuf,
+    /// The scene file (.gltf, .glb or .obj; default scenes/cornell-box.gltf). With --resume:
+    /// the scene to continue the render with (default: the one the state names).
+    pub scene: Option<PathBuf>,
     /// The scene's camera to start from: its index in the glTF `cameras` array, or its name
     /// or its node's name (default: the first camera the file's nodes place).
     #[arg(long, value_name = "INDEX|NAME")]
     pub camera: Option<String>,
+    /// Continue the render whose state is in this file (written by `vcm render --state` or
+    /// the viewer's *Save state…*): its scene (checked by content), camera, image size,
+    /// algorithm and options, which therefore cannot be given as well.
+    #[arg(long, value_name = "FILE", conflicts_with_all = STATE_SETTINGS)]
+    pub resume: Option<PathBuf>,
     /// The light transport algorithm to start with.
     #[arg(long, value_enum, default_value_t = Algorithm::Pt)]
     pub algo: Algorithm,
@@ -80,7 +100,11 @@ mod tests {
     #[test]
     fn defaults_render_the_cornell_box_with_the_path_tracer() {
         let options = parse(&[]).unwrap();
-        assert_eq!(options.scene, PathBuf::from("scenes/cornell-box.gltf"));
+        assert_eq!(
+            options.scene, None,
+            "the app opens crate::app::DEFAULT_SCENE"
+        );
+        assert_eq!(options.resume, None);
         assert_eq!(options.settings().algorithm, Algorithm::Pt);
         assert_eq!(options.settings().schedule, ScheduleOptions::default());
         assert_eq!(options.screenshot(), None);
@@ -131,5 +155,51 @@ mod tests {
         }
         let both = parse(&["--frames", "4", "--screenshot", "a.png"]).unwrap();
         assert_eq!(both.screenshot(), Some((4, PathBuf::from("a.png"))));
+    }
+
+    #[test]
+    fn resume_takes_the_settings_from_the_state() {
+        let options = parse(&["--resume", "a.state", "--backend", "gpu", "--exposure", "1"]);
+        let options = options.unwrap();
+        assert_eq!(options.resume, Some(PathBuf::from("a.state")));
+        assert_eq!(options.scene, None);
+        let with_scene = parse(&["box.gltf", "--resume", "a.state"]).unwrap();
+        assert_eq!(with_scene.scene, Some(PathBuf::from("box.gltf")));
+        let screenshot = [
+            "--resume",
+            "a.state",
+            "--frames",
+            "2",
+            "--screenshot",
+            "s.png",
+        ];
+        assert!(
+            parse(&screenshot).is_ok(),
+            "scheduling and display are free"
+        );
+        for setting in [
+            &["--algo", "vcm"][..],
+            &["--width", "64"],
+            &["--height", "64"],
+            &["--camera", "0"],
+            &["--seed", "3"],
+            &["--sampler", "independent"],
+            &["--max-depth", "4"],
+            &["--connections", "2"],
+            &["--radius", "0.01"],
+            &["--alpha", "0.5"],
+            &["--no-prune"],
+        ] {
+            let args: Vec<&str> = ["--resume", "a.state"]
+                .iter()
+                .chain(setting)
+                .copied()
+                .collect();
+            let error = parse(&args).unwrap_err().to_string();
+            assert!(
+                error.contains("--resume") && error.contains(setting[0]),
+                "{setting:?}: {error}"
+            );
+        }
     }
 }

@@ -12,7 +12,7 @@ use vcm_rs::Backend;
 use vcm_rs::frames::Frames;
 use vcm_rs::integrators::{Algorithm, ScheduleOptions, SchedulerKind};
 
-use crate::app::{LoadedScene, ViewerApp};
+use crate::app::{LoadedScene, STATE_EXTENSION, ViewerApp};
 use crate::camera_controller::CameraController;
 use crate::settings::{ALGORITHMS, RenderSettings};
 use crate::stats::LiveStats;
@@ -32,6 +32,8 @@ pub fn controls(app: &mut ViewerApp, ui: &mut egui::Ui) {
                 render_section(&mut app.settings, ui);
                 ui.separator();
                 image_section(app, ui);
+                ui.separator();
+                state_section(app, ui);
                 ui.separator();
                 stats_section(app, ui);
                 if app.reference_size.is_some() {
@@ -231,6 +233,34 @@ fn image_section(app: &mut ViewerApp, ui: &mut egui::Ui) {
             }
         }
     }
+}
+
+/// Saving the render as a render state, and opening one (of `vcm render --state`, or saved
+/// here) to continue it.
+fn state_section(app: &mut ViewerApp, ui: &mut egui::Ui) {
+    ui.heading("Render state");
+    ui.horizontal(|ui| {
+        if ui.button("Open state…").clicked()
+            && let Some(path) = rfd::FileDialog::new().pick_file()
+        {
+            app.open_state(ui.ctx(), &path, None, None);
+        }
+        let can_save = app.shown.is_some() && app.saving.is_none();
+        if ui
+            .add_enabled(can_save, egui::Button::new("Save state…"))
+            .clicked()
+            && let Some(path) = rfd::FileDialog::new()
+                .add_filter("render state", &[STATE_EXTENSION])
+                .set_file_name(format!("render.{STATE_EXTENSION}"))
+                .save_file()
+        {
+            app.save_state(ui.ctx(), path);
+        }
+    });
+    if let Some(saving) = &app.saving {
+        ui.label(format!("saving {} …", saving.path().display()));
+    }
+    ui.small("continue a render of vcm render --state, or save this one for --resume");
 }
 
 fn stats_section(app: &ViewerApp, ui: &mut egui::Ui) {

@@ -1,6 +1,8 @@
 //! The render worker: a thread that renders the current [`Job`] frame after frame into a film
 //! and publishes the running mean, so the UI thread never waits for a frame. A new job
-//! replaces the current one between two frames: the accumulation restarts.
+//! replaces the current one between two frames: the accumulation restarts. A job may continue
+//! a saved render state's film, and the worker hands out a copy of its film between two
+//! frames ([`Renderer::request_film`]), so that a render state holds whole frames only.
 
 use std::sync::mpsc::{Receiver, Sender, TryRecvError};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -13,6 +15,7 @@ use vcm::{Film, FrameStats, Integrator};
 use vcm_rs::Backend;
 use vcm_rs::frames::{Frames, Remaining};
 use vcm_rs::integrators;
+use vcm_rs::state::SampleRanges;
 use vcm_scene::Scene;
 use vcm_traversal::Traversal;
 
@@ -28,6 +31,39 @@ pub struct Job {
     pub view: View,
     /// Stop after this many frames; `None`: render until replaced.
     pub frame_limit: Option<u32>,
+    /// The film to continue (a render state's), instead of an empty one.
+    pub resume: Option<Box<Resume>>,
+}
+
+/// A render to continue: its film and the global samples (iterations) it holds. The job
+/// renders on from the sample after the last one held, so the film grows exactly as the
+/// uninterrupted render's would (see `vcm_rs::state`).
+#[derive(Clone, Debug)]
+pub struct Resume {
+    /// The accumulated samples and splats, of the job's image size.
+    pub film: Film,
+    /// The global samples the film holds.
+    pub samples: SampleRanges,
+}
+
+/// A copy of a render's film after its last whole frame, and the global samples it holds.
+#[derive(Clone, Debug)]
+pub struct FilmCopy {
+    /// The job's generation.
+    pub generation: u64,
+    /// The film.
+    pub film: Film,
+    /// The global samples in it: those the job continued from and those it rendered since.
+    pub samples: SampleRanges,
+}
+
+/// What the UI asks of the worker.
+enum Request {
+    /// Render this job instead of the current one.
+    Job(Job),
+    /// Send a copy of the current render's film here (between two frames). Dropped
+    /// unanswered when there is no render to copy.
+    Film(Sender<FilmCopy>),
 }
 
 /// The state of a render after some frames.
@@ -39,8 +75,10 @@ pub struct Snapshot {
     pub size: (u32, u32),
     /// Mean radiance per pixel (W·sr⁻¹·m⁻², RGB), row by row from the top left.
     pub mean: Vec<Vec3>,
-    /// Samples per pixel rendered.
+    /// Samples per pixel rendered by this job.
     pub spp: u32,
+    /// Samples per pixel the job continued from (a render state's), 0 for a new render.
+    pub resumed_spp: u64,
     /// Time spent rendering frames since the job started.
     pub elapsed: Duration,
     /// Rays and times summed over the frames.
@@ -67,7 +105,7 @@ pub enum Update {
 
 /// The handle of the render worker thread; dropping it stops the thread after its frame.
 pub struct Renderer {
-    jobs: Option<Sender<Job>>,
+    requests: Option<Sender<Request>>,
     latest: Arc<Mutex<Option<Update>>>,
     thread: Option<JoinHandle<()>>,
 }
@@ -91,7 +129,7 @@ impl Renderer {
             .name("render worker".into())
             .spawn(move || worker.run(&inbox))?;
         Ok(Renderer {
-            jobs: Some(jobs),
+            requests: Some(jobs),
             latest,
             thread: Some(thread),
         })
@@ -99,9 +137,23 @@ impl Renderer {
 
     /// Replaces the current render with `job` (after the frame in progress).
     pub fn submit(&self, job: Job) {
-        if let Some(jobs) = &self.jobs {
+        self.send(Request::Job(job));
+    }
+
+    /// Asks for a copy of the current render's film, taken after the frame in progress (or
+    /// at once when the render has reached its frame limit); the UI is notified when it is
+    /// there. The sender is dropped unanswered when there is no render (none started, or it
+    /// failed) or a newer job was submitted before.
+    pub fn request_film(&self) -> Receiver<FilmCopy> {
+        let (reply, copy) = std::sync::mpsc::channel();
+        self.send(Request::Film(reply));
+        copy
+    }
+
+    fn send(&self, request: Request) {
+        if let Some(requests) = &self.requests {
             // Sending fails only when the worker has ended, which it does only when dropped.
-            let _ = jobs.send(job);
+            let _ = requests.send(request);
         }
     }
 
@@ -116,7 +168,7 @@ impl Renderer {
 
 impl Drop for Renderer {
     fn drop(&mut self) {
-        self.jobs = None;
+        self.requests = None;
         if let Some(thread) = self.thread.take() {
             let _ = thread.join();
         }
@@ -147,11 +199,11 @@ enum Next {
 }
 
 impl Worker {
-    fn run(mut self, inbox: &Receiver<Job>) {
+    fn run(mut self, inbox: &Receiver<Request>) {
         let mut next = wait_for_job(inbox);
         while let Next::Job(job) = next {
             next = match self.start(&job) {
-                Ok(integrator) => self.render(&job, integrator, inbox),
+                Ok(integrator) => self.render(job, integrator, inbox),
                 Err(message) => {
                     self.publish(Update::Failed {
                         generation: job.generation,
@@ -218,31 +270,84 @@ impl Worker {
         Ok(traversal)
     }
 
-    /// Renders frames of `job` until another job arrives, the renderer is dropped or the
-    /// frame limit is reached (then it waits for the next job).
+    /// Renders frames of `job` until another job arrives or the renderer is dropped; once the
+    /// frame limit is reached it keeps the film (for copies) and waits.
     fn render(
         &self,
-        job: &Job,
+        job: Job,
         mut integrator: Box<dyn Integrator>,
-        inbox: &Receiver<Job>,
+        inbox: &Receiver<Request>,
     ) -> Next {
         let (width, height) = job.view.size;
-        let mut film = Film::new(width, height);
+        let settings = &job.view.settings;
+        let Resume {
+            mut film,
+            samples: held,
+        } = job.resume.map_or_else(
+            || Resume {
+                film: Film::new(width, height),
+                samples: SampleRanges::new(),
+            },
+            |resume| *resume,
+        );
+        if (film.width(), film.height()) != (width, height) {
+            self.publish(Update::Failed {
+                generation: job.generation,
+                message: format!(
+                    "cannot continue a {}×{} film at {width}×{height}",
+                    film.width(),
+                    film.height()
+                ),
+            });
+            return wait_for_job(inbox);
+        }
         let mut totals = FrameStats::default();
         let mut elapsed = Duration::ZERO;
-        let settings = &job.view.settings;
-        let mut frames = Frames::new(settings.schedule, settings.backend);
+        let mut frames = Frames::new(settings.schedule, settings.backend).starting_at(held.end());
+        let snapshot = |film: &Film, frames: &Frames, totals: FrameStats, elapsed: Duration| {
+            let mean = film.mean();
+            Snapshot {
+                generation: job.generation,
+                size: job.view.size,
+                relmse: self.relmse(job.view.size, &mean),
+                mean,
+                spp: frames.samples(),
+                resumed_spp: held.count(),
+                elapsed,
+                totals,
+                dropped: film.dropped(),
+            }
+        };
+        if !held.is_empty() {
+            // The continued film is on screen before the first new frame.
+            self.publish(Update::Frames(snapshot(&film, &frames, totals, elapsed)));
+        }
         loop {
-            match inbox.try_recv() {
-                Ok(newer) => return latest_job(newer, inbox),
+            let done = job
+                .frame_limit
+                .is_some_and(|limit| frames.counts().count >= limit);
+            let request = if done {
+                inbox.recv().map_err(|_| TryRecvError::Disconnected)
+            } else {
+                inbox.try_recv()
+            };
+            match request {
+                Ok(Request::Job(newer)) => return latest_job(newer, inbox),
+                Ok(Request::Film(reply)) => {
+                    let mut samples = held.clone();
+                    samples.insert(held.end()..frames.next_sample());
+                    let copy = FilmCopy {
+                        generation: job.generation,
+                        film: film.clone(),
+                        samples,
+                    };
+                    // The UI may have stopped waiting: then nobody needs the copy.
+                    let _ = reply.send(copy);
+                    (self.notify)();
+                    continue;
+                }
                 Err(TryRecvError::Disconnected) => return Next::Quit,
                 Err(TryRecvError::Empty) => {}
-            }
-            if job
-                .frame_limit
-                .is_some_and(|limit| frames.counts().count >= limit)
-            {
-                return wait_for_job(inbox);
             }
             let start = Instant::now();
             match frames.render_next(integrator.as_mut(), &mut film, Remaining::default()) {
@@ -257,19 +362,7 @@ impl Worker {
                 }
             }
             elapsed += start.elapsed();
-            let spp = frames.samples();
-            let mean = film.mean();
-            let relmse = self.relmse(job.view.size, &mean);
-            self.publish(Update::Frames(Snapshot {
-                generation: job.generation,
-                size: job.view.size,
-                mean,
-                spp,
-                elapsed,
-                totals,
-                dropped: film.dropped(),
-                relmse,
-            }));
+            self.publish(Update::Frames(snapshot(&film, &frames, totals, elapsed)));
         }
     }
 
@@ -289,19 +382,25 @@ impl Worker {
     }
 }
 
-/// Blocks until a job arrives (the latest one, if several are queued).
-fn wait_for_job(inbox: &Receiver<Job>) -> Next {
-    match inbox.recv() {
-        Ok(job) => latest_job(job, inbox),
-        Err(_) => Next::Quit,
+/// Blocks until a job arrives (the latest one, if several are queued). Requests for a film
+/// meanwhile are dropped unanswered: there is none.
+fn wait_for_job(inbox: &Receiver<Request>) -> Next {
+    loop {
+        match inbox.recv() {
+            Ok(Request::Job(job)) => return latest_job(job, inbox),
+            Ok(Request::Film(_)) => {}
+            Err(_) => return Next::Quit,
+        }
     }
 }
 
-/// `job`, or the newest job queued behind it: older ones are outdated.
-fn latest_job(mut job: Job, inbox: &Receiver<Job>) -> Next {
+/// `job`, or the newest job queued behind it: older ones are outdated, and so are requests
+/// for their films (dropped unanswered).
+fn latest_job(mut job: Job, inbox: &Receiver<Request>) -> Next {
     loop {
         match inbox.try_recv() {
-            Ok(newer) => job = newer,
+            Ok(Request::Job(newer)) => job = newer,
+            Ok(Request::Film(_)) => {}
             Err(TryRecvError::Empty) => return Next::Job(job),
             Err(TryRecvError::Disconnected) => return Next::Quit,
         }
@@ -309,8 +408,9 @@ fn latest_job(mut job: Job, inbox: &Receiver<Job>) -> Next {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+    use std::ops::Range;
     use std::path::Path;
     use std::sync::mpsc;
 
@@ -318,12 +418,12 @@ mod tests {
 
     use crate::settings::RenderSettings;
 
-    fn cornell_box() -> Arc<Scene> {
+    pub(crate) fn cornell_box() -> Arc<Scene> {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.gltf");
         Arc::new(Scene::load(path).unwrap())
     }
 
-    fn settings(algorithm: Algorithm) -> RenderSettings {
+    pub(crate) fn settings(algorithm: Algorithm) -> RenderSettings {
         RenderSettings {
             algorithm,
             backend: Backend::Cpu,
@@ -343,7 +443,12 @@ mod tests {
         }
     }
 
-    fn job(generation: u64, scene: &Arc<Scene>, size: (u32, u32), limit: Option<u32>) -> Job {
+    pub(crate) fn job(
+        generation: u64,
+        scene: &Arc<Scene>,
+        size: (u32, u32),
+        limit: Option<u32>,
+    ) -> Job {
         Job {
             generation,
             scene: Arc::clone(scene),
@@ -354,11 +459,12 @@ mod tests {
                 size,
             },
             frame_limit: limit,
+            resume: None,
         }
     }
 
     /// A renderer whose updates also arrive on a channel.
-    fn spawn(reference: Option<RgbImage>) -> (Renderer, mpsc::Receiver<()>) {
+    pub(crate) fn spawn(reference: Option<RgbImage>) -> (Renderer, mpsc::Receiver<()>) {
         let (sender, woken) = mpsc::channel();
         let renderer = Renderer::spawn(reference, move || {
             let _ = sender.send(());
@@ -368,7 +474,7 @@ mod tests {
     }
 
     /// Waits (up to a minute) for an update that `accept` takes.
-    fn wait_for<T>(
+    pub(crate) fn wait_for<T>(
         renderer: &Renderer,
         woken: &mpsc::Receiver<()>,
         mut accept: impl FnMut(Update) -> Option<T>,
@@ -383,26 +489,39 @@ mod tests {
         panic!("no such update within a minute");
     }
 
-    fn frames(update: Update, generation: u64, spp: u32) -> Option<Snapshot> {
+    pub(crate) fn frames(update: Update, generation: u64, spp: u32) -> Option<Snapshot> {
         match update {
             Update::Frames(s) if s.generation == generation && s.spp >= spp => Some(s),
             _ => None,
         }
     }
 
-    /// The mean of `frames` frames of one sample per pixel rendered directly by the integrator
-    /// (the VCM family's frames of two samples add the same as two of one).
-    fn direct_render(scene: &Arc<Scene>, size: (u32, u32), frames: u32) -> Vec<Vec3> {
+    /// The film of `samples` rendered directly by the integrator, one sample per pixel per
+    /// frame (the VCM family's frames of two samples add the same as two of one).
+    pub(crate) fn direct_film(scene: &Arc<Scene>, size: (u32, u32), samples: Range<u32>) -> Film {
         let settings = settings(Algorithm::Vcm);
         let traversal = Backend::Cpu.traversal(scene).unwrap();
         let mut integrator =
             integrators::build(Algorithm::Vcm, scene, traversal, size, &settings.integrator)
                 .unwrap();
         let mut film = Film::new(size.0, size.1);
-        for sample in 0..frames {
+        for sample in samples {
             integrator.render_frame(&mut film, sample);
         }
-        film.mean()
+        film
+    }
+
+    /// The mean of `frames` frames of one sample per pixel rendered directly.
+    fn direct_render(scene: &Arc<Scene>, size: (u32, u32), frames: u32) -> Vec<Vec3> {
+        direct_film(scene, size, 0..frames).mean()
+    }
+
+    /// The worker's copy of its film (waits up to a minute).
+    pub(crate) fn film_copy(renderer: &Renderer) -> FilmCopy {
+        renderer
+            .request_film()
+            .recv_timeout(Duration::from_secs(60))
+            .expect("a copy of the film within a minute")
     }
 
     #[test]
@@ -415,6 +534,67 @@ mod tests {
         assert_eq!(snapshot.mean, direct_render(&scene, (24, 16), 4));
         assert!(snapshot.totals.camera_rays == 4 * 24 * 16);
         assert_eq!(snapshot.relmse, None, "no reference");
+        assert_eq!(snapshot.resumed_spp, 0);
+        // The film itself, after the frame limit: exact sums, bit for bit.
+        let copy = film_copy(&renderer);
+        assert_eq!(
+            (copy.generation, copy.samples.to_string()),
+            (1, "0..4".into())
+        );
+        assert_eq!(copy.film, direct_film(&scene, (24, 16), 0..4));
+    }
+
+    #[test]
+    fn the_worker_continues_a_film_as_the_uninterrupted_render() {
+        let scene = cornell_box();
+        let size = (20, 12);
+        let (renderer, woken) = spawn(None);
+        let resume = Resume {
+            film: direct_film(&scene, size, 0..3),
+            samples: SampleRanges::from_range(0..3),
+        };
+        // The continued film is shown before the first new frame (none here).
+        let mut shown = job(1, &scene, size, Some(0));
+        shown.resume = Some(Box::new(resume.clone()));
+        renderer.submit(shown);
+        let first = wait_for(&renderer, &woken, |u| frames(u, 1, 0));
+        assert_eq!((first.spp, first.resumed_spp), (0, 3));
+        assert_eq!(first.mean, resume.film.mean());
+        assert_eq!(film_copy(&renderer).film, resume.film);
+        // Two frames of two samples go on from sample 3.
+        let mut continued = job(2, &scene, size, Some(2));
+        continued.resume = Some(Box::new(resume));
+        renderer.submit(continued);
+        let last = wait_for(&renderer, &woken, |u| frames(u, 2, 4));
+        assert_eq!((last.spp, last.resumed_spp), (4, 3));
+        assert_eq!(last.totals.camera_rays, 4 * 20 * 12, "only the new samples");
+        let copy = film_copy(&renderer);
+        assert_eq!(copy.samples.to_string(), "0..7");
+        assert_eq!(copy.film, direct_film(&scene, size, 0..7));
+    }
+
+    #[test]
+    fn a_film_of_another_size_is_refused_and_copies_need_a_render() {
+        let scene = cornell_box();
+        let (renderer, woken) = spawn(None);
+        let no_render = renderer.request_film();
+        let mut wrong = job(1, &scene, (8, 8), None);
+        wrong.resume = Some(Box::new(Resume {
+            film: Film::new(4, 8),
+            samples: SampleRanges::from_range(0..1),
+        }));
+        renderer.submit(wrong);
+        let message = wait_for(&renderer, &woken, |u| match u {
+            Update::Failed { message, .. } => Some(message),
+            Update::Frames(_) => None,
+        });
+        assert!(
+            message.contains("4×8") && message.contains("8×8"),
+            "{message}"
+        );
+        assert!(no_render.recv().is_err(), "no render, no copy");
+        let failed = renderer.request_film();
+        assert!(failed.recv().is_err(), "a failed render has no film");
     }
 
     #[test]

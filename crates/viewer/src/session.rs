@@ -41,6 +41,11 @@ impl Session {
     pub fn generation(&self) -> u64 {
         self.generation
     }
+
+    /// The view of the render going on, if one is.
+    pub fn view(&self) -> Option<&View> {
+        self.rendering.as_ref()
+    }
 }
 
 #[cfg(test)]
@@ -78,9 +83,11 @@ mod tests {
     #[test]
     fn the_first_view_starts_a_render_and_an_unchanged_view_continues_it() {
         let mut session = Session::default();
+        assert_eq!(session.view(), None);
         assert_eq!(session.restart_if_changed(&view()), Some(1));
         assert_eq!(session.restart_if_changed(&view()), None);
         assert_eq!(session.generation(), 1);
+        assert_eq!(session.view(), Some(&view()));
     }
 
     #[test]

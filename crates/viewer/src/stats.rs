@@ -8,8 +8,8 @@ use crate::renderer::Snapshot;
 /// Throughput and counts of a render so far.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LiveStats {
-    /// Samples per pixel (frames) accumulated.
-    pub spp: u32,
+    /// Samples per pixel accumulated, those of a continued render state included.
+    pub spp: u64,
     /// Frames per second of render time.
     pub frames_per_second: f64,
     /// Rays of every kind per second of render time.
@@ -25,7 +25,7 @@ impl LiveStats {
     pub fn of(snapshot: &Snapshot) -> LiveStats {
         let seconds = snapshot.elapsed.as_secs_f64().max(1e-9);
         LiveStats {
-            spp: snapshot.spp,
+            spp: snapshot.resumed_spp + u64::from(snapshot.spp),
             frames_per_second: f64::from(snapshot.spp) / seconds,
             rays_per_second: snapshot.totals.rays() as f64 / seconds,
             elapsed: snapshot.elapsed,
@@ -71,6 +71,7 @@ mod tests {
             size: (2, 1),
             mean: vec![glam::Vec3::ZERO; 2],
             spp,
+            resumed_spp: 0,
             elapsed: Duration::from_secs_f64(seconds),
             totals: FrameStats {
                 camera_rays: 2 * u64::from(spp),
@@ -89,6 +90,16 @@ mod tests {
         assert_eq!(stats.frames_per_second, 4.0);
         assert_eq!(stats.rays_per_second, 20.0);
         assert_eq!(stats.dropped, 1);
+        let resumed = Snapshot {
+            resumed_spp: 100,
+            ..snapshot(1, 8, 2.0, None)
+        };
+        let stats = LiveStats::of(&resumed);
+        assert_eq!(stats.spp, 108, "the samples continued count");
+        assert_eq!(
+            stats.frames_per_second, 4.0,
+            "the samples continued took no time"
+        );
     }
 
     #[test]

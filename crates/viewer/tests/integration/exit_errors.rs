@@ -31,3 +31,36 @@ fn an_error_into_a_closed_pipe_still_exits_with_status_1() {
     // `eprintln!` would panic on the broken pipe: status 101.
     assert_eq!(status.code(), Some(1), "{status}");
 }
+
+#[test]
+fn a_missing_or_damaged_state_is_an_error_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let damaged = dir.path().join("damaged.state");
+    std::fs::write(&damaged, b"\x10\0\0\0\0\0\0\0{\"truncated").unwrap();
+    let missing = dir.path().join("missing.state");
+    for (state, says) in [
+        (&damaged, "not a vcm-rs render state"),
+        (&missing, "cannot read"),
+    ] {
+        let Output { status, stderr, .. } = viewer(&["--resume", state.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&stderr);
+        assert_eq!(status.code(), Some(1), "{stderr}");
+        let names = format!("{}: {says}", state.display());
+        assert!(stderr.contains(&names), "{stderr}");
+    }
+}
+
+#[test]
+fn settings_beside_resume_are_refused() {
+    let Output { status, stderr, .. } = viewer(&["--resume", "a.state", "--algo", "vcm"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&stderr);
+    assert_eq!(status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--resume") && stderr.contains("--algo"),
+        "{stderr}"
+    );
+}

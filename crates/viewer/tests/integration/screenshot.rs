@@ -7,6 +7,7 @@
 //! `xvfb-run`, or when no window can be opened (the viewer exits with status 3), the test
 //! is skipped with a message, unless `VCM_REQUIRE_GPU=1` (set by `.ci/run`): then it fails.
 
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::Arc;
@@ -106,6 +107,33 @@ fn library_render(scene: &Arc<Scene>, seed: u64) -> Srgb {
 
 /// Runs the viewer under Xvfb; `None` when the test is skipped.
 fn run_viewer(screenshot: &Path) -> Option<Output> {
+    let (width, seed, frames) = (
+        WIDTH.to_string(),
+        VIEWER_SEED.to_string(),
+        FRAMES.to_string(),
+    );
+    let scene = scene_path();
+    let output = under_xvfb(&[
+        scene.as_os_str(),
+        "--algo".as_ref(),
+        "pt".as_ref(),
+        "--width".as_ref(),
+        width.as_ref(),
+        "--seed".as_ref(),
+        seed.as_ref(),
+        "--frames".as_ref(),
+        frames.as_ref(),
+        "--screenshot".as_ref(),
+        screenshot.as_os_str(),
+    ])?;
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "the viewer failed: {stderr}");
+    Some(output)
+}
+
+/// Runs the viewer with `args` under Xvfb and returns what it did, or `None` when the test
+/// is skipped: no `xvfb-run`, or the viewer could not open a window (exit status 3).
+pub fn under_xvfb(args: &[&OsStr]) -> Option<Output> {
     let found = Command::new("xvfb-run").arg("--help").output().is_ok();
     if !found {
         return skip("xvfb-run is not installed (Debian: apt-get install xvfb xauth)");
@@ -113,11 +141,7 @@ fn run_viewer(screenshot: &Path) -> Option<Output> {
     let mut child = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 1280x1024x24"])
         .arg(env!("CARGO_BIN_EXE_vcm-viewer"))
-        .arg(scene_path())
-        .args(["--algo", "pt", "--width", &WIDTH.to_string()])
-        .args(["--seed", &VIEWER_SEED.to_string()])
-        .args(["--frames", &FRAMES.to_string(), "--screenshot"])
-        .arg(screenshot)
+        .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -139,7 +163,6 @@ fn run_viewer(screenshot: &Path) -> Option<Output> {
             "the viewer could not open a window under Xvfb: {stderr}"
         ));
     }
-    assert!(output.status.success(), "the viewer failed: {stderr}");
     Some(output)
 }
 
