@@ -9,6 +9,7 @@
 //! - [`vcm`]: the integrators themselves, the [`vcm::Film`] they accumulate into and image I/O.
 //! - [`Backend`]: the traversal backends, chosen at run time.
 //! - [`integrators`]: the light transport algorithms, their options and one builder for all.
+//! - [`progressive`]: the render loop: frames until a sample or time budget is spent.
 //! - [`plot`]: PNG plots of error, CPU utilization and scheduler speed-ups.
 //! - [`state`]: a render's state as a value and a file: checkpoint, resume, shards, merge.
 //!
@@ -65,6 +66,7 @@ mod backend;
 pub mod frames;
 pub mod integrators;
 pub mod plot;
+pub mod progressive;
 pub mod state;
 
 pub use vcm;

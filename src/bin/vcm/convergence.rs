@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use vcm::Film;
 
-use crate::progressive::{self, Budget, Outcome};
+use crate::progressive::{self, Outcome};
 use crate::render::{
     RenderSetup, build_traversal, check_outputs, load_scene, read_reference, relmse_points,
     set_threads, stop_flag, write_text,
@@ -45,7 +45,7 @@ pub struct ConvergenceArgs {
 /// Renders with every algorithm, then writes the CSV and the plot and prints the table.
 pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
     set_threads(args.setup.threads)?;
-    let budget = Budget::from_options(None, Some(args.time))?;
+    let budget = progressive::budget_from_options(None, Some(args.time))?;
     let csv_path = args.output.with_extension("csv");
     let outputs = [
         ("the plot", args.output.clone()),

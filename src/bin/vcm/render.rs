@@ -238,7 +238,7 @@ impl RenderArgs {
         let Some(resume) = &self.resume else {
             let (first_sample, budget) = match &self.samples {
                 Some(range) => (range.start, Budget::Samples(range.end - range.start)),
-                None => (0, Budget::from_options(self.spp, self.time)?),
+                None => (0, progressive::budget_from_options(self.spp, self.time)?),
             };
             return Ok(Plan {
                 scene_path: self.scene.clone(),
@@ -267,7 +267,7 @@ impl RenderArgs {
         }
         let done = state.samples.count();
         let budget = match (self.spp, self.time, state.target_spp) {
-            (_, Some(_), _) => Budget::from_options(None, self.time)?,
+            (_, Some(_), _) => progressive::budget_from_options(None, self.time)?,
             (Some(total), None, _) | (None, None, Some(total)) => {
                 if u64::from(total) <= done {
                     bail!(

@@ -1,0 +1,123 @@
+//! The progressive render loop: frames until a sample count or a time budget is spent or a
+//! stop is requested. `vcm render`, `vcm convergence` and the Python package run it, each
+//! watching the frames through its own callback (progress bars, checkpoints, error reports).
+
+use std::time::{Duration, Instant};
+
+use vcm::{Film, FrameStats, Integrator, StopFlag};
+
+use crate::frames::{FrameCounts, Frames, Remaining};
+
+/// When to stop rendering.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Budget {
+    /// This many samples per pixel.
+    Samples(u32),
+    /// This many seconds of wall-clock time.
+    Seconds(f64),
+}
+
+impl Budget {
+    /// Whether the budget is spent after `spp` samples per pixel and `elapsed`.
+    pub fn done(&self, spp: u32, elapsed: Duration) -> bool {
+        match *self {
+            Budget::Samples(n) => spp >= n,
+            Budget::Seconds(s) => elapsed.as_secs_f64() >= s,
+        }
+    }
+
+    /// What is left of the budget after `spp` samples per pixel and `elapsed`.
+    pub fn remaining(&self, spp: u32, elapsed: Duration) -> Remaining {
+        match *self {
+            Budget::Samples(n) => Remaining {
+                samples: Some(n.saturating_sub(spp)),
+                time: None,
+            },
+            Budget::Seconds(s) => Remaining {
+                samples: None,
+                time: Some(Duration::from_secs_f64(s).saturating_sub(elapsed)),
+            },
+        }
+    }
+}
+
+/// A whole frame just rendered, as the loop's callback sees it.
+pub struct FrameDone<'a> {
+    /// The film with the frame added.
+    pub film: &'a Film,
+    /// What the frame did.
+    pub stats: &'a FrameStats,
+    /// Samples per pixel rendered so far.
+    pub spp: u32,
+    /// Wall-clock time since the render started.
+    pub elapsed: Duration,
+}
+
+/// What a progressive render did.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// Samples per pixel rendered.
+    pub spp: u32,
+    /// The frames they came in.
+    pub frames: FrameCounts,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Work summed over all frames.
+    pub totals: FrameStats,
+}
+
+/// Renders `frames` into `film` until `budget` is spent or `stop` is raised (which also cuts
+/// the frame in progress short, dropping it whole), calling `after_frame` after each whole
+/// frame; an error from it ends the render with that error.
+pub fn render(
+    integrator: &mut dyn Integrator,
+    frames: &mut Frames,
+    film: &mut Film,
+    budget: Budget,
+    stop: &StopFlag,
+    mut after_frame: impl FnMut(FrameDone<'_>) -> anyhow::Result<()>,
+) -> anyhow::Result<Rendered> {
+    integrator.set_stop(stop.clone());
+    let mut totals = FrameStats::default();
+    let start = Instant::now();
+    while !budget.done(frames.samples(), start.elapsed()) && !stop.is_raised() {
+        let remaining = budget.remaining(frames.samples(), start.elapsed());
+        let stats = frames.render_next(integrator, film, remaining)?;
+        if stats.interrupted {
+            break;
+        }
+        totals.accumulate(&stats);
+        after_frame(FrameDone {
+            film,
+            stats: &stats,
+            spp: frames.samples(),
+            elapsed: start.elapsed(),
+        })?;
+    }
+    Ok(Rendered {
+        spp: frames.samples(),
+        frames: frames.counts(),
+        seconds: start.elapsed().as_secs_f64(),
+        totals,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sample_budgets_count_samples_and_time_budgets_seconds() {
+        let budget = Budget::Samples(8);
+        assert!(!budget.done(7, Duration::from_secs(1000)));
+        assert!(budget.done(8, Duration::ZERO));
+        assert_eq!(budget.remaining(3, Duration::ZERO).samples, Some(5));
+        assert_eq!(budget.remaining(9, Duration::ZERO).samples, Some(0));
+        let budget = Budget::Seconds(2.0);
+        assert!(!budget.done(1000, Duration::from_millis(1999)));
+        assert!(budget.done(0, Duration::from_secs(2)));
+        let left = budget.remaining(0, Duration::from_millis(500));
+        assert_eq!(left.time, Some(Duration::from_millis(1500)));
+        assert_eq!(left.samples, None);
+    }
+}
