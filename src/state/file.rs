@@ -38,6 +38,21 @@ const TENSORS: [&str; 3] = ["sum", "sum_exact", "samples"];
 /// Writes `state` to `path` through a temporary file in the same folder, renamed over `path`
 /// once complete.
 pub fn write(path: &Path, state: &RenderState) -> Result<(), StateError> {
+    let failed = |reason: String| StateError::Write {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let bytes = encode(state).map_err(failed)?;
+    // A plain write, so the file gets the permissions the umask gives new files.
+    write_atomically(
+        path,
+        |temporary| std::fs::write(temporary, &bytes).map_err(|e| failed(e.to_string())),
+        |e| failed(e.to_string()),
+    )
+}
+
+/// The bytes of the state file of `state`; the error says why it cannot be encoded.
+pub fn encode(state: &RenderState) -> Result<Vec<u8>, String> {
     let film = &state.film;
     let (width, height) = (film.width() as usize, film.height() as usize);
     let rounded: Vec<u8> = film
@@ -58,12 +73,7 @@ pub fn write(path: &Path, state: &RenderState) -> Result<(), StateError> {
         .iter()
         .flat_map(|n| n.to_le_bytes())
         .collect();
-    let view = |dtype, shape, data| {
-        TensorView::new(dtype, shape, data).map_err(|e| StateError::Write {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })
-    };
+    let view = |dtype, shape, data| TensorView::new(dtype, shape, data).map_err(|e| e.to_string());
     let tensors = [
         ("sum", view(Dtype::F64, vec![height, width, 3], &rounded)?),
         (
@@ -76,18 +86,7 @@ pub fn write(path: &Path, state: &RenderState) -> Result<(), StateError> {
     let checksum = checksum(&metadata, tensors.iter().map(|(_, t)| t));
     metadata.insert("checksum".into(), checksum);
     let metadata: HashMap<String, String> = metadata.into_iter().collect();
-    let failed = |reason: String| StateError::Write {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let bytes = safetensors::serialize(tensors.iter().cloned(), Some(metadata))
-        .map_err(|e| failed(e.to_string()))?;
-    // A plain write, so the file gets the permissions the umask gives new files.
-    write_atomically(
-        path,
-        |temporary| std::fs::write(temporary, &bytes).map_err(|e| failed(e.to_string())),
-        |e| failed(e.to_string()),
-    )
+    safetensors::serialize(tensors.iter().cloned(), Some(metadata)).map_err(|e| e.to_string())
 }
 
 /// Reads the render state at `path`, checking everything: that it is a regular file and a
@@ -103,13 +102,19 @@ pub fn read(path: &Path) -> Result<RenderState, StateError> {
         return Err(not_a_state(path, "it is not a regular file"));
     }
     let bytes = std::fs::read(path).map_err(io)?;
-    let file = SafeTensors::deserialize(&bytes).map_err(|e| {
+    decode(&bytes, path)
+}
+
+/// Reads a render state from the bytes of a state file, checking everything as [`read`]
+/// does; errors name `path` as where the bytes came from.
+pub fn decode(bytes: &[u8], path: &Path) -> Result<RenderState, StateError> {
+    let file = SafeTensors::deserialize(bytes).map_err(|e| {
         not_a_state(
             path,
             &format!("not a complete safetensors file ({e}); it may be truncated"),
         )
     })?;
-    let (_, header) = SafeTensors::read_metadata(&bytes)
+    let (_, header) = SafeTensors::read_metadata(bytes)
         .map_err(|e| not_a_state(path, &format!("unreadable header ({e})")))?;
     let metadata: BTreeMap<String, String> = header
         .metadata()
@@ -159,11 +164,7 @@ pub fn read(path: &Path) -> Result<RenderState, StateError> {
     check_tensor(&rounded, Dtype::F64, &[height, width, 3]).map_err(damaged)?;
     check_tensor(&exact, Dtype::U64, &[height, width, 3, WORDS]).map_err(damaged)?;
     check_tensor(&samples, Dtype::U64, &[height, width]).map_err(damaged)?;
-    let words: Vec<u64> = exact
-        .data()
-        .chunks_exact(8)
-        .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
-        .collect();
+    let words = little_endian_words(exact.data());
     let sums: Vec<PixelSum> = words
         .chunks_exact(3 * WORDS)
         .map(|pixel| {
@@ -172,11 +173,7 @@ pub fn read(path: &Path) -> Result<RenderState, StateError> {
             })
         })
         .collect();
-    let counts: Vec<u64> = samples
-        .data()
-        .chunks_exact(8)
-        .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
-        .collect();
+    let counts = little_endian_words(samples.data());
     let dropped: u64 = entry("dropped")?
         .parse()
         .map_err(|_| damaged("the entry `dropped` is not a count".into()))?;
@@ -206,6 +203,15 @@ pub fn read(path: &Path) -> Result<RenderState, StateError> {
         target_spp,
         film,
     })
+}
+
+/// The little-endian 64-bit words of `bytes` (a trailing partial word is ignored; the
+/// tensors' shapes were checked before).
+fn little_endian_words(bytes: &[u8]) -> Vec<u64> {
+    bytes
+        .chunks_exact(8)
+        .map(|b| u64::from_le_bytes(b.try_into().expect("chunks of 8 bytes")))
+        .collect()
 }
 
 /// Checks a tensor's type and shape; the error says what differs.

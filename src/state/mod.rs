@@ -122,6 +122,18 @@ impl RenderState {
         file::write(path.as_ref(), self)
     }
 
+    /// The state as the bytes of a state file (what [`RenderState::save`] writes), to send
+    /// elsewhere; the error says why it cannot be encoded.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, String> {
+        file::encode(self)
+    }
+
+    /// A state from the bytes of a state file, checked as [`RenderState::load`] checks a
+    /// file; errors name `origin` as where the bytes came from.
+    pub fn from_bytes(bytes: &[u8], origin: impl AsRef<Path>) -> Result<RenderState, StateError> {
+        file::decode(bytes, origin.as_ref())
+    }
+
     /// The mean radiance per pixel.
     pub fn image(&self) -> RgbImage {
         self.film.image()

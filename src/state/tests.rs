@@ -232,3 +232,18 @@ fn replaced(bytes: &[u8], from: &str, to: &str) -> Vec<u8> {
     edited[at..at + to.len()].copy_from_slice(to.as_bytes());
     edited
 }
+
+#[test]
+fn bytes_are_the_file_and_read_back_checked() {
+    let scene = scene();
+    let mut state = render(&scene, &settings(Algorithm::Vcm, SamplerKind::Sobol), 0..2);
+    state.target_spp = Some(4);
+    let bytes = state.to_bytes().unwrap();
+    assert_eq!(RenderState::from_bytes(&bytes, "sent").unwrap(), state);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("state.safetensors");
+    state.save(&path).unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), bytes);
+    let error = RenderState::from_bytes(&bytes[..bytes.len() - 1], "sent").unwrap_err();
+    assert!(error.to_string().starts_with("sent: "), "{error}");
+}
