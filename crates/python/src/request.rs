@@ -1,0 +1,200 @@
+//! The keyword arguments of `render` and `render_state`: read, checked and turned into the
+//! library's settings, with errors that name the argument.
+
+use clap::ValueEnum;
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use vcm_rs::Backend;
+use vcm_rs::integrators::{Algorithm, IntegratorOptions, SamplerKind, ScheduleOptions, image_size};
+use vcm_rs::progressive::Budget;
+use vcm_rs::state::RenderSettings;
+
+use crate::scene::Scene;
+
+/// The keyword arguments both `render` and `render_state` take, in the order the docs list
+/// them.
+pub const KEYWORDS: [&str; 17] = [
+    "algo",
+    "spp",
+    "time",
+    "width",
+    "height",
+    "seed",
+    "sampler",
+    "max_depth",
+    "connections",
+    "radius",
+    "alpha",
+    "no_prune",
+    "backend",
+    "spp_per_frame",
+    "scheduler",
+    "tile_size",
+    "progress",
+];
+
+/// Samples per pixel when neither `spp` nor `time` is given (as `vcm render`).
+const DEFAULT_SPP: u32 = 16;
+
+/// Image width when none is given (as `vcm render`).
+const DEFAULT_WIDTH: u32 = 512;
+
+/// A render as the keyword arguments ask for it.
+pub struct Request {
+    /// What the estimator computes (the image a seed gives depends on these only).
+    pub settings: RenderSettings,
+    /// How the work is scheduled.
+    pub schedule: ScheduleOptions,
+    /// Where rays are traced.
+    pub backend: Backend,
+    /// `spp`, if given.
+    pub spp: Option<u32>,
+    /// `time` in seconds, if given.
+    pub time: Option<f64>,
+    /// Called with the progress while rendering.
+    pub progress: Option<Py<PyAny>>,
+}
+
+impl Request {
+    /// Reads `kwargs` for a render of `scene`: unknown names are a `TypeError`, values of the
+    /// wrong type a `TypeError` and values out of range a `ValueError`, each naming the
+    /// argument.
+    pub fn from_kwargs(scene: &Scene, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Request> {
+        let mut algorithm = Algorithm::Vcm;
+        let mut width = DEFAULT_WIDTH;
+        let mut height = None;
+        let mut options = IntegratorOptions::default();
+        let mut schedule = ScheduleOptions::default();
+        let mut backend = Backend::Cpu;
+        let (mut spp, mut time, mut progress) = (None, None, None);
+        for (key, value) in kwargs.into_iter().flatten() {
+            let key: String = key.extract()?;
+            let key = key.as_str();
+            let value = &value;
+            match key {
+                "algo" => algorithm = choice(key, value)?,
+                "spp" => spp = Some(positive(key, value)?),
+                "time" => time = Some(seconds(key, value)?),
+                "width" => width = positive(key, value)?,
+                "height" => height = optional(value, |v| positive(key, v))?,
+                "seed" => options.seed = value_as(key, value)?,
+                "sampler" => options.sampler = choice::<SamplerKind>(key, value)?,
+                "max_depth" => options.max_depth = optional(value, |v| positive(key, v))?,
+                "connections" => options.connections = value_as(key, value)?,
+                "radius" => options.radius = value_as(key, value)?,
+                "alpha" => options.alpha = value_as(key, value)?,
+                "no_prune" => options.no_prune = value_as(key, value)?,
+                "backend" => backend = choice(key, value)?,
+                "spp_per_frame" => schedule.spp_per_frame = optional(value, |v| positive(key, v))?,
+                "scheduler" => schedule.scheduler = optional(value, |v| choice(key, v))?,
+                "tile_size" => schedule.tile_size = optional(value, |v| positive(key, v))?,
+                "progress" if value.is_callable() => progress = Some(value.clone().unbind()),
+                "progress" => {
+                    return Err(PyTypeError::new_err(
+                        "progress: expected a function of (done, total)",
+                    ));
+                }
+                _ => {
+                    return Err(PyTypeError::new_err(format!(
+                        "unexpected keyword argument '{key}' (the keywords are {})",
+                        KEYWORDS.join(", ")
+                    )));
+                }
+            }
+        }
+        if spp.is_some() && time.is_some() {
+            return Err(PyValueError::new_err(
+                "give spp (samples per pixel) or time (seconds), not both",
+            ));
+        }
+        let (width, height) = image_size(&scene.data, width, height);
+        Ok(Request {
+            settings: RenderSettings {
+                algorithm,
+                width,
+                height,
+                camera: scene.camera.clone(),
+                options,
+            },
+            schedule,
+            backend,
+            spp,
+            time,
+            progress,
+        })
+    }
+
+    /// The budget `spp` or `time` give (16 samples per pixel when neither is given).
+    pub fn budget(&self) -> Budget {
+        match (self.spp, self.time) {
+            (_, Some(seconds)) => Budget::Seconds(seconds),
+            (spp, None) => Budget::Samples(spp.unwrap_or(DEFAULT_SPP)),
+        }
+    }
+}
+
+/// `value` as a `T`; a conversion error names the argument `key` and keeps its class
+/// (`TypeError` for another type, `OverflowError` or `ValueError` for a value out of range).
+fn value_as<'py, T>(key: &str, value: &Bound<'py, PyAny>) -> PyResult<T>
+where
+    T: for<'a> FromPyObject<'a, 'py>,
+    for<'a> <T as FromPyObject<'a, 'py>>::Error: Into<PyErr>,
+{
+    value.extract::<T>().map_err(|e| {
+        let e: PyErr = e.into();
+        let message = format!("{key}: {}", e.value(value.py()));
+        if e.is_instance_of::<PyTypeError>(value.py()) {
+            PyTypeError::new_err(message)
+        } else {
+            PyValueError::new_err(message)
+        }
+    })
+}
+
+/// `value` as a whole number of at least 1.
+fn positive(key: &str, value: &Bound<'_, PyAny>) -> PyResult<u32> {
+    let n: i64 = value_as(key, value)?;
+    u32::try_from(n).ok().filter(|&n| n >= 1).ok_or_else(|| {
+        PyValueError::new_err(format!("{key}: must be from 1 to 4294967295, not {n}"))
+    })
+}
+
+/// `value` as a positive, finite number of seconds.
+fn seconds(key: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
+    let seconds: f64 = value_as(key, value)?;
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "{key}: must be a positive number of seconds, not {seconds}"
+        )));
+    }
+    Ok(seconds)
+}
+
+/// `None` for Python's `None`, else `read(value)`.
+fn optional<'py, T>(
+    value: &Bound<'py, PyAny>,
+    read: impl FnOnce(&Bound<'py, PyAny>) -> PyResult<T>,
+) -> PyResult<Option<T>> {
+    if value.is_none() {
+        Ok(None)
+    } else {
+        read(value).map(Some)
+    }
+}
+
+/// `value` as one of the names of `T`'s values (as on the command line).
+fn choice<T: ValueEnum>(key: &str, value: &Bound<'_, PyAny>) -> PyResult<T> {
+    let name: String = value_as(key, value)?;
+    T::from_str(&name, true).map_err(|_| {
+        let names: Vec<String> = T::value_variants()
+            .iter()
+            .filter_map(|v| v.to_possible_value())
+            .map(|v| v.get_name().to_string())
+            .collect();
+        PyValueError::new_err(format!(
+            "{key}: unknown value '{name}' (one of {})",
+            names.join(", ")
+        ))
+    })
+}
