@@ -1,12 +1,12 @@
 //! `vcm_rs._native`: the Rust half of the Python package `vcm_rs` (the Python half, with the
 //! documentation users read, is in `python/vcm_rs/`).
 //!
-//! - [`scene`]: `load_scene` and the `Scene` class.
-//! - [`request`]: the keyword arguments of `render` and `render_state`, read and checked.
-//! - [`render`]: `render` and `render_state`, run with the interpreter released.
-//! - [`state`]: the `RenderState` class and `load_state`.
-//! - [`images`]: arrays to and from images, EXR files and error metrics.
-//! - [`released`]: running Rust work off the interpreter while Ctrl-C keeps working.
+//! - `scene`: `load_scene` and the `Scene` class.
+//! - `request`: the keyword arguments of `render` and `render_state`, read and checked.
+//! - `render`: `render` and `render_state`, run with the interpreter released.
+//! - `state`: the `RenderState` class and `load_state`.
+//! - `images`: arrays to and from images, EXR files and error metrics.
+//! - `released`: running Rust work off the interpreter while Ctrl-C keeps working.
 
 mod images;
 mod released;
