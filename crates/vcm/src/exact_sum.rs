@@ -145,7 +145,7 @@ impl ExactSum {
         let shift = top - 52;
         let mut mantissa = self.bits(shift, 53);
         let half = self.bit(shift - 1);
-        let below_half = (0..shift - 1).any(|i| self.bit(i));
+        let below_half = self.any_below(shift - 1);
         if half && (below_half || mantissa & 1 == 1) {
             mantissa += 1; // 2⁵³ after a carry is still exact as an f64
         }
@@ -155,6 +155,13 @@ impl ExactSum {
     /// Bit `index` of the integer.
     fn bit(&self, index: u32) -> bool {
         self.words[(index / 64) as usize] >> (index % 64) & 1 == 1
+    }
+
+    /// Whether any bit below bit `index` is set (whole words at a time).
+    fn any_below(&self, index: u32) -> bool {
+        let (word, offset) = ((index / 64) as usize, index % 64);
+        let partial = self.words[word] & ((1 << offset) - 1);
+        partial != 0 || self.words[..word].iter().any(|&w| w != 0)
     }
 
     /// `count` (≤ 64) bits from bit `first` upwards.
@@ -250,6 +257,11 @@ mod tests {
         assert_eq!(sum(&[two_53, 1.0, 2.0]).to_f64(), 2f64.powi(53) + 4.0);
         // Just above a tie rounds up: 2⁵³ + 1 + 2⁻¹⁰⁰.
         let above = sum(&[two_53, 1.0, 2f32.powi(-100)]);
+        assert_eq!(above.to_f64(), 2f64.powi(53) + 2.0);
+        // The same with the sticky bit in the word of the rounding bit, and in the lowest.
+        let above = sum(&[two_53, 1.0, 2f32.powi(-10)]);
+        assert_eq!(above.to_f64(), 2f64.powi(53) + 2.0);
+        let above = sum(&[two_53, 1.0, 2f32.powi(-149)]);
         assert_eq!(above.to_f64(), 2f64.powi(53) + 2.0);
     }
 
