@@ -21,7 +21,7 @@ use vcm::image_io::RgbImage;
 pub use file::{FORMAT_NAME, FORMAT_VERSION};
 pub use ranges::{SampleRanges, parse_range};
 pub use scene_hash::scene_hash;
-pub use settings::{RenderSettings, SETTING_KEYS};
+pub use settings::{RenderSettings, SETTING_KEYS, SETTING_OPTIONS, SETTINGS};
 
 /// Why a render state could not be read, written, merged or resumed.
 #[derive(Debug, thiserror::Error)]

@@ -24,20 +24,43 @@ pub struct RenderSettings {
     pub options: IntegratorOptions,
 }
 
-/// The metadata keys of [`RenderSettings`], in the order messages list them.
-pub const SETTING_KEYS: [&str; 11] = [
-    "algorithm",
-    "width",
-    "height",
-    "camera",
-    "seed",
-    "sampler",
-    "max_depth",
-    "connections",
-    "radius",
-    "alpha",
-    "no_prune",
+/// Every setting of [`RenderSettings`]: its key in the state file's metadata and the option
+/// that gives it (`vcm render --max-depth` has the id `max_depth`, as the viewer's option and
+/// the Python keyword), in the order messages list them.
+pub const SETTINGS: [(&str, &str); 11] = [
+    ("algorithm", "algo"),
+    ("width", "width"),
+    ("height", "height"),
+    ("camera", "camera"),
+    ("seed", "seed"),
+    ("sampler", "sampler"),
+    ("max_depth", "max_depth"),
+    ("connections", "connections"),
+    ("radius", "radius"),
+    ("alpha", "alpha"),
+    ("no_prune", "no_prune"),
 ];
+
+/// The metadata keys of [`SETTINGS`].
+pub const SETTING_KEYS: [&str; 11] = column(0);
+
+/// The options of [`SETTINGS`] (for clap's `conflicts_with_all`, which takes an array).
+pub const SETTING_OPTIONS: [&str; 11] = column(1);
+
+/// Column `index` (0: keys, 1: options) of [`SETTINGS`].
+const fn column(index: usize) -> [&'static str; 11] {
+    let mut names = [""; 11];
+    let mut i = 0;
+    while i < names.len() {
+        names[i] = if index == 0 {
+            SETTINGS[i].0
+        } else {
+            SETTINGS[i].1
+        };
+        i += 1;
+    }
+    names
+}
 
 /// The name clap gives a value of a `ValueEnum` on the command line.
 fn enum_name(value: &impl ValueEnum) -> String {

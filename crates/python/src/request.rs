@@ -8,25 +8,15 @@ use pyo3::types::PyDict;
 use vcm_rs::Backend;
 use vcm_rs::integrators::{Algorithm, IntegratorOptions, SamplerKind, ScheduleOptions, image_size};
 use vcm_rs::progressive::Budget;
-use vcm_rs::state::RenderSettings;
+use vcm_rs::state::{RenderSettings, SETTING_OPTIONS};
 
 use crate::scene::Scene;
 
-/// The keyword arguments both `render` and `render_state` take, in the order the docs list
-/// them.
-pub const KEYWORDS: [&str; 17] = [
-    "algo",
+/// The keyword arguments of `render` and `render_state` besides the settings' own
+/// ([`SETTING_OPTIONS`] but the camera, which the scene carries).
+const OTHER_KEYWORDS: [&str; 7] = [
     "spp",
     "time",
-    "width",
-    "height",
-    "seed",
-    "sampler",
-    "max_depth",
-    "connections",
-    "radius",
-    "alpha",
-    "no_prune",
     "backend",
     "spp_per_frame",
     "scheduler",
@@ -96,9 +86,11 @@ impl Request {
                     ));
                 }
                 _ => {
+                    let keywords = SETTING_OPTIONS.iter().filter(|&&k| k != "camera");
+                    let keywords: Vec<&str> = keywords.chain(&OTHER_KEYWORDS).copied().collect();
                     return Err(PyTypeError::new_err(format!(
                         "unexpected keyword argument '{key}' (the keywords are {})",
-                        KEYWORDS.join(", ")
+                        keywords.join(", ")
                     )));
                 }
             }

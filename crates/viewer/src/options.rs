@@ -5,23 +5,9 @@ use std::path::PathBuf;
 use clap::Parser;
 use vcm_rs::Backend;
 use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
+use vcm_rs::state::SETTING_OPTIONS;
 
 use crate::settings::RenderSettings;
-
-/// The options a render state sets (its settings, `vcm_rs::state::SETTING_KEYS`).
-const STATE_SETTINGS: [&str; 11] = [
-    "algo",
-    "width",
-    "height",
-    "camera",
-    "seed",
-    "sampler",
-    "max_depth",
-    "connections",
-    "radius",
-    "alpha",
-    "no_prune",
-];
 
 /// vcm-viewer: watch a scene converge, move the camera, switch algorithms.
 #[derive(Debug, Parser)]
@@ -37,7 +23,7 @@ pub struct Options {
     /// Continue the render whose state is in this file (written by `vcm render --state` or
     /// the viewer's *Save state…*): its scene (checked by content), camera, image size,
     /// algorithm and options, which therefore cannot be given as well.
-    #[arg(long, value_name = "FILE", conflicts_with_all = STATE_SETTINGS)]
+    #[arg(long, value_name = "FILE", conflicts_with_all = SETTING_OPTIONS)]
     pub resume: Option<PathBuf>,
     /// The light transport algorithm to start with.
     #[arg(long, value_enum, default_value_t = Algorithm::Pt)]

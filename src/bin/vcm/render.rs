@@ -16,7 +16,7 @@ use vcm::{Film, Integrator, StopFlag};
 use vcm_rs::Backend;
 use vcm_rs::frames::Frames;
 use vcm_rs::scene::{LoadOptions, Scene, ShadingPlan};
-use vcm_rs::state::{RenderSettings, RenderState, parse_range, scene_hash};
+use vcm_rs::state::{RenderSettings, RenderState, SETTINGS, parse_range, scene_hash};
 use vcm_rs::traversal::Traversal;
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic};
@@ -156,21 +156,6 @@ pub struct RenderArgs {
     explain: bool,
 }
 
-/// The command-line arguments behind each estimator setting ([`SETTING_KEYS`]).
-const SETTING_ARGUMENTS: [(&str, &str); 11] = [
-    ("algorithm", "algo"),
-    ("width", "width"),
-    ("height", "height"),
-    ("camera", "camera"),
-    ("seed", "seed"),
-    ("sampler", "sampler"),
-    ("max_depth", "max_depth"),
-    ("connections", "connections"),
-    ("radius", "radius"),
-    ("alpha", "alpha"),
-    ("no_prune", "no_prune"),
-];
-
 /// The output EXR when none is given.
 const DEFAULT_OUTPUT: &str = "out.exr";
 
@@ -254,7 +239,7 @@ impl RenderArgs {
         let state = RenderState::load(resume)?;
         let requested = self.settings(self.setup.height.unwrap_or(0)).to_metadata();
         let recorded = state.settings.to_metadata();
-        for (key, argument) in SETTING_ARGUMENTS {
+        for (key, argument) in SETTINGS {
             if given(argument) && requested[key] != recorded[key] {
                 bail!(
                     "{}: the render was made with {key} {}, and --resume cannot change it \

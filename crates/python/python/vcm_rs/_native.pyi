@@ -3,6 +3,8 @@
 import os
 from typing import Callable, Literal, Optional, Union
 
+from typing_extensions import TypedDict, Unpack
+
 import numpy as np
 import numpy.typing as npt
 
@@ -48,48 +50,30 @@ def load_scene(
     max_texels: int = ...,
     allow_outside_files: bool = False,
 ) -> Scene: ...
-def render(
-    scene: Scene,
-    *,
-    algo: Literal["pt", "lt", "bpt", "ppm", "bpm", "vcm"] = "vcm",
-    spp: Optional[int] = None,
-    time: Optional[float] = None,
-    width: int = 512,
-    height: Optional[int] = None,
-    seed: int = 0,
-    sampler: Literal["sobol", "independent"] = "sobol",
-    max_depth: Optional[int] = None,
-    connections: int = 1,
-    radius: float = ...,
-    alpha: float = ...,
-    no_prune: bool = False,
-    backend: Literal["cpu", "gpu"] = "cpu",
-    spp_per_frame: Optional[int] = None,
-    scheduler: Optional[Literal["none", "tile", "queue"]] = None,
-    tile_size: Optional[int] = None,
-    progress: Optional[Callable[[float, float], object]] = None,
-) -> _Image: ...
+class RenderOptions(TypedDict, total=False):
+    """The keyword arguments of `render` and `render_state` (see `help(vcm_rs.render)`)."""
+
+    algo: Literal["pt", "lt", "bpt", "ppm", "bpm", "vcm"]
+    spp: int
+    time: float
+    width: int
+    height: Optional[int]
+    seed: int
+    sampler: Literal["sobol", "independent"]
+    max_depth: Optional[int]
+    connections: int
+    radius: float
+    alpha: float
+    no_prune: bool
+    backend: Literal["cpu", "gpu"]
+    spp_per_frame: Optional[int]
+    scheduler: Optional[Literal["none", "tile", "queue"]]
+    tile_size: Optional[int]
+    progress: Callable[[float, float], object]
+
+def render(scene: Scene, **options: Unpack[RenderOptions]) -> _Image: ...
 def render_state(
-    scene: Scene,
-    samples: Optional[range] = None,
-    *,
-    algo: Literal["pt", "lt", "bpt", "ppm", "bpm", "vcm"] = "vcm",
-    spp: Optional[int] = None,
-    time: Optional[float] = None,
-    width: int = 512,
-    height: Optional[int] = None,
-    seed: int = 0,
-    sampler: Literal["sobol", "independent"] = "sobol",
-    max_depth: Optional[int] = None,
-    connections: int = 1,
-    radius: float = ...,
-    alpha: float = ...,
-    no_prune: bool = False,
-    backend: Literal["cpu", "gpu"] = "cpu",
-    spp_per_frame: Optional[int] = None,
-    scheduler: Optional[Literal["none", "tile", "queue"]] = None,
-    tile_size: Optional[int] = None,
-    progress: Optional[Callable[[float, float], object]] = None,
+    scene: Scene, samples: Optional[range] = None, **options: Unpack[RenderOptions]
 ) -> RenderState: ...
 def load_state(path: _Path) -> RenderState: ...
 def write_exr(path: _Path, image: npt.NDArray[np.floating]) -> None: ...
