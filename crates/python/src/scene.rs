@@ -57,7 +57,8 @@ impl Scene {
 
     /// What the scene contains, as a dict: path, triangles, materials, textures, lights (by
     /// kind), cameras (their names), the camera rendered from, bounds, material classes,
-    /// features (textures, alpha masks, …) and the loader's warnings.
+    /// features (whether it has textures, alpha masks, normal maps, vertex colours,
+    /// absorbing volumes) and the loader's warnings.
     fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let scene = &self.data;
         let features = &scene.features;
@@ -67,17 +68,17 @@ impl Scene {
         info.set_item("dropped_triangles", scene.dropped_triangles)?;
         info.set_item("materials", scene.materials.len())?;
         info.set_item("textures", scene.textures.len())?;
-        let lights = PyDict::new(py);
         let counts = &features.lights;
-        for (kind, count) in [
-            ("area", counts.area),
-            ("point", counts.point),
-            ("spot", counts.spot),
-            ("directional", counts.directional),
-            ("environment", counts.environment),
-        ] {
-            lights.set_item(kind, count)?;
-        }
+        let lights = dict_of(
+            py,
+            [
+                ("area", counts.area),
+                ("point", counts.point),
+                ("spot", counts.spot),
+                ("directional", counts.directional),
+                ("environment", counts.environment),
+            ],
+        )?;
         info.set_item("lights", lights)?;
         let cameras: Vec<String> = scene.cameras.iter().map(ToString::to_string).collect();
         info.set_item("cameras", cameras)?;
@@ -85,26 +86,28 @@ impl Scene {
         let bounds = features.bounds;
         info.set_item("bounds", (bounds.min.to_array(), bounds.max.to_array()))?;
         let classes = &features.materials;
-        let material_classes = PyDict::new(py);
-        for (class, present) in [
-            ("diffuse", classes.diffuse),
-            ("glossy", classes.glossy),
-            ("specular", classes.specular),
-            ("near_specular", classes.near_specular),
-            ("transmission", classes.transmission),
-        ] {
-            material_classes.set_item(class, present)?;
-        }
+        let material_classes = dict_of(
+            py,
+            [
+                ("diffuse", classes.diffuse),
+                ("glossy", classes.glossy),
+                ("specular", classes.specular),
+                ("near_specular", classes.near_specular),
+                ("transmission", classes.transmission),
+            ],
+        )?;
         info.set_item("material_classes", material_classes)?;
-        for (feature, present) in [
-            ("has_textures", features.textures),
-            ("alpha_masks", features.alpha_masks),
-            ("normal_maps", features.normal_maps),
-            ("vertex_colors", features.vertex_colors),
-            ("absorbing_volumes", features.absorbing_volumes),
-        ] {
-            info.set_item(feature, present)?;
-        }
+        let present = dict_of(
+            py,
+            [
+                ("textures", features.textures),
+                ("alpha_masks", features.alpha_masks),
+                ("normal_maps", features.normal_maps),
+                ("vertex_colors", features.vertex_colors),
+                ("absorbing_volumes", features.absorbing_volumes),
+            ],
+        )?;
+        info.set_item("features", present)?;
         info.set_item("warnings", scene.warnings.clone())?;
         Ok(info)
     }
@@ -117,6 +120,18 @@ impl Scene {
             self.data.lights.len()
         )
     }
+}
+
+/// A dict of `pairs`.
+fn dict_of<'py, V: IntoPyObject<'py>>(
+    py: Python<'py>,
+    pairs: impl IntoIterator<Item = (&'static str, V)>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let dict = PyDict::new(py);
+    for (key, value) in pairs {
+        dict.set_item(key, value)?;
+    }
+    Ok(dict)
 }
 
 /// Loads a scene file (.gltf, .glb or .obj).

@@ -42,6 +42,9 @@ def test_scene_info_describes_the_scene(box, water):
     assert info["material_classes"]["diffuse"] and not info["material_classes"]["specular"]
     assert water.info()["material_classes"]["transmission"]
     assert info["cameras"] and info["camera"] is None and info["warnings"] == []
+    assert info["features"] == dict.fromkeys(
+        ["textures", "alpha_masks", "normal_maps", "vertex_colors", "absorbing_volumes"], False
+    )
     assert str(box.path).endswith("cornell-box.gltf")
 
 
