@@ -2,19 +2,9 @@
 //! non-zero exit status, `compare` reports metrics.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn vcm(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vcm"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the vcm binary runs")
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
+use crate::command::{stderr, vcm};
 
 #[test]
 fn render_writes_exr_and_png_and_compare_measures_them() {

@@ -5,6 +5,8 @@
 //! stack, so every extra file in `tests/` would add a link to `cargo test` (see issue 57).
 
 mod cli;
+mod command;
+mod experiment;
 mod gpu_backend;
 mod mitsuba_crosscheck;
 mod render_state;

@@ -3,33 +3,12 @@
 //! with the setting named, and SIGTERM or SIGHUP leave a valid image and state.
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use vcm_rs::state::RenderState;
 
-fn vcm(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vcm"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the vcm binary runs")
-}
-
-/// Runs `vcm` and fails the test with its stderr unless it succeeds.
-fn vcm_ok(args: &[&str]) -> Output {
-    let output = vcm(args);
-    assert!(output.status.success(), "vcm {args:?}: {}", stderr(&output));
-    output
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-fn arg(path: &Path) -> &str {
-    path.to_str().expect("a UTF-8 temporary path")
-}
+use crate::command::{arg, stderr, vcm, vcm_ok};
 
 fn bytes(path: &Path) -> Vec<u8> {
     std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))

@@ -6,6 +6,7 @@ mod say;
 
 mod compare;
 mod convergence;
+mod experiment;
 mod info;
 mod merge;
 mod process;
@@ -29,6 +30,10 @@ enum Command {
     /// Render a scene with several algorithms for the same time each and compare their error
     /// against a reference over time: one relMSE plot, a CSV and a throughput table.
     Convergence(convergence::ConvergenceArgs),
+    /// Render every scene of an experiment file with every run configuration for the same
+    /// time, against a reference: images, error images, CSVs, relMSE plots, an equal-time
+    /// table and a Markdown report (docs/experiments.md); resumes where it was interrupted.
+    Experiment(experiment::ExperimentArgs),
     /// Merge render states of one image (shards from `vcm render --samples A..B --state`)
     /// into an EXR, a PNG and, if asked, one state.
     Merge(merge::MergeArgs),
@@ -50,6 +55,7 @@ fn main() -> std::process::ExitCode {
         Command::Compare(args) => compare::run(&args),
         Command::Merge(args) => merge::run(&args),
         Command::Convergence(args) => convergence::run(&args),
+        Command::Experiment(args) => experiment::run(&args),
         Command::Info(args) => info::run(&args),
     };
     match result {

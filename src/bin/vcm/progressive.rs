@@ -57,6 +57,23 @@ pub struct Checkpoint {
 }
 
 impl Checkpoint {
+    /// A row written by [`Checkpoint::csv_row`] read back (`None` if it is not one).
+    pub fn from_csv_row(row: &str) -> Option<Checkpoint> {
+        let fields: Vec<&str> = row.split(',').collect();
+        let [seconds, spp, rmse, relmse, mae] = fields[..] else {
+            return None;
+        };
+        Some(Checkpoint {
+            seconds: seconds.parse().ok()?,
+            spp: spp.parse().ok()?,
+            metrics: ErrorMetrics {
+                rmse: rmse.parse().ok()?,
+                relmse: relmse.parse().ok()?,
+                mae: mae.parse().ok()?,
+            },
+        })
+    }
+
     /// `seconds,spp,rmse,relmse,mae` as a CSV row (no line break).
     pub fn csv_row(&self) -> String {
         let m = &self.metrics;

@@ -1,0 +1,536 @@
+//! `vcm experiment`: renders every scene of an experiment file with every run configuration
+//! for the same time (or sample count), measures each against a reference over time, and
+//! writes per run an EXR, a PNG, a false-colour error image and CSVs, per scene a relMSE plot,
+//! and for the whole experiment an equal-time table (CSV) and a Markdown report. A finished
+//! run is recognised by its totals file and read back instead of rendered again, so an
+//! interrupted experiment resumes where it stopped.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{Context, bail};
+use clap::Parser;
+use glam::Vec3;
+use serde::Deserialize;
+use vcm::Film;
+use vcm::image_io::{RgbImage, write_error_png};
+use vcm::metrics::relative_error_per_pixel;
+use vcm_rs::Backend;
+use vcm_rs::frames::Frames;
+use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, ScheduleOptions, image_size};
+use vcm_rs::plot::{Series, plot_relmse};
+use vcm_rs::scene::Scene;
+use vcm_rs::traversal::Traversal;
+
+use crate::progressive::{self, Budget, Checkpoint};
+use crate::render::{
+    SceneLimits, build_traversal, load_scene, relmse_points, stop_flag, write_report, write_text,
+};
+
+/// Arguments of `vcm experiment`.
+#[derive(clap::Args)]
+pub struct ExperimentArgs {
+    /// The experiment file (TOML; see docs/experiments.md).
+    file: PathBuf,
+    /// The folder for the results (default: beside the file, named after it).
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    #[command(flatten)]
+    limits: SceneLimits,
+}
+
+/// An experiment file. Paths in it are relative to its folder.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Experiment {
+    /// The report's title.
+    title: String,
+    /// Image width in pixels (the height comes from each scene's camera).
+    #[serde(default = "default_width")]
+    width: u32,
+    /// Seconds each run renders (equal time); or `spp`.
+    seconds: Option<f64>,
+    /// Samples per pixel each run renders (equal samples); or `seconds`.
+    spp: Option<u32>,
+    /// The run the speed-ups are measured against (default: the first).
+    baseline: Option<String>,
+    /// How references are made, for scenes that do not name a reference file.
+    reference: Option<ReferenceSpec>,
+    /// The scenes, each rendered by every run.
+    scenes: Vec<SceneEntry>,
+    /// The run configurations.
+    runs: Vec<Run>,
+}
+
+/// A reference rendered by the experiment (once per scene; kept in the results folder).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReferenceSpec {
+    /// Options as for a run.
+    #[serde(default)]
+    options: String,
+    /// Samples per pixel.
+    spp: u32,
+}
+
+/// A scene of the experiment.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneEntry {
+    /// The scene file.
+    path: PathBuf,
+    /// The file's camera to render from.
+    camera: Option<String>,
+    /// A reference EXR of the image size (instead of rendering one).
+    reference: Option<PathBuf>,
+}
+
+/// A run configuration: a name and `vcm render` options.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Run {
+    /// The name in tables, plots and file names.
+    name: String,
+    /// `vcm render` options: the algorithm, its options, the backend and the schedule.
+    #[serde(default)]
+    options: String,
+}
+
+fn default_width() -> u32 {
+    256
+}
+
+/// The options a run's `options` string may give.
+#[derive(Parser)]
+#[command(no_binary_name = true)]
+struct RunOptions {
+    #[arg(long, value_enum, default_value_t = Algorithm::Pt)]
+    algo: Algorithm,
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    backend: Backend,
+    #[command(flatten)]
+    integrator: IntegratorOptions,
+    #[command(flatten)]
+    schedule: ScheduleOptions,
+}
+
+/// What a finished run measured.
+struct Measured {
+    /// Samples per pixel rendered.
+    spp: u32,
+    /// Wall-clock seconds of the render loop.
+    seconds: f64,
+    /// Frames rendered.
+    frames: u32,
+    /// The error over time; the last row is the final error.
+    checkpoints: Vec<Checkpoint>,
+}
+
+/// Runs the experiment in `args.file`.
+pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
+    let file = &args.file;
+    let text = std::fs::read_to_string(file)
+        .with_context(|| format!("{}: cannot read the experiment", file.display()))?;
+    let experiment: Experiment =
+        toml::from_str(&text).with_context(|| format!("{}: not an experiment", file.display()))?;
+    let base = file.parent().unwrap_or(Path::new("."));
+    let budget = match (experiment.seconds, experiment.spp) {
+        (Some(_), Some(_)) | (None, None) => {
+            bail!("{}: give `seconds` or `spp` (one of them)", file.display())
+        }
+        (seconds, spp) => progressive::budget_from_options(spp, seconds)
+            .with_context(|| format!("{}: `seconds` or `spp`", file.display()))?,
+    };
+    let runs = parse_runs(file, &experiment.runs)?;
+    let baseline = match &experiment.baseline {
+        Some(name) => runs
+            .iter()
+            .position(|(run, _)| &run.name == name)
+            .with_context(|| format!("{}: the baseline `{name}` is not a run", file.display()))?,
+        None => 0,
+    };
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| file.with_extension(""));
+    std::fs::create_dir_all(&output)
+        .with_context(|| format!("{}: cannot create the results folder", output.display()))?;
+    let stop = stop_flag()?;
+    let mut report = report_header(&experiment, file, budget);
+    let mut table = String::from(
+        "scene,run,spp,seconds,m_samples_per_second,frames_per_second,relmse,rmse,speedup\n",
+    );
+    let total = experiment.scenes.len() * runs.len();
+    for (s, entry) in experiment.scenes.iter().enumerate() {
+        let path = base.join(&entry.path);
+        let scene = load_scene(&path, entry.camera.as_deref(), &args.limits)?;
+        let size = image_size(&scene, experiment.width, None);
+        let name = file_stem(&path);
+        let folder = output.join(&name);
+        std::fs::create_dir_all(&folder)
+            .with_context(|| format!("{}: cannot create the folder", folder.display()))?;
+        let mut traversals = Traversals::default();
+        let reference = match &entry.reference {
+            Some(file) => crate::render::read_reference(&base.join(file), size)?,
+            None => {
+                let reference = (&experiment, file.as_path());
+                reference_for(reference, &scene, &mut traversals, size, &folder, &stop)?
+            }
+        };
+        let mut results = Vec::new();
+        for (r, (run, options)) in runs.iter().enumerate() {
+            say!("[{}/{total}] {name}: {}", s * runs.len() + r + 1, run.name);
+            let setup = Setup {
+                scene: &scene,
+                traversals: &mut traversals,
+                options,
+                size,
+            };
+            let measured = measure(setup, budget, &reference, &folder, run, &stop)?;
+            if stop.is_raised() {
+                say!("interrupted: run the same command again to resume");
+                return Ok(());
+            }
+            results.push(measured);
+        }
+        let series: Vec<Series> = runs
+            .iter()
+            .zip(&results)
+            .map(|((run, _), m)| Series {
+                label: run.name.clone(),
+                points: relmse_points(&m.checkpoints),
+            })
+            .collect();
+        plot_relmse(&folder.join("relmse.png"), &name, &series)?;
+        let pixels = f64::from(size.0) * f64::from(size.1);
+        report_scene(&mut report, &name, &runs, &results, baseline, pixels);
+        for ((run, _), m) in runs.iter().zip(&results) {
+            let last = final_error(m);
+            let _ = writeln!(
+                table,
+                "{},{},{},{:.3},{:.4},{:.3},{:.6e},{:.6e},{:.3}",
+                csv_field(&name),
+                csv_field(&run.name),
+                m.spp,
+                m.seconds,
+                f64::from(m.spp) * pixels / m.seconds / 1e6,
+                f64::from(m.frames) / m.seconds,
+                last.relmse,
+                last.rmse,
+                final_error(&results[baseline]).relmse / last.relmse
+            );
+        }
+    }
+    write_text(&output.join("table.csv"), table)?;
+    write_text(&output.join("report.md"), report)?;
+    say!(
+        "wrote {} and {}",
+        output.join("report.md").display(),
+        output.join("table.csv").display()
+    );
+    Ok(())
+}
+
+/// The runs with their options parsed (as `vcm render` parses them); their names must give
+/// distinct file names.
+fn parse_runs<'a>(file: &Path, runs: &'a [Run]) -> anyhow::Result<Vec<(&'a Run, RunOptions)>> {
+    if runs.is_empty() {
+        bail!("{}: the experiment has no [[runs]]", file.display());
+    }
+    let mut parsed: Vec<(&Run, RunOptions)> = Vec::new();
+    for run in runs {
+        if parsed.iter().any(|(r, _)| slug(&r.name) == slug(&run.name)) || run.name.is_empty() {
+            bail!(
+                "{}: the run name `{}` is empty or names the files of another run",
+                file.display(),
+                run.name
+            );
+        }
+        let options = RunOptions::try_parse_from(run.options.split_whitespace())
+            .map_err(|e| anyhow::anyhow!("{}: run `{}`: {e}", file.display(), run.name))?;
+        parsed.push((run, options));
+    }
+    Ok(parsed)
+}
+
+/// The reference of `scene`: `reference.exr` in `folder` if an earlier run of the experiment
+/// rendered it, else rendered now as `[reference]` says.
+fn reference_for(
+    (experiment, file): (&Experiment, &Path),
+    scene: &Arc<Scene>,
+    traversals: &mut Traversals,
+    size: (u32, u32),
+    folder: &Path,
+    stop: &vcm::StopFlag,
+) -> anyhow::Result<Vec<Vec3>> {
+    let path = folder.join("reference.exr");
+    if path.is_file() {
+        say!(
+            "reference: {} (delete it to render it again)",
+            path.display()
+        );
+        return crate::render::read_reference(&path, size);
+    }
+    let Some(spec) = &experiment.reference else {
+        bail!(
+            "{}: {} names no reference file and there is no [reference] to render one",
+            file.display(),
+            scene.path.display()
+        );
+    };
+    let options = RunOptions::try_parse_from(spec.options.split_whitespace())
+        .map_err(|e| anyhow::anyhow!("{}: [reference]: {e}", file.display()))?;
+    say!("reference: {} spp of {}", spec.spp, options.algo.name());
+    let setup = Setup {
+        scene,
+        traversals,
+        options: &options,
+        size,
+    };
+    let (film, _) = render(setup, Budget::Samples(spec.spp), None, stop)?;
+    if stop.is_raised() {
+        bail!("interrupted while rendering the reference; nothing was written");
+    }
+    let image = film.image();
+    image.write_exr(&path)?;
+    Ok(image.pixels)
+}
+
+/// The traversal structures built for a scene so far, one per backend.
+#[derive(Default)]
+struct Traversals(Vec<(Backend, Arc<dyn Traversal>)>);
+
+impl Traversals {
+    /// The structure of `backend` for `scene`, built on first use.
+    fn get(&mut self, backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<Arc<dyn Traversal>> {
+        if let Some((_, traversal)) = self.0.iter().find(|(b, _)| *b == backend) {
+            return Ok(Arc::clone(traversal));
+        }
+        let traversal = build_traversal(backend, scene)?;
+        self.0.push((backend, Arc::clone(&traversal)));
+        Ok(traversal)
+    }
+}
+
+/// What a render of one configuration needs.
+struct Setup<'a> {
+    scene: &'a Arc<Scene>,
+    traversals: &'a mut Traversals,
+    options: &'a RunOptions,
+    size: (u32, u32),
+}
+
+/// Renders `setup` within `budget`, measuring against `reference` if given.
+fn render(
+    setup: Setup<'_>,
+    budget: Budget,
+    reference: Option<&[Vec3]>,
+    stop: &vcm::StopFlag,
+) -> anyhow::Result<(Film, progressive::Outcome)> {
+    let Setup {
+        scene,
+        traversals,
+        options,
+        size,
+    } = setup;
+    let traversal = traversals.get(options.backend, scene)?;
+    let mut integrator =
+        integrators::build(options.algo, scene, traversal, size, &options.integrator)?;
+    integrator.set_schedule(options.schedule.first_schedule_on(options.backend))?;
+    let frames = Frames::new(options.schedule, options.backend);
+    let mut film = Film::new(size.0, size.1);
+    let outcome = progressive::render(
+        integrator.as_mut(),
+        frames,
+        &mut film,
+        budget,
+        reference,
+        stop,
+        None,
+    )?;
+    Ok((film, outcome))
+}
+
+/// The measurements of `run`: read back when an earlier invocation finished it, else
+/// rendered now and written (the totals file last, so that it marks a finished run).
+fn measure(
+    setup: Setup<'_>,
+    budget: Budget,
+    reference: &[Vec3],
+    folder: &Path,
+    run: &Run,
+    stop: &vcm::StopFlag,
+) -> anyhow::Result<Measured> {
+    let name = slug(&run.name);
+    let totals = folder.join(format!("{name}.totals.csv"));
+    let report = folder.join(format!("{name}.csv"));
+    if let Some(measured) = read_back(&totals, &report) {
+        say!("  finished earlier: {}", totals.display());
+        return Ok(measured);
+    }
+    let (film, outcome) = render(setup, budget, Some(reference), stop)?;
+    let measured = Measured {
+        spp: outcome.spp,
+        seconds: outcome.seconds,
+        frames: outcome.frames.count,
+        checkpoints: outcome.checkpoints,
+    };
+    if stop.is_raised() {
+        return Ok(measured);
+    }
+    let image = film.image();
+    image.write_exr(&folder.join(format!("{name}.exr")))?;
+    image.write_png(&folder.join(format!("{name}.png")), 0.0)?;
+    write_error_image(&folder.join(format!("{name}.error.png")), &image, reference)?;
+    write_report(&report, &measured.checkpoints)?;
+    write_text(
+        &totals,
+        format!(
+            "seconds,spp,frames\n{:.6},{},{}\n",
+            measured.seconds, measured.spp, measured.frames
+        ),
+    )?;
+    Ok(measured)
+}
+
+/// The false-colour relative error of `image` against `reference`.
+fn write_error_image(path: &Path, image: &RgbImage, reference: &[Vec3]) -> anyhow::Result<()> {
+    let errors = relative_error_per_pixel(&image.pixels, reference);
+    write_error_png(path, image.width, image.height, &errors)?;
+    Ok(())
+}
+
+/// A finished run's measurements from its totals and error CSVs (`None` if either is
+/// missing or unreadable: the run is rendered again).
+fn read_back(totals: &Path, report: &Path) -> Option<Measured> {
+    let totals = std::fs::read_to_string(totals).ok()?;
+    let row: Vec<&str> = totals.lines().nth(1)?.split(',').collect();
+    let checkpoints = std::fs::read_to_string(report)
+        .ok()?
+        .lines()
+        .skip(1)
+        .map(Checkpoint::from_csv_row)
+        .collect::<Option<Vec<_>>>()?;
+    if checkpoints.is_empty() {
+        return None;
+    }
+    Some(Measured {
+        seconds: row.first()?.parse().ok()?,
+        spp: row.get(1)?.parse().ok()?,
+        frames: row.get(2)?.parse().ok()?,
+        checkpoints,
+    })
+}
+
+/// The error at the end of a run.
+fn final_error(measured: &Measured) -> vcm::metrics::ErrorMetrics {
+    measured
+        .checkpoints
+        .last()
+        .expect("a run with a reference has a final checkpoint")
+        .metrics
+}
+
+/// The report's title, machine and command.
+fn report_header(experiment: &Experiment, file: &Path, budget: Budget) -> String {
+    let each = match budget {
+        Budget::Seconds(s) => format!("{s} s"),
+        Budget::Samples(n) => format!("{n} samples per pixel"),
+    };
+    format!(
+        "# {}\n\nEach run rendered {each}, {} pixels wide, on {} ({} threads). \
+         Regenerate with `vcm experiment {}`; speed-up is the baseline's relMSE over the \
+         run's at the end (at equal time, the ratio of efficiencies).\n",
+        experiment.title,
+        experiment.width,
+        cpu_model(),
+        rayon::current_num_threads(),
+        file.display()
+    )
+}
+
+/// One scene's section: the plot, the table and the images with their error images.
+fn report_scene(
+    report: &mut String,
+    name: &str,
+    runs: &[(&Run, RunOptions)],
+    results: &[Measured],
+    baseline: usize,
+    pixels: f64,
+) {
+    let base = final_error(&results[baseline]).relmse;
+    let _ = write!(
+        report,
+        "\n## {name}\n\n![relMSE against time]({name}/relmse.png)\n\n\
+         | run | spp | M samples/s | frames/s | relMSE | RMSE | speed-up vs {} |\n\
+         | --- | --- | --- | --- | --- | --- | --- |\n",
+        runs[baseline].0.name
+    );
+    for ((run, _), m) in runs.iter().zip(results) {
+        let last = final_error(m);
+        let _ = writeln!(
+            report,
+            "| {} | {} | {:.3} | {:.2} | {:.3e} | {:.3e} | {:.2}× |",
+            run.name,
+            m.spp,
+            f64::from(m.spp) * pixels / m.seconds / 1e6,
+            f64::from(m.frames) / m.seconds,
+            last.relmse,
+            last.rmse,
+            base / last.relmse
+        );
+    }
+    let _ = writeln!(
+        report,
+        "\n| run | image | relative error |\n| --- | --- | --- |"
+    );
+    for (run, _) in runs {
+        let file = slug(&run.name);
+        let _ = writeln!(
+            report,
+            "| {} | ![]({name}/{file}.png) | ![]({name}/{file}.error.png) |",
+            run.name
+        );
+    }
+}
+
+/// The CPU's model name (from /proc/cpuinfo where there is one).
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|text| {
+            text.lines()
+                .find_map(|l| l.strip_prefix("model name"))
+                .map(|l| l.trim_start_matches([' ', '\t', ':']).to_string())
+        })
+        .unwrap_or_else(|| "an unknown CPU".into())
+}
+
+/// `text` as a CSV field: quoted (with quotes doubled) where it holds a comma or a quote.
+fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+/// A file's name without its extension.
+fn file_stem(path: &Path) -> String {
+    path.file_stem()
+        .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
+}
+
+/// `name` as a file name: letters, digits, `-` and `_`, the rest as `-`.
+fn slug(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect()
+}

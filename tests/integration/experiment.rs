@@ -1,0 +1,114 @@
+//! `vcm experiment`: an experiment file rendered into images, CSVs, plots, a table and a
+//! report; finished runs are read back rather than rendered again; bad files are named.
+
+use std::path::Path;
+
+use crate::command::{arg, stderr, vcm, vcm_ok};
+
+/// An experiment of two runs on the Cornell box at 24 pixels wide, `budget` each, with a
+/// rendered reference; the scene path is absolute so the file may live anywhere.
+fn experiment(budget: &str) -> String {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.gltf");
+    format!(
+        r#"title = "Two runs"
+width = 24
+{budget}
+baseline = "vcm"
+
+[reference]
+options = "--algo pt --seed 99"
+spp = 16
+
+[[scenes]]
+path = "{}"
+
+[[runs]]
+name = "pt, 1 sample"
+options = "--algo pt"
+
+[[runs]]
+name = "vcm"
+options = "--algo vcm --connections 2"
+"#,
+        scene.display()
+    )
+}
+
+#[test]
+fn an_experiment_writes_its_results_and_resumes_finished_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("two.toml");
+    std::fs::write(&file, experiment("spp = 3")).unwrap();
+    vcm_ok(&["experiment", arg(&file)]);
+    let results = dir.path().join("two");
+    let scene = results.join("cornell-box");
+    for name in [
+        "reference.exr",
+        "relmse.png",
+        "pt--1-sample.exr",
+        "pt--1-sample.png",
+        "pt--1-sample.error.png",
+        "pt--1-sample.csv",
+        "vcm.totals.csv",
+    ] {
+        assert!(scene.join(name).is_file(), "{name} is missing");
+    }
+    let table = std::fs::read_to_string(results.join("table.csv")).unwrap();
+    let rows: Vec<&str> = table.lines().collect();
+    assert_eq!(rows.len(), 3, "{table}");
+    assert!(
+        rows[1].starts_with("cornell-box,\"pt, 1 sample\",3,"),
+        "{table}"
+    );
+    // The baseline's speed-up is 1.
+    assert!(rows[2].starts_with("cornell-box,vcm,3,") && rows[2].ends_with(",1.000"));
+    let report = std::fs::read_to_string(results.join("report.md")).unwrap();
+    assert!(report.contains("# Two runs") && report.contains("speed-up vs vcm"));
+    assert!(
+        report.contains("![](cornell-box/vcm.error.png)"),
+        "{report}"
+    );
+
+    // Run again with one run's totals gone: only that run is rendered.
+    std::fs::remove_file(scene.join("vcm.totals.csv")).unwrap();
+    let again = vcm_ok(&["experiment", arg(&file)]);
+    let said = String::from_utf8_lossy(&again.stdout);
+    assert!(said.contains("finished earlier"), "{said}");
+    assert_eq!(said.matches("finished earlier").count(), 1, "{said}");
+    assert!(scene.join("vcm.totals.csv").is_file());
+}
+
+#[test]
+fn bad_experiment_files_are_named_with_the_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            experiment("spp = 2\nseconds = 1"),
+            "give `seconds` or `spp`",
+        ),
+        (experiment("colour = 3\nspp = 2"), "colour"),
+        (
+            experiment("spp = 2").replace("--connections 2", "--connections two"),
+            "run `vcm`",
+        ),
+        (
+            experiment("spp = 2").replace("baseline = \"vcm\"", "baseline = \"mlt\""),
+            "the baseline `mlt` is not a run",
+        ),
+        (
+            experiment("spp = 2").replace("name = \"vcm\"", "name = \"pt, 1 sample\""),
+            "names the files of another run",
+        ),
+    ];
+    for (text, expected) in cases {
+        let file = dir.path().join("bad.toml");
+        std::fs::write(&file, &text).unwrap();
+        let output = vcm(&["experiment", arg(&file)]);
+        let message = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{message}");
+        assert!(
+            message.contains("bad.toml") && message.contains(expected),
+            "{expected}: {message}"
+        );
+    }
+}
