@@ -76,6 +76,13 @@ fn an_experiment_writes_its_results_and_resumes_finished_runs() {
     assert!(said.contains("finished earlier"), "{said}");
     assert_eq!(said.matches("finished earlier").count(), 1, "{said}");
     assert!(scene.join("vcm.totals.csv").is_file());
+
+    // Everything finished: the report is written again without a reference.
+    std::fs::remove_file(scene.join("reference.exr")).unwrap();
+    std::fs::remove_file(results.join("report.md")).unwrap();
+    vcm_ok(&["experiment", arg(&file)]);
+    assert!(results.join("report.md").is_file());
+    assert!(!scene.join("reference.exr").exists());
 }
 
 #[test]

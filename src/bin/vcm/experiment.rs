@@ -171,23 +171,32 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         std::fs::create_dir_all(&folder)
             .with_context(|| format!("{}: cannot create the folder", folder.display()))?;
         let mut traversals = Traversals::default();
-        let reference = match &entry.reference {
-            Some(file) => crate::render::read_reference(&base.join(file), size)?,
-            None => {
-                let reference = (&experiment, file.as_path());
-                reference_for(reference, &scene, &mut traversals, size, &folder, &stop)?
-            }
-        };
+        // Loaded or rendered when the first run that is not finished needs it.
+        let mut reference: Option<Vec<Vec3>> = None;
         let mut results = Vec::new();
         for (r, (run, options)) in runs.iter().enumerate() {
             say!("[{}/{total}] {name}: {}", s * runs.len() + r + 1, run.name);
+            if let Some(measured) = finished(&folder, run) {
+                results.push(measured);
+                continue;
+            }
+            let reference: &[Vec3] = match &mut reference {
+                Some(reference) => reference,
+                None => reference.insert(match &entry.reference {
+                    Some(file) => crate::render::read_reference(&base.join(file), size)?,
+                    None => {
+                        let spec = (&experiment, file.as_path());
+                        reference_for(spec, &scene, &mut traversals, size, &folder, &stop)?
+                    }
+                }),
+            };
             let setup = Setup {
                 scene: &scene,
                 traversals: &mut traversals,
                 options,
                 size,
             };
-            let measured = measure(setup, budget, &reference, &folder, run, &stop)?;
+            let measured = measure(setup, budget, reference, &folder, run, &stop)?;
             if stop.is_raised() {
                 say!("interrupted: run the same command again to resume");
                 return Ok(());
@@ -352,8 +361,17 @@ fn render(
     Ok((film, outcome))
 }
 
-/// The measurements of `run`: read back when an earlier invocation finished it, else
-/// rendered now and written (the totals file last, so that it marks a finished run).
+/// The measurements of `run` if an earlier invocation finished it (its totals file exists).
+fn finished(folder: &Path, run: &Run) -> Option<Measured> {
+    let name = slug(&run.name);
+    let totals = folder.join(format!("{name}.totals.csv"));
+    let measured = read_back(&totals, &folder.join(format!("{name}.csv")))?;
+    say!("  finished earlier: {}", totals.display());
+    Some(measured)
+}
+
+/// Renders `run` and writes its results (the totals file last, so that it marks a finished
+/// run); what it measured.
 fn measure(
     setup: Setup<'_>,
     budget: Budget,
@@ -365,10 +383,6 @@ fn measure(
     let name = slug(&run.name);
     let totals = folder.join(format!("{name}.totals.csv"));
     let report = folder.join(format!("{name}.csv"));
-    if let Some(measured) = read_back(&totals, &report) {
-        say!("  finished earlier: {}", totals.display());
-        return Ok(measured);
-    }
     let (film, outcome) = render(setup, budget, Some(reference), stop)?;
     let measured = Measured {
         spp: outcome.spp,
