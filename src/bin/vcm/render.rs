@@ -541,7 +541,7 @@ pub fn load_scene(
     Ok(Arc::new(scene))
 }
 
-/// Reads a reference EXR and checks that it has the render's size.
+/// Reads a reference EXR and checks that it has the render's size and finite pixels.
 pub fn read_reference(path: &Path, (width, height): (u32, u32)) -> anyhow::Result<Vec<Vec3>> {
     let image = RgbImage::read_exr(path)?;
     if (image.width, image.height) != (width as usize, height as usize) {
@@ -552,6 +552,7 @@ pub fn read_reference(path: &Path, (width, height): (u32, u32)) -> anyhow::Resul
             image.height
         );
     }
+    crate::compare::check_finite(path, &image.pixels)?;
     Ok(image.pixels)
 }
 
