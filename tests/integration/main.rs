@@ -6,6 +6,8 @@
 
 mod cli;
 mod gpu_backend;
+#[cfg(target_os = "linux")]
+mod hostile;
 mod mitsuba_crosscheck;
 mod render_state;
 mod scenes;
