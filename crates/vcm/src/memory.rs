@@ -121,37 +121,52 @@ impl AvailableMemory {
 /// A render whose estimated memory exceeds what is available.
 #[derive(Clone, Debug, PartialEq, Eq, Error)]
 #[error(
-    "the render needs about {} ({estimate}), more than the {} available ({})",
+    "the render needs about {} ({estimate}), more than the {} available ({}){}",
     Bytes(estimate.total()),
     Bytes(available.bytes),
-    available.limit
+    available.limit,
+    held_already(*held)
 )]
 pub struct MemoryShortfall {
     /// The render's estimated memory.
     pub estimate: MemoryEstimate,
     /// What was available.
     pub available: AvailableMemory,
+    /// Bytes of the estimate the render has allocated already (a frame of another schedule
+    /// and its film, which a new one reuses): they need no room of their own.
+    pub held: u64,
     /// The setting to lower: the first of the samples per frame, the connections and the
     /// scheduler whose default would bring the estimate within the budget, else the image
     /// size.
     pub cause: MemoryCause,
 }
 
+/// " and the … it holds already", for the bytes a render holds (nothing for none).
+fn held_already(held: u64) -> String {
+    if held == 0 {
+        String::new()
+    } else {
+        format!(" and the {} it holds already", Bytes(held))
+    }
+}
+
 /// Checks the estimate `estimate` gives for the settings asked for (`estimate(None)`)
-/// against `available` (`None`: nothing to check against). Over budget, the cause is the
-/// first setting whose default alone (`estimate(Some(cause))`, `None` where the setting is
-/// at its default already) would fit.
+/// against `available` (`None`: nothing to check against) and the `held` bytes the render
+/// holds already. Over budget, the cause is the first setting whose default alone
+/// (`estimate(Some(cause))`, `None` where the setting is at its default already) would fit.
 pub fn check_budget(
     estimate: impl Fn(Option<MemoryCause>) -> Option<MemoryEstimate>,
     available: Option<AvailableMemory>,
+    held: u64,
 ) -> Result<(), MemoryShortfall> {
     let (Some(available), Some(asked)) = (available, estimate(None)) else {
         return Ok(());
     };
-    if asked.total() <= available.bytes {
+    let budget = available.bytes.saturating_add(held);
+    if asked.total() <= budget {
         return Ok(());
     }
-    let fits = |cause| estimate(Some(cause)).is_some_and(|e| e.total() <= available.bytes);
+    let fits = |cause| estimate(Some(cause)).is_some_and(|e| e.total() <= budget);
     let cause = [
         MemoryCause::SamplesPerFrame,
         MemoryCause::Connections,
@@ -163,18 +178,23 @@ pub fn check_budget(
     Err(MemoryShortfall {
         estimate: asked,
         available,
+        held,
         cause,
     })
 }
 
 /// Checks a render's memory with `schedule` and `connections` per camera vertex (1 for
 /// integrators without connections) against what this process may allocate; `estimate`
-/// gives the bytes for any schedule and connections.
+/// gives the bytes for any schedule and connections. `current` is the schedule of a frame
+/// rendered already (`None` before the first): its buffers and film were allocated, so only
+/// the growth beyond them needs room.
 pub(crate) fn check_render(
     schedule: Schedule,
     connections: u32,
+    current: Option<Schedule>,
     estimate: impl Fn(Schedule, u32) -> MemoryEstimate,
 ) -> Result<(), MemoryShortfall> {
+    let held = current.map_or(0, |current| estimate(current, connections).total());
     let at_default = |cause| {
         let (mut schedule, mut connections) = (schedule, connections);
         match cause {
@@ -190,7 +210,7 @@ pub(crate) fn check_render(
         }
         Some(estimate(schedule, connections))
     };
-    check_budget(at_default, AvailableMemory::of_this_process())
+    check_budget(at_default, AvailableMemory::of_this_process(), held)
 }
 
 /// Bytes of `count` values of `T`, saturating.
@@ -310,15 +330,20 @@ mod tests {
 
     #[test]
     fn a_render_within_the_budget_passes() {
-        assert_eq!(check_budget(estimate(1, 1), available(3 * GIB)), Ok(()));
+        assert_eq!(check_budget(estimate(1, 1), available(3 * GIB), 0), Ok(()));
         // Nothing to check against.
-        assert_eq!(check_budget(estimate(100, 100), None), Ok(()));
+        assert_eq!(check_budget(estimate(100, 100), None, 0), Ok(()));
+        // What the render holds already needs no room of its own.
+        assert_eq!(
+            check_budget(estimate(2, 1), available(GIB), 3 * GIB),
+            Ok(())
+        );
     }
 
     #[test]
     fn a_render_over_the_budget_names_the_setting_to_lower() {
         let over = |samples, connections, bytes| {
-            check_budget(estimate(samples, connections), available(bytes)).unwrap_err()
+            check_budget(estimate(samples, connections), available(bytes), 0).unwrap_err()
         };
         let samples = over(100, 1, 4 * GIB);
         assert_eq!(samples.cause, MemoryCause::SamplesPerFrame);
@@ -327,6 +352,13 @@ mod tests {
         // Neither default alone fits: the image size is what is left to lower.
         assert_eq!(over(100, 100, 4 * GIB).cause, MemoryCause::ImageSize);
         assert_eq!(over(1, 1, 2 * GIB).cause, MemoryCause::ImageSize);
+        let held = check_budget(estimate(100, 1), available(GIB), 3 * GIB).unwrap_err();
+        assert_eq!(held.cause, MemoryCause::SamplesPerFrame);
+        assert!(
+            held.to_string()
+                .ends_with("available (test) and the 3.0 GiB it holds already"),
+            "{held}"
+        );
         assert_eq!(
             over(100, 1, 4 * GIB).to_string(),
             "the render needs about 102.0 GiB (outputs 100.0 GiB, film 1.0 GiB, shadow rays \

@@ -62,6 +62,9 @@ pub struct PathTracer {
     /// Shading in SIMD lanes at plain Lambert vertices, or why the scene allows none.
     lambert_lanes: Result<LambertLanes, &'static str>,
     schedule: Schedule,
+    /// The schedule of the last frame rendered: its buffers, and the film it rendered into,
+    /// have been allocated (`None` before the first frame).
+    last_frame: Option<Schedule>,
     last_schedule_stats: SchedulerStats,
     /// Raised to end the frame in progress early ([`Integrator::set_stop`]).
     stop: StopFlag,
@@ -83,10 +86,11 @@ impl PathTracer {
             traversal,
             settings,
             schedule: Schedule::default(),
+            last_frame: None,
             last_schedule_stats: SchedulerStats::default(),
             stop: StopFlag::new(),
         };
-        tracer.check_memory(tracer.schedule)?;
+        tracer.check_memory(tracer.schedule, None)?;
         Ok(tracer)
     }
 
@@ -114,9 +118,14 @@ impl PathTracer {
             )
     }
 
-    /// Fails when a frame with `schedule` would need more memory than is available.
-    fn check_memory(&self, schedule: Schedule) -> Result<(), RenderError> {
-        Ok(check_render(schedule, 1, |schedule, _| {
+    /// Fails when a frame with `schedule` would need more memory than is available, past
+    /// what a frame with the `current` schedule allocated already.
+    fn check_memory(
+        &self,
+        schedule: Schedule,
+        current: Option<Schedule>,
+    ) -> Result<(), RenderError> {
+        Ok(check_render(schedule, 1, current, |schedule, _| {
             self.memory_estimate(schedule)
         })?)
     }
@@ -142,6 +151,7 @@ impl Integrator for PathTracer {
             (width, height),
             "film size differs from the settings"
         );
+        self.last_frame = Some(self.schedule);
         let samples = self.schedule.samples_per_frame;
         let new_wavefront = || PtWavefront {
             scene: &self.scene,
@@ -198,7 +208,7 @@ impl Integrator for PathTracer {
     /// Checks that frames with `schedule` fit the available memory, then renders with it.
     fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
         let schedule = schedule.validated()?;
-        self.check_memory(schedule)?;
+        self.check_memory(schedule, self.last_frame)?;
         self.schedule = schedule;
         Ok(())
     }

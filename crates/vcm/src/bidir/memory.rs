@@ -56,11 +56,17 @@ impl Vcm {
             .with("hash grids", grids)
     }
 
-    /// Fails when a frame with `schedule` would need more memory than is available.
-    pub(super) fn check_memory(&self, schedule: Schedule) -> Result<(), RenderError> {
+    /// Fails when a frame with `schedule` would need more memory than is available, past
+    /// what a frame with the `current` schedule allocated already.
+    pub(super) fn check_memory(
+        &self,
+        schedule: Schedule,
+        current: Option<Schedule>,
+    ) -> Result<(), RenderError> {
         Ok(check_render(
             schedule,
             self.settings.connections,
+            current,
             |schedule, connections| self.memory_estimate(schedule, connections),
         )?)
     }

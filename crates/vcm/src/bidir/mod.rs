@@ -202,6 +202,9 @@ pub struct Vcm {
     plan: BidirPlan,
     base_radius: f32,
     schedule: Schedule,
+    /// The schedule of the last frame rendered: its buffers, and the film it rendered into,
+    /// have been allocated (`None` before the first frame).
+    last_frame: Option<Schedule>,
     /// Capacity of each iteration's cache, from the preprocess (0 without a cache).
     cache_capacity: usize,
     /// One light vertex cache per sample of a frame.
@@ -254,6 +257,7 @@ impl Vcm {
             plan,
             base_radius,
             schedule: Schedule::default(),
+            last_frame: None,
             cache_capacity: 0,
             caches: Vec::new(),
             grids: Vec::new(),
@@ -263,7 +267,7 @@ impl Vcm {
         if plan.cache {
             vcm.cache_capacity = vcm.estimate_cache_capacity();
         }
-        vcm.check_memory(vcm.schedule)?;
+        vcm.check_memory(vcm.schedule, None)?;
         vcm.size_buffers();
         Ok(vcm)
     }
@@ -373,6 +377,7 @@ impl Integrator for Vcm {
             "film size differs from the settings"
         );
         let start = Instant::now();
+        self.last_frame = Some(self.schedule);
         let mut stats = FrameStats::default();
         let scheduler = self.schedule.scheduler;
         let mut caches = std::mem::take(&mut self.caches);
@@ -461,7 +466,7 @@ impl Integrator for Vcm {
     /// Checks that frames with `schedule` fit the available memory first.
     fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
         let schedule = schedule.validated()?;
-        self.check_memory(schedule)?;
+        self.check_memory(schedule, self.last_frame)?;
         self.schedule = schedule;
         self.size_buffers();
         Ok(())
