@@ -81,8 +81,9 @@ pub struct IntegratorOptions {
     /// Russian roulette.
     #[arg(long)]
     pub max_depth: Option<u32>,
-    /// Light vertices each camera vertex connects to (bpt, vcm).
-    #[arg(long, default_value_t = 1)]
+    /// Light vertices each camera vertex connects to (bpt, vcm; 1 to 1024).
+    #[arg(long, default_value_t = 1,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(vcm::MAX_CONNECTIONS)))]
     pub connections: u32,
     /// Initial merge radius as a fraction of the scene's bounding-sphere radius (ppm, bpm, vcm).
     #[arg(long, default_value_t = DEFAULT_RADIUS_FRACTION, allow_negative_numbers = true)]
@@ -191,9 +192,11 @@ impl ScheduleOptions {
     }
 
     /// The schedule of the first frame on `backend` (what an integrator is set up with, which
-    /// also checks the options).
-    pub fn first_schedule_on(&self, backend: Backend) -> Schedule {
-        self.schedule_on(backend, self.frame_sizes(backend).first())
+    /// also checks the options and the memory they need), of at most `samples_left` samples
+    /// per pixel where a render has no more to do: a frame never renders past it.
+    pub fn first_schedule_on(&self, backend: Backend, samples_left: Option<u32>) -> Schedule {
+        let first = self.frame_sizes(backend).first();
+        self.schedule_on(backend, samples_left.map_or(first, |left| first.min(left)))
     }
 
     /// How frames are sized on `backend`: `--spp-per-frame` in every frame where given, else
@@ -310,5 +313,17 @@ mod tests {
         for backend in Backend::ALL {
             assert_eq!(four.frame_sizes(*backend), FrameSizes::Fixed(4));
         }
+    }
+
+    #[test]
+    fn the_first_frame_never_renders_past_the_samples_left() {
+        let many = ScheduleOptions {
+            spp_per_frame: Some(100_000),
+            ..ScheduleOptions::default()
+        };
+        let first = |left| many.first_schedule_on(Backend::Cpu, left).samples_per_frame;
+        assert_eq!(first(Some(1)), 1);
+        assert_eq!(first(Some(300_000)), 100_000);
+        assert_eq!(first(None), 100_000);
     }
 }

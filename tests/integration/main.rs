@@ -8,6 +8,8 @@ mod cli;
 mod command;
 mod experiment;
 mod gpu_backend;
+#[cfg(target_os = "linux")]
+mod hostile;
 mod mitsuba_crosscheck;
 mod render_state;
 mod scenes;

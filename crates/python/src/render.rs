@@ -3,6 +3,7 @@
 
 use std::ops::Range;
 use std::sync::Mutex;
+use std::time::Duration;
 
 use numpy::PyArray3;
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -137,6 +138,7 @@ fn run(
 ) -> PyResult<(Film, u32)> {
     let settings = &request.settings;
     let size = (settings.width, settings.height);
+    let samples_left = budget.remaining(0, Duration::ZERO).samples;
     let traversal = py
         .detach(|| scene.traversal(request.backend))
         .map_err(vcm_error)?;
@@ -149,7 +151,11 @@ fn run(
     )
     .map_err(|e| PyValueError::new_err(e.to_string()))?;
     integrator
-        .set_schedule(request.schedule.first_schedule_on(request.backend))
+        .set_schedule(
+            request
+                .schedule
+                .first_schedule_on(request.backend, samples_left),
+        )
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let mut frames = Frames::new(request.schedule, request.backend).starting_at(first);
     let stop = StopFlag::new();

@@ -58,6 +58,32 @@ impl Scheduler {
     pub fn default_queues() -> usize {
         rayon::current_num_threads().max(1) + 1
     }
+
+    /// The most paths a pass over a `width × height` image with `samples` paths per pixel
+    /// holds at once on the caller's rayon pool (an upper bound, for memory budgets): every
+    /// wavefront with a full tile and the paths below which it merges in the next one, and
+    /// never more than the whole image.
+    pub fn most_paths_in_flight(&self, (width, height): (u32, u32), samples: u32) -> u64 {
+        let all = u64::from(width) * u64::from(height) * u64::from(samples);
+        let (size, merge_below, wavefronts) = match *self {
+            Scheduler::None => return all,
+            Scheduler::Tile { size, merge_below } => {
+                (size, merge_below, rayon::current_num_threads())
+            }
+            Scheduler::Queue {
+                queues,
+                size,
+                merge_below,
+            } => (size, merge_below, queues),
+        };
+        let tile = u64::from(size).saturating_mul(u64::from(size));
+        // As `TileCounter::merge_at` computes it; a float cast saturates.
+        let merge_at = (f64::from(merge_below.max(0.0)) * tile as f64) as u64;
+        let per_wavefront = merge_at.saturating_add(tile.saturating_mul(u64::from(samples)));
+        per_wavefront
+            .saturating_mul(wavefronts.max(1) as u64)
+            .min(all)
+    }
 }
 
 impl Default for Scheduler {

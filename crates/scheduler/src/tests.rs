@@ -504,3 +504,59 @@ impl Wavefront for StopAfterShading {
         self.0.finish()
     }
 }
+
+#[test]
+fn the_paths_in_flight_stay_within_the_bound_for_memory_budgets() {
+    let schedulers = [
+        Scheduler::None,
+        Scheduler::Tile {
+            size: 4,
+            merge_below: 0.5,
+        },
+        Scheduler::Tile {
+            size: 3,
+            merge_below: 0.9,
+        },
+        Scheduler::Queue {
+            queues: 2,
+            size: 4,
+            merge_below: 0.5,
+        },
+    ];
+    for scheduler in schedulers {
+        pool(2).install(|| {
+            let bound = scheduler.most_paths_in_flight((13, 7), 1);
+            let traversal = FakeTraversal::new(None);
+            let new_wave = || FakeWave::new(13, None);
+            let (_, stats) = run(scheduler, (13, 7), &traversal, &StopFlag::new(), new_wave);
+            assert!(
+                stats.peak_paths as u64 <= bound,
+                "{scheduler:?}: {} paths in flight, bound {bound}",
+                stats.peak_paths
+            );
+        });
+    }
+    // Two workers, each with a tile of 16 paths and the 8 below which it merges the next.
+    let tiles = Scheduler::Tile {
+        size: 4,
+        merge_below: 0.5,
+    };
+    assert_eq!(
+        pool(2).install(|| tiles.most_paths_in_flight((100, 100), 1)),
+        48
+    );
+    // Three queues of 2 × 64 paths and 32 more.
+    let queues = Scheduler::Queue {
+        queues: 3,
+        size: 8,
+        merge_below: 0.5,
+    };
+    assert_eq!(queues.most_paths_in_flight((100, 100), 2), 480);
+    // Never more than the whole image, however large the tiles.
+    assert_eq!(Scheduler::None.most_paths_in_flight((13, 7), 3), 273);
+    let huge = Scheduler::Tile {
+        size: u32::MAX,
+        merge_below: 1e30,
+    };
+    assert_eq!(huge.most_paths_in_flight((13, 7), 1), 91);
+}

@@ -36,6 +36,9 @@ pub struct RayBatch {
 }
 
 impl RayBatch {
+    /// Bytes each ray takes in a batch: its eight `f32` fields.
+    pub const BYTES_PER_RAY: usize = 8 * size_of::<f32>();
+
     /// Bytes allocated for the batch's arrays (their capacity, not just their length).
     pub fn memory_bytes(&self) -> usize {
         self.arrays().map(Vec::capacity).iter().sum::<usize>() * size_of::<f32>()
@@ -203,6 +206,9 @@ pub struct HitBatch {
 }
 
 impl HitBatch {
+    /// Bytes each hit takes in a batch: `t`, `u` and `v` and the primitive.
+    pub const BYTES_PER_HIT: usize = 3 * size_of::<f32>() + size_of::<u32>();
+
     /// Bytes allocated for the batch's arrays (their capacity, not just their length).
     pub fn memory_bytes(&self) -> usize {
         (self.t.capacity() + self.u.capacity() + self.v.capacity()) * size_of::<f32>()

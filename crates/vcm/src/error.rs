@@ -2,6 +2,8 @@
 
 use thiserror::Error;
 
+use crate::memory::MemoryShortfall;
+
 /// Settings an integrator cannot render with.
 #[derive(Debug, Error, Clone, PartialEq, Eq)]
 pub enum RenderError {
@@ -24,4 +26,7 @@ pub enum RenderError {
     /// A setting outside its valid range.
     #[error("invalid setting: {0}")]
     InvalidSetting(String),
+    /// The render's largest buffers would need more memory than the process may allocate.
+    #[error(transparent)]
+    OutOfMemory(#[from] MemoryShortfall),
 }

@@ -31,6 +31,9 @@ pub struct Film {
 }
 
 impl Film {
+    /// Bytes a film holds per pixel: its exact RGB sums and its sample count.
+    pub const BYTES_PER_PIXEL: u64 = (size_of::<PixelSum>() + size_of::<u64>()) as u64;
+
     /// An empty film of `width` × `height` pixels.
     pub fn new(width: u32, height: u32) -> Film {
         let pixels = width as usize * height as usize;

@@ -68,6 +68,15 @@ struct Entry {
 }
 
 impl HashGrid {
+    /// The most bytes building a grid over `points` points holds at once: the points
+    /// themselves, each point's bucket, slot and index, the entries, and three lists over
+    /// the buckets (up to twice as many as points).
+    pub fn bytes_to_build(points: u64) -> u64 {
+        let per_point = size_of::<Vec3>() + 3 * size_of::<u32>() + size_of::<Entry>();
+        let per_bucket = 3 * size_of::<u32>();
+        points.saturating_mul((per_point + 2 * per_bucket) as u64)
+    }
+
     /// Builds the grid over `points` for queries of radius `radius` (> 0).
     ///
     /// Panics if there are 2³² or more points.

@@ -89,6 +89,14 @@ impl Schedule {
             Scheduler::Queue { queues: 0, .. } => Err(RenderError::InvalidSetting(
                 "the queue scheduler needs at least 1 queue".into(),
             )),
+            Scheduler::Tile { merge_below, .. } | Scheduler::Queue { merge_below, .. }
+                if !(0.0..=1.0).contains(&merge_below) =>
+            {
+                Err(RenderError::InvalidSetting(format!(
+                    "the tile merge threshold must be a fraction from 0 to 1 (asked for \
+                     {merge_below})"
+                )))
+            }
             _ => Ok(self),
         }
     }

@@ -55,6 +55,7 @@ mod lambert;
 mod lanes;
 pub mod light_vertex_cache;
 mod medium;
+pub mod memory;
 pub mod metrics;
 mod path_state;
 mod path_tracer;
@@ -66,7 +67,9 @@ mod shadow;
 mod surface_hit;
 mod wave;
 
-pub use bidir::{Algorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Vcm, VcmSettings};
+pub use bidir::{
+    Algorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, MAX_CONNECTIONS, Vcm, VcmSettings,
+};
 pub use error::RenderError;
 pub use film::{Film, FilmBand, PixelSum, rounded_sum};
 pub use integrator::{FrameStats, Integrator, Schedule};

@@ -18,7 +18,8 @@ pub struct ErrorMetrics {
 }
 
 /// Compares `image` with `reference` (same pixel order). `None` when their sizes differ or
-/// they are empty.
+/// they are empty. A non-finite channel in either makes the metrics NaN or infinite: check
+/// both with [`non_finite_pixels`] first.
 pub fn compare(image: &[Vec3], reference: &[Vec3]) -> Option<ErrorMetrics> {
     if image.len() != reference.len() || image.is_empty() {
         return None;
@@ -39,6 +40,11 @@ pub fn compare(image: &[Vec3], reference: &[Vec3]) -> Option<ErrorMetrics> {
         relmse: relative / n,
         mae: absolute / n,
     })
+}
+
+/// The pixels of `pixels` with a NaN or infinite channel.
+pub fn non_finite_pixels(pixels: &[Vec3]) -> usize {
+    pixels.iter().filter(|p| !p.is_finite()).count()
 }
 
 /// Per-pixel relative squared error (mean over channels), for false-colour error images.
@@ -77,5 +83,17 @@ mod tests {
         assert_eq!((zero.rmse, zero.relmse, zero.mae), (0.0, 0.0, 0.0));
         let per_pixel = relative_error_per_pixel(&image, &reference);
         assert!((per_pixel[1] - 1.0 / 3.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn non_finite_pixels_are_counted_once_each() {
+        let pixels = [
+            Vec3::ONE,
+            Vec3::new(f32::NAN, 0.0, f32::NAN),
+            Vec3::new(0.0, f32::INFINITY, 0.0),
+            Vec3::splat(f32::MAX),
+        ];
+        assert_eq!(non_finite_pixels(&pixels), 2);
+        assert_eq!(non_finite_pixels(&pixels[3..]), 0);
     }
 }

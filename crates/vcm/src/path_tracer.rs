@@ -16,6 +16,7 @@ use crate::film::Film;
 use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
 use crate::lambert::path_tracing::LambertShading;
 use crate::lambert::{LANES_PART, LANES_RUN, LambertLanes};
+use crate::memory::{MemoryEstimate, bytes_of, check_render};
 use crate::path_state::{PathState, ShadowRay};
 use crate::shade::{ShadeContext, shade, vertex_sampler};
 use crate::surface_hit::SurfaceHit;
@@ -61,6 +62,9 @@ pub struct PathTracer {
     /// Shading in SIMD lanes at plain Lambert vertices, or why the scene allows none.
     lambert_lanes: Result<LambertLanes, &'static str>,
     schedule: Schedule,
+    /// The schedule of the last frame rendered: its buffers, and the film it rendered into,
+    /// have been allocated (`None` before the first frame).
+    last_frame: Option<Schedule>,
     last_schedule_stats: SchedulerStats,
     /// Raised to end the frame in progress early ([`Integrator::set_stop`]).
     stop: StopFlag,
@@ -76,15 +80,54 @@ impl PathTracer {
         settings: PtSettings,
     ) -> Result<PathTracer, RenderError> {
         check_image_size(settings.width, settings.height)?;
-        Ok(PathTracer {
+        let tracer = PathTracer {
             lambert_lanes: LambertLanes::for_scene(&scene),
             scene,
             traversal,
             settings,
             schedule: Schedule::default(),
+            last_frame: None,
             last_schedule_stats: SchedulerStats::default(),
             stop: StopFlag::new(),
-        })
+        };
+        tracer.check_memory(tracer.schedule, None)?;
+        Ok(tracer)
+    }
+
+    /// Estimates the memory of a frame with `schedule`, the film it renders into included:
+    /// the paths in flight with their rays, hits and shadow rays, and the frame's radiance
+    /// samples (twice over with several samples per pixel, which are sorted into a copy).
+    fn memory_estimate(&self, schedule: Schedule) -> MemoryEstimate {
+        let PtSettings { width, height, .. } = self.settings;
+        let samples = schedule.samples_per_frame;
+        let pixels = u64::from(width) * u64::from(height);
+        let paths = schedule
+            .scheduler
+            .most_paths_in_flight((width, height), samples);
+        let per_path = size_of::<PathState>()
+            + 2 * RayBatch::BYTES_PER_RAY
+            + HitBatch::BYTES_PER_HIT
+            + size_of::<bool>();
+        let copies = if samples > 1 { 2 } else { 1 };
+        MemoryEstimate::default()
+            .with("film", pixels.saturating_mul(Film::BYTES_PER_PIXEL))
+            .with("paths in flight", paths.saturating_mul(per_path as u64))
+            .with(
+                "radiance samples",
+                copies * bytes_of::<(u64, Vec3)>(pixels * u64::from(samples)),
+            )
+    }
+
+    /// Fails when a frame with `schedule` would need more memory than is available, past
+    /// what a frame with the `current` schedule allocated already.
+    fn check_memory(
+        &self,
+        schedule: Schedule,
+        current: Option<Schedule>,
+    ) -> Result<(), RenderError> {
+        Ok(check_render(schedule, 1, current, |schedule, _| {
+            self.memory_estimate(schedule)
+        })?)
     }
 
     /// The settings this tracer renders with.
@@ -108,6 +151,7 @@ impl Integrator for PathTracer {
             (width, height),
             "film size differs from the settings"
         );
+        self.last_frame = Some(self.schedule);
         let samples = self.schedule.samples_per_frame;
         let new_wavefront = || PtWavefront {
             scene: &self.scene,
@@ -161,8 +205,11 @@ impl Integrator for PathTracer {
         (self.settings.width, self.settings.height)
     }
 
+    /// Checks that frames with `schedule` fit the available memory, then renders with it.
     fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
-        self.schedule = schedule.validated()?;
+        let schedule = schedule.validated()?;
+        self.check_memory(schedule, self.last_frame)?;
+        self.schedule = schedule;
         Ok(())
     }
 

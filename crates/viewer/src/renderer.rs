@@ -236,7 +236,7 @@ impl Worker {
             &settings.integrator,
         )
         .map_err(|e| format!("cannot start {name}: {e}"))?;
-        let schedule = settings.schedule.first_schedule_on(settings.backend);
+        let schedule = settings.schedule.first_schedule_on(settings.backend, None);
         integrator
             .set_schedule(schedule)
             .map_err(|e| format!("cannot schedule {name}: {e}"))?;

@@ -1,10 +1,11 @@
 //! `vcm compare`: error metrics between two EXR images and a false-colour error image.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::bail;
+use glam::Vec3;
 use vcm::image_io::{RgbImage, write_error_png};
-use vcm::metrics::{compare, relative_error_per_pixel};
+use vcm::metrics::{compare, non_finite_pixels, relative_error_per_pixel};
 
 use crate::render::check_outputs;
 
@@ -18,6 +19,21 @@ pub struct CompareArgs {
     /// Write a false-colour PNG of the per-pixel relative squared error.
     #[arg(long)]
     diff: Option<PathBuf>,
+}
+
+/// Fails when `pixels`, read from `path`, hold a NaN or infinite channel: metrics over them
+/// would be NaN or infinite, whatever the other pixels.
+pub fn check_finite(path: &Path, pixels: &[Vec3]) -> anyhow::Result<()> {
+    let count = non_finite_pixels(pixels);
+    if count > 0 {
+        bail!(
+            "{}: {count} of {} pixels are not finite (NaN or infinite); the error metrics \
+             need finite pixels",
+            path.display(),
+            pixels.len()
+        );
+    }
+    Ok(())
 }
 
 /// Prints RMSE, relMSE and MAE of `image` against `reference`.
@@ -38,6 +54,9 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
             reference.width,
             reference.height
         );
+    }
+    for (path, pixels) in [(&args.image, &image), (&args.reference, &reference)] {
+        check_finite(path, &pixels.pixels)?;
     }
     let m = compare(&image.pixels, &reference.pixels)
         .ok_or_else(|| anyhow::anyhow!("{}: the image is empty", args.image.display()))?;

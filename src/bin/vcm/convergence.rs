@@ -65,7 +65,7 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
         let options = &args.setup.integrator;
         let mut integrator = args
             .setup
-            .integrator(algorithm, &scene, traversal, size, options)?;
+            .integrator(algorithm, &scene, traversal, size, options, None)?;
         let mut film = Film::new(size.0, size.1);
         let outcome = progressive::render(
             integrator.as_mut(),

@@ -346,7 +346,11 @@ fn render(
     let traversal = traversals.get(options.backend, scene)?;
     let mut integrator =
         integrators::build(options.algo, scene, traversal, size, &options.integrator)?;
-    integrator.set_schedule(options.schedule.first_schedule_on(options.backend))?;
+    let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
+    let schedule = options
+        .schedule
+        .first_schedule_on(options.backend, samples_left);
+    integrator.set_schedule(schedule)?;
     let frames = Frames::new(options.schedule, options.backend);
     let mut film = Film::new(size.0, size.1);
     let outcome = progressive::render(

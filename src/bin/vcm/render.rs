@@ -8,11 +8,13 @@ use std::time::Duration;
 
 use anyhow::{Context, bail};
 use clap::ArgMatches;
+use clap::builder::RangedU64ValueParser;
 use clap::parser::ValueSource;
 use glam::Vec3;
 use vcm::atomic_write::{writable_target, write_atomically};
 use vcm::image_io::RgbImage;
-use vcm::{Film, Integrator, StopFlag};
+use vcm::memory::MemoryCause;
+use vcm::{Film, Integrator, RenderError, StopFlag};
 use vcm_rs::Backend;
 use vcm_rs::frames::Frames;
 use vcm_rs::scene::{LoadOptions, Scene, ShadingPlan};
@@ -39,8 +41,8 @@ pub struct RenderSetup {
     /// Ray traversal backend.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     pub backend: Backend,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
+    /// Worker threads (default: all cores; 1 to 1024).
+    #[arg(long, value_parser = RangedU64ValueParser::<usize>::new().range(1..=MAX_THREADS))]
     pub threads: Option<usize>,
     #[command(flatten)]
     pub integrator: IntegratorOptions,
@@ -75,10 +77,15 @@ impl SceneLimits {
     }
 }
 
+/// Most worker threads `--threads` takes: more only add start-up time and memory.
+const MAX_THREADS: u64 = 1024;
+
 impl RenderSetup {
     /// The integrator of `algorithm` with `options` for `scene` at `size`, traced by
     /// `traversal`, with the schedule of the first frame these options ask for on their
-    /// backend (which checks it).
+    /// backend (which checks it and the memory it needs), of at most `samples_left` samples
+    /// per pixel where the render has no more to do. A render over the memory budget fails
+    /// with the options to lower.
     pub fn integrator(
         &self,
         algorithm: Algorithm,
@@ -86,10 +93,38 @@ impl RenderSetup {
         traversal: Arc<dyn Traversal>,
         size: (u32, u32),
         options: &IntegratorOptions,
+        samples_left: Option<u32>,
     ) -> anyhow::Result<Box<dyn Integrator>> {
-        let mut integrator = integrators::build(algorithm, scene, traversal, size, options)?;
-        integrator.set_schedule(self.schedule.first_schedule_on(self.backend))?;
-        Ok(integrator)
+        let schedule = self.schedule.first_schedule_on(self.backend, samples_left);
+        integrators::build(algorithm, scene, traversal, size, options)
+            .and_then(|mut integrator| {
+                integrator.set_schedule(schedule)?;
+                Ok(integrator)
+            })
+            .map_err(|error| self.explain(error, size))
+    }
+
+    /// `error`, and where it is a memory shortfall, the options that would lower it for a
+    /// render of `size`.
+    fn explain(&self, error: RenderError, (width, height): (u32, u32)) -> anyhow::Error {
+        let RenderError::OutOfMemory(shortfall) = &error else {
+            return error.into();
+        };
+        let lower = match shortfall.cause {
+            MemoryCause::ImageSize if self.height.is_none() => format!(
+                "--width, or give --height (the image is {width}×{height}, its height from \
+                 the camera's aspect ratio)"
+            ),
+            MemoryCause::ImageSize => {
+                format!("--width or --height (the image is {width}×{height})")
+            }
+            MemoryCause::SamplesPerFrame => "--spp-per-frame".into(),
+            MemoryCause::Connections => "--connections".into(),
+            MemoryCause::Scheduler => {
+                "the paths in flight: --scheduler, --tile-size or --queues".into()
+            }
+        };
+        anyhow::anyhow!("{error}; lower {lower}")
     }
 
     /// The frames to render with: sized and scheduled as these options ask on their backend.
@@ -307,12 +342,14 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
         None => None,
     };
     let traversal = build_traversal(args.setup.backend, &scene)?;
+    let samples_left = plan.budget.remaining(0, Duration::ZERO).samples;
     let mut integrator = args.setup.integrator(
         plan.settings.algorithm,
         &scene,
         traversal,
         (width, height),
         &plan.settings.options,
+        samples_left,
     )?;
     if args.explain {
         let shading = plan.settings.options.shading_plan(&scene);
@@ -504,7 +541,7 @@ pub fn load_scene(
     Ok(Arc::new(scene))
 }
 
-/// Reads a reference EXR and checks that it has the render's size.
+/// Reads a reference EXR and checks that it has the render's size and finite pixels.
 pub fn read_reference(path: &Path, (width, height): (u32, u32)) -> anyhow::Result<Vec<Vec3>> {
     let image = RgbImage::read_exr(path)?;
     if (image.width, image.height) != (width as usize, height as usize) {
@@ -515,6 +552,7 @@ pub fn read_reference(path: &Path, (width, height): (u32, u32)) -> anyhow::Resul
             image.height
         );
     }
+    crate::compare::check_finite(path, &image.pixels)?;
     Ok(image.pixels)
 }
 

@@ -74,7 +74,22 @@ struct CameraPathState {
     picks: Option<CachePicks>,
 }
 
-/// Traces one camera path per pixel for each iteration of `iterations`, grouped as
+/// Bytes a camera path in flight takes with `connections` per vertex: its state, its rays
+/// and hit, and its light sample's and connections' shadow rays (those beyond the inline
+/// ones held twice: in the path's list and in the batch).
+pub(crate) fn bytes_per_path(connections: u32) -> u64 {
+    let shadows = u64::from(connections) + 1;
+    let spilled = shadows.saturating_sub(INLINE_SHADOW_RAYS as u64);
+    (size_of::<CameraPathState>() + RayBatch::BYTES_PER_RAY + HitBatch::BYTES_PER_HIT) as u64
+        + spilled * size_of::<ShadowRay>() as u64
+        + shadows * (RayBatch::BYTES_PER_RAY + size_of::<bool>()) as u64
+}
+
+/// Bytes of one camera sample of a frame: its (sample, pixel, radiance) as its path ends
+/// and its (pixel, radiance) in its iteration's list.
+pub(crate) const BYTES_PER_SAMPLE: u64 =
+    (size_of::<(u32, u32, Vec3)>() + size_of::<(u32, Vec3)>()) as u64;
+
 /// `scheduler` says, and returns each iteration's (pixel, radiance) samples: one per pixel, in
 /// no particular order (the additions to different pixels commute).
 pub(crate) fn run(

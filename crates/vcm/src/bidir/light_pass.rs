@@ -66,7 +66,21 @@ struct LightPathState {
     kept_splats: u32,
 }
 
-/// Traces one light path per pixel for each iteration of `iterations`, grouped as `scheduler`
+/// Bytes a light path in flight takes: its state, its ray and hit, and its camera
+/// connection's shadow ray.
+pub(crate) const BYTES_PER_PATH: u64 = (size_of::<LightPathState>()
+    + 2 * RayBatch::BYTES_PER_RAY
+    + HitBatch::BYTES_PER_HIT
+    + size_of::<bool>()) as u64;
+
+/// Bytes of one light vertex in a worker's results (the vertex, its key and its place in
+/// the key order), before it is copied into the light vertex cache.
+pub(crate) const BYTES_PER_RESULT_VERTEX: u64 =
+    (size_of::<LightVertex>() + size_of::<u64>() + size_of::<(u32, u32)>()) as u64;
+
+/// Bytes of one light tracing splat in the results.
+pub(crate) const BYTES_PER_SPLAT: u64 = size_of::<(u64, u32, Vec3)>() as u64;
+
 /// says, and returns each iteration's vertices and (with `splat`) unoccluded camera
 /// connections.
 pub(crate) fn run(

@@ -26,6 +26,7 @@
 
 mod camera_pass;
 mod light_pass;
+mod memory;
 pub(crate) mod mis;
 mod path_order;
 mod plan;
@@ -56,6 +57,11 @@ const PREPROCESS_LIGHT_PATHS: u32 = 10_000;
 
 /// Default initial merge radius, as a fraction of the scene's bounding-sphere radius.
 pub const DEFAULT_RADIUS_FRACTION: f32 = 0.003;
+
+/// Most light vertices a camera vertex may connect to (N_c): each connection is a shadow ray
+/// held with its path, and a pass's waves must stay short enough to honour a stop request
+/// within about a second.
+pub const MAX_CONNECTIONS: u32 = 1024;
 
 /// Default radius reduction exponent α of progressive photon mapping.
 pub const DEFAULT_ALPHA: f32 = 0.75;
@@ -130,7 +136,7 @@ pub struct VcmSettings {
     pub max_depth: Option<u32>,
     /// Which techniques are used.
     pub algorithm: Algorithm,
-    /// N_c, light vertices each camera vertex connects to (≥ 1).
+    /// N_c, light vertices each camera vertex connects to (1 to [`MAX_CONNECTIONS`]).
     pub connections: u32,
     /// Merge radius of the first frame, as a fraction of the scene's bounding-sphere radius.
     pub radius_fraction: f32,
@@ -196,6 +202,9 @@ pub struct Vcm {
     plan: BidirPlan,
     base_radius: f32,
     schedule: Schedule,
+    /// The schedule of the last frame rendered: its buffers, and the film it rendered into,
+    /// have been allocated (`None` before the first frame).
+    last_frame: Option<Schedule>,
     /// Capacity of each iteration's cache, from the preprocess (0 without a cache).
     cache_capacity: usize,
     /// One light vertex cache per sample of a frame.
@@ -221,10 +230,11 @@ impl Vcm {
     ) -> Result<Vcm, RenderError> {
         let VcmSettings { width, height, .. } = settings;
         crate::integrator::check_image_size(width, height)?;
-        if settings.connections == 0 {
-            return Err(RenderError::InvalidSetting(
-                "connections per camera vertex must be at least 1".into(),
-            ));
+        if !(1..=MAX_CONNECTIONS).contains(&settings.connections) {
+            return Err(RenderError::InvalidSetting(format!(
+                "connections per camera vertex must be 1 to {MAX_CONNECTIONS} (asked for {})",
+                settings.connections
+            )));
         }
         if !(settings.radius_fraction.is_finite() && settings.radius_fraction > 0.0) {
             return Err(RenderError::InvalidSetting(
@@ -247,6 +257,7 @@ impl Vcm {
             plan,
             base_radius,
             schedule: Schedule::default(),
+            last_frame: None,
             cache_capacity: 0,
             caches: Vec::new(),
             grids: Vec::new(),
@@ -256,6 +267,7 @@ impl Vcm {
         if plan.cache {
             vcm.cache_capacity = vcm.estimate_cache_capacity();
         }
+        vcm.check_memory(vcm.schedule, None)?;
         vcm.size_buffers();
         Ok(vcm)
     }
@@ -365,6 +377,7 @@ impl Integrator for Vcm {
             "film size differs from the settings"
         );
         let start = Instant::now();
+        self.last_frame = Some(self.schedule);
         let mut stats = FrameStats::default();
         let scheduler = self.schedule.scheduler;
         let mut caches = std::mem::take(&mut self.caches);
@@ -450,8 +463,11 @@ impl Integrator for Vcm {
 
     /// Both passes run under `schedule.scheduler`; `schedule.samples_per_frame` iterations
     /// per frame, each with its own cache and grid.
+    /// Checks that frames with `schedule` fit the available memory first.
     fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
-        self.schedule = schedule.validated()?;
+        let schedule = schedule.validated()?;
+        self.check_memory(schedule, self.last_frame)?;
+        self.schedule = schedule;
         self.size_buffers();
         Ok(())
     }

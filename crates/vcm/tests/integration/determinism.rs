@@ -258,6 +258,21 @@ fn invalid_schedules_are_rejected() {
             },
             ..Schedule::default()
         },
+        Schedule {
+            scheduler: Scheduler::Tile {
+                size: 8,
+                merge_below: f32::NAN,
+            },
+            ..Schedule::default()
+        },
+        Schedule {
+            scheduler: Scheduler::Queue {
+                queues: 2,
+                size: 8,
+                merge_below: 2.0,
+            },
+            ..Schedule::default()
+        },
     ];
     for schedule in bad {
         assert!(schedule.validated().is_err(), "{schedule:?}");
