@@ -215,7 +215,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         let pixels = f64::from(size.0) * f64::from(size.1);
         report_scene(&mut report, &name, &runs, &results, baseline, pixels);
         for ((run, _), m) in runs.iter().zip(&results) {
-            let last = final_error(m);
+            let row = m.summary(pixels, &results[baseline]);
             let _ = writeln!(
                 table,
                 "{},{},{},{:.3},{:.4},{:.3},{:.6e},{:.6e},{:.3}",
@@ -223,11 +223,11 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                 csv_field(&run.name),
                 m.spp,
                 m.seconds,
-                f64::from(m.spp) * pixels / m.seconds / 1e6,
-                f64::from(m.frames) / m.seconds,
-                last.relmse,
-                last.rmse,
-                final_error(&results[baseline]).relmse / last.relmse
+                row.samples_per_second / 1e6,
+                row.frames_per_second,
+                row.last.relmse,
+                row.last.rmse,
+                row.speedup
             );
         }
     }
@@ -441,6 +441,29 @@ fn read_back(totals: &Path, report: &Path) -> Option<Measured> {
     })
 }
 
+/// A run's figures for the table and the report.
+struct Summary {
+    samples_per_second: f64,
+    frames_per_second: f64,
+    /// The error at the end.
+    last: vcm::metrics::ErrorMetrics,
+    /// The baseline's final relMSE over this run's.
+    speedup: f64,
+}
+
+impl Measured {
+    /// The figures of this run of an image of `pixels`, against `baseline`.
+    fn summary(&self, pixels: f64, baseline: &Measured) -> Summary {
+        let last = final_error(self);
+        Summary {
+            samples_per_second: f64::from(self.spp) * pixels / self.seconds,
+            frames_per_second: f64::from(self.frames) / self.seconds,
+            last,
+            speedup: final_error(baseline).relmse / last.relmse,
+        }
+    }
+}
+
 /// The error at the end of a run.
 fn final_error(measured: &Measured) -> vcm::metrics::ErrorMetrics {
     measured
@@ -477,7 +500,6 @@ fn report_scene(
     baseline: usize,
     pixels: f64,
 ) {
-    let base = final_error(&results[baseline]).relmse;
     let _ = write!(
         report,
         "\n## {name}\n\n![relMSE against time]({name}/relmse.png)\n\n\
@@ -486,17 +508,17 @@ fn report_scene(
         runs[baseline].0.name
     );
     for ((run, _), m) in runs.iter().zip(results) {
-        let last = final_error(m);
+        let row = m.summary(pixels, &results[baseline]);
         let _ = writeln!(
             report,
             "| {} | {} | {:.3} | {:.2} | {:.3e} | {:.3e} | {:.2}× |",
             run.name,
             m.spp,
-            f64::from(m.spp) * pixels / m.seconds / 1e6,
-            f64::from(m.frames) / m.seconds,
-            last.relmse,
-            last.rmse,
-            base / last.relmse
+            row.samples_per_second / 1e6,
+            row.frames_per_second,
+            row.last.relmse,
+            row.last.rmse,
+            row.speedup
         );
     }
     let _ = writeln!(
