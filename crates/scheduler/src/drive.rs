@@ -158,6 +158,9 @@ pub fn run<W: Wavefront>(
 
 /// One worker's loop: start a tile whenever fewer than `merge_at` paths run (and when none
 /// do), then advance all paths by one segment; until no path is left, or a stop is requested.
+/// The stop flag is checked between the steps, not only between segments: a wavefront over
+/// the whole image (the `none` scheduler) starts, traces or shades millions of paths in one
+/// step, and its shading itself stops once asked to.
 fn drive<W: Wavefront>(
     wave: &mut W,
     traversal: &dyn Traversal,
@@ -167,18 +170,25 @@ fn drive<W: Wavefront>(
 ) {
     let (mut rays, mut hits) = (RayBatch::default(), HitBatch::default());
     let (mut shadow_rays, mut occluded) = (RayBatch::default(), Vec::new());
-    while !tiles.stopped() && top_up(wave, tiles, merge_at, stats) {
+    // Past a stop the pass is dropped whole: its paths are left where they are.
+    while !tiles.stopped() && top_up(wave, tiles, merge_at, stats) && !tiles.stopped() {
         time(&mut stats.shading, || wave.extension_rays(&mut rays));
         time(&mut stats.traversal, || {
             traversal.intersect(&rays, &mut hits)
         });
+        stats.closest_rays += rays.len() as u64;
+        if tiles.stopped() {
+            break;
+        }
         time(&mut stats.shading, || wave.shade(&hits, &mut shadow_rays));
+        if tiles.stopped() {
+            break;
+        }
         note_queue_memory(stats, wave, (&rays, &hits, &shadow_rays), &occluded);
         time(&mut stats.traversal, || {
             traversal.occluded(&shadow_rays, &mut occluded)
         });
-        time(&mut stats.shading, || wave.resolve(&occluded));
-        stats.closest_rays += rays.len() as u64;
         stats.shadow_rays += shadow_rays.len() as u64;
+        time(&mut stats.shading, || wave.resolve(&occluded));
     }
 }

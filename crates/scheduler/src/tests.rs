@@ -458,14 +458,21 @@ fn a_stop_request_ends_a_pass_between_tiles_and_passes() {
         let (_, stats) = pool(2).install(|| run(scheduler, (64, 64), &traversal, &stop, new_wave));
         assert_eq!(stats.tiles, 0, "{scheduler:?}");
         // Raised by the first shading call: the pass ends without starting every tile (the
-        // `none` scheduler's one tile is the image, so it ends after that pass instead).
+        // `none` scheduler's one tile is the image, so it ends right after that shading,
+        // before tracing its shadow rays).
         let stop = StopFlag::new();
         let raising_wave = || StopAfterShading(FakeWave::new(64, None), stop.clone());
         let (_, stats) =
             pool(2).install(|| run(scheduler, (64, 64), &traversal, &stop, raising_wave));
-        let passes = stats.closest_rays;
         assert!(stats.tiles < 256, "{scheduler:?}: {} tiles", stats.tiles);
-        assert!(passes > 0, "{scheduler:?}");
+        assert!(stats.closest_rays > 0, "{scheduler:?}");
+        if scheduler == Scheduler::None {
+            assert!(
+                stats.closest_rays <= 64 * 64,
+                "at most one segment per path"
+            );
+            assert_eq!(stats.shadow_rays, 0, "no step after the shading");
+        }
     }
 }
 

@@ -28,6 +28,8 @@ pub trait Wavefront: Send {
     fn extension_rays(&self, rays: &mut RayBatch);
 
     /// Shades every active path at its hit (`hits[i]` for path `i`) and fills `shadow_rays`.
+    /// Once the pass's stop flag is raised it may leave paths unshaded: the scheduler then
+    /// ends the pass without resolving them.
     fn shade(&mut self, hits: &HitBatch, shadow_rays: &mut RayBatch);
 
     /// Applies the occlusion of the shadow rays queued by [`shade`](Self::shade) and retires

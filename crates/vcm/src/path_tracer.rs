@@ -159,6 +159,7 @@ impl Integrator for PathTracer {
             lambert_lanes: self.lambert_lanes.as_ref().ok(),
             first_sample,
             samples,
+            stop: &self.stop,
             paths: Vec::new(),
             finished: Vec::new(),
         };
@@ -243,6 +244,8 @@ struct PtWavefront<'a> {
     lambert_lanes: Option<&'a LambertLanes>,
     first_sample: u32,
     samples: u32,
+    /// The frame's stop request: shading ends early once it is raised.
+    stop: &'a StopFlag,
     paths: Vec<PathState>,
     finished: Vec<(u64, Vec3)>,
 }
@@ -307,7 +310,7 @@ impl Wavefront for PtWavefront<'_> {
         };
         shade_in_parallel(
             &mut self.paths,
-            hits,
+            (hits, self.stop),
             vertex_sampler,
             &lanes,
             |_, hit| SurfaceHit::at(scene, hit),

@@ -4,7 +4,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 use vcm_scene::sampling::SobolSampler;
-use vcm_scheduler::Tile;
+use vcm_scheduler::{StopFlag, Tile};
 use vcm_traversal::{HitBatch, RayBatch};
 
 use crate::lanes::LANES;
@@ -151,9 +151,11 @@ impl<T> ChunkLists<T> {
 ///
 /// The vertices `lanes` takes are shaded by it instead, [`LANES`] at a time, once the
 /// others of the chunk are done; it moves their samplers and computes their numbers itself.
+///
+/// Once `stop` is raised no further chunk is shaded: the pass is being dropped.
 pub(crate) fn shade_in_parallel<P: Send, T: Send>(
     paths: &mut [P],
-    hits: &HitBatch,
+    (hits, stop): (&HitBatch, &StopFlag),
     vertex_sampler: impl Fn(&mut P) -> &mut SobolSampler + Sync,
     lanes: &impl LaneShading<P>,
     prepare: impl Fn(&mut P, Hit) -> T + Sync,
@@ -163,6 +165,9 @@ pub(crate) fn shade_in_parallel<P: Send, T: Send>(
     paths.par_chunks_mut(SHADE_CHUNK).enumerate().for_each_init(
         ChunkLists::new,
         |lists, (chunk_index, chunk)| {
+            if stop.is_raised() {
+                return;
+            }
             let first = chunk_index * SHADE_CHUNK;
             let ChunkLists {
                 kinds,
@@ -278,6 +283,33 @@ mod tests {
                 chunk.iter_mut().for_each(|visits| *visits += 1);
             });
             assert!(paths.iter().all(|&visits| visits == 1), "{count} paths");
+        }
+    }
+
+    #[test]
+    fn shading_shades_every_path_once_and_none_after_a_stop() {
+        let mut hits = HitBatch::default();
+        hits.resize(3 * SHADE_CHUNK + 1);
+        for raised in [false, true] {
+            let stop = StopFlag::new();
+            if raised {
+                stop.raise();
+            }
+            let mut paths = vec![(SobolSampler::new(&[1], 0), 0u32); hits.len()];
+            shade_in_parallel(
+                &mut paths,
+                (&hits, &stop),
+                |(rng, _)| rng,
+                &NoLanes,
+                |_, _| (),
+                None::<fn(&_, &mut _, _)>,
+                |(_, shaded), _| *shaded += 1,
+            );
+            let expected = u32::from(!raised);
+            assert!(
+                paths.iter().all(|&(_, shaded)| shaded == expected),
+                "stop {raised}"
+            );
         }
     }
 }

@@ -264,7 +264,9 @@ fn shade<'s, W: Wavefront + 's>(
 /// The shading part of a queue's pass, from `state` to the next state that waits for
 /// traversal, or to empty when its paths have ended and no tile is left: shade the hits;
 /// resolve the shadow rays (at once when shading queued none); start a tile when few paths
-/// are left, as the tile scheduler does; fill the next extension rays.
+/// are left, as the tile scheduler does; fill the next extension rays. Once a stop is
+/// requested the queue is empty at once: its paths are dropped with the pass (shading
+/// stops advancing them).
 fn advance<W: Wavefront>(
     queue: &mut Queue<W>,
     state: State,
@@ -272,6 +274,9 @@ fn advance<W: Wavefront>(
     merge_at: usize,
     stats: &mut SchedulerStats,
 ) -> State {
+    if tiles.stopped() {
+        return State::Empty;
+    }
     let Queue {
         wave,
         rays,

@@ -170,7 +170,7 @@ impl Wavefront for CameraWavefront<'_> {
         if iterations[0].plan.merges {
             shade_in_parallel(
                 &mut self.paths,
-                hits,
+                (hits, iterations[0].frame.stop),
                 vertex_sampler,
                 &NoLanes,
                 |path, hit| MergingHit::prepare(ctx(path), path, hit),
@@ -183,7 +183,7 @@ impl Wavefront for CameraWavefront<'_> {
         } else {
             shade_in_parallel(
                 &mut self.paths,
-                hits,
+                (hits, iterations[0].frame.stop),
                 vertex_sampler,
                 &lanes::CameraLanes::new(iterations),
                 |path, hit| prepare(ctx(path), path, hit),

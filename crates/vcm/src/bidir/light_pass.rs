@@ -196,6 +196,16 @@ impl LightResults {
         }
     }
 
+    /// The parts of a pass that a stop request cut short, left unordered: they are only
+    /// recycled.
+    fn dropped(parts: Vec<WorkerResults>) -> LightResults {
+        LightResults {
+            parts,
+            order: Vec::new(),
+            splats: Vec::new(),
+        }
+    }
+
     /// Number of vertices.
     pub fn vertex_count(&self) -> usize {
         self.order.len()
@@ -242,6 +252,9 @@ fn trace(
         }
     }
     let paths = size.0 as usize * size.1 as usize;
+    if stop.is_raised() {
+        return parts.into_iter().map(LightResults::dropped).collect();
+    }
     let gather = |parts| LightResults::gather(parts, paths);
     parts.into_par_iter().map(gather).collect()
 }
@@ -308,7 +321,7 @@ impl Wavefront for LightWavefront<'_> {
         let scene = iterations[0].scene;
         shade_in_parallel(
             &mut self.paths,
-            hits,
+            (hits, iterations[0].stop),
             vertex_sampler,
             &lanes::LightLanes { iterations, splat },
             |_, hit| SurfaceHit::at(scene, hit),

@@ -360,6 +360,19 @@ impl Vcm {
         )
     }
 
+    /// Ends a frame that a stop request cut short, leaving the film as it was and keeping
+    /// the frame's buffers for the next.
+    fn drop_frame(
+        &mut self,
+        light: Vec<light_pass::LightResults>,
+        caches: Vec<LightVertexCache>,
+        grids: Vec<HashGrid>,
+    ) -> FrameStats {
+        self.light_buffers.recycle(light);
+        (self.caches, self.grids) = (caches, grids);
+        FrameStats::INTERRUPTED
+    }
+
     fn light_paths(&self) -> u32 {
         self.settings.width * self.settings.height
     }
@@ -389,6 +402,9 @@ impl Integrator for Vcm {
         } else {
             Vec::new()
         };
+        if self.stop.is_raised() {
+            return self.drop_frame(light, caches, grids);
+        }
         if plan.cache {
             for (cache, results) in caches.iter_mut().zip(&mut light) {
                 cache.clear();
@@ -416,10 +432,7 @@ impl Integrator for Vcm {
             .collect();
         let camera = camera_pass::run(&samples, scheduler, &mut stats);
         if self.stop.is_raised() {
-            // Cut short: drop the frame whole, leaving the film as it was.
-            self.light_buffers.recycle(light);
-            (self.caches, self.grids) = (caches, grids);
-            return FrameStats::INTERRUPTED;
+            return self.drop_frame(light, caches, grids);
         }
         film.add_in_bands(|band| {
             for (sample, radiance) in camera.iter().enumerate() {

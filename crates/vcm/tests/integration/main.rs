@@ -21,4 +21,5 @@ mod pruning;
 mod punctual_lights;
 mod sds_caustic;
 mod stiff;
+mod stop;
 mod vertex_colors;
