@@ -49,15 +49,17 @@ impl SchedulerStats {
     }
 
     /// High-water mark of the pass's queues: [`peak_queue_bytes`](Self::peak_queue_bytes)
-    /// times the wavefronts that exist at once (the workers, or the queue scheduler's pool),
-    /// an upper bound since the wavefronts need not peak together.
+    /// times the wavefronts that held paths at once (the workers, or the queue scheduler's
+    /// pool, but no more than the tiles started: a wavefront that never started a tile holds
+    /// no paths), an upper bound since the wavefronts need not peak together.
     pub fn queue_memory(&self) -> usize {
         let wavefronts = if self.queues > 0 {
             self.queues
         } else {
             self.workers
         };
-        self.peak_queue_bytes * wavefronts.max(1)
+        let holding_paths = (wavefronts as u64).min(self.tiles).max(1);
+        self.peak_queue_bytes * holding_paths as usize
     }
 
     /// The wall-clock time traversal accounts for: the workers' [`traversal`](Self::traversal)

@@ -395,6 +395,17 @@ fn queue_memory_follows_the_paths_in_flight() {
         queues * 8 < one_batch,
         "queues {queues} vs one batch {one_batch}"
     );
+    // A pool far larger than the image's 4 tiles: only the queues that started a tile count,
+    // each holding at most a tile and a half.
+    let many_queues = memory(Scheduler::Queue {
+        queues: 100_000,
+        size: 16,
+        merge_below: 0.5,
+    });
+    assert!(
+        many_queues < 2 * one_batch,
+        "100,000 queues {many_queues} vs one batch {one_batch}"
+    );
 }
 
 /// Counts the traversal calls made from a thread outside every rayon pool.
