@@ -260,18 +260,20 @@ mod linux {
     /// The room left under the memory limit of the process's cgroup, if it has one.
     pub fn cgroup_room() -> Option<AvailableMemory> {
         let groups = std::fs::read_to_string("/proc/self/cgroup").ok()?;
+        room_under_cgroup(&groups, "/sys/fs/cgroup")
+    }
+
+    /// The room left under the memory limit of the cgroup that `groups` (the text of
+    /// /proc/self/cgroup) names, its file systems mounted at `root`.
+    pub(super) fn room_under_cgroup(groups: &str, root: &str) -> Option<AvailableMemory> {
         groups.lines().find_map(|line| {
             // "0::/path" (v2) or "4:memory:/path" (v1).
             let mut fields = line.splitn(3, ':');
             let (_, controllers, path) = (fields.next()?, fields.next()?, fields.next()?);
             let (folder, max, current) = match controllers {
-                "" => (
-                    format!("/sys/fs/cgroup{path}"),
-                    "memory.max",
-                    "memory.current",
-                ),
+                "" => (format!("{root}{path}"), "memory.max", "memory.current"),
                 "memory" => (
-                    format!("/sys/fs/cgroup/memory{path}"),
+                    format!("{root}/memory{path}"),
                     "memory.limit_in_bytes",
                     "memory.usage_in_bytes",
                 ),
@@ -364,6 +366,36 @@ mod tests {
             "the render needs about 102.0 GiB (outputs 100.0 GiB, film 1.0 GiB, shadow rays \
              1.0 GiB), more than the 4.0 GiB available (test)"
         );
+    }
+
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn a_cgroup_limit_leaves_the_room_under_it_in_v2_and_v1() {
+        let root = tempfile::tempdir().unwrap();
+        let write = |folder: &str, file: &str, text: &str| {
+            let folder = root.path().join(folder);
+            std::fs::create_dir_all(&folder).unwrap();
+            std::fs::write(folder.join(file), text).unwrap();
+        };
+        write("jobs/render", "memory.max", "4294967296\n");
+        write("jobs/render", "memory.current", "1073741824\n");
+        write("memory/old", "memory.limit_in_bytes", "2147483648\n");
+        write("memory/old", "memory.usage_in_bytes", "536870912\n");
+        write("free", "memory.max", "max\n");
+        write("free", "memory.current", "1073741824\n");
+        let root = root.path().to_str().unwrap();
+        let room = |groups: &str| linux::room_under_cgroup(groups, root).map(|room| room.bytes);
+        assert_eq!(room("0::/jobs/render\n"), Some(3 * GIB), "v2");
+        assert_eq!(
+            room("12:cpu:/x\n4:memory:/old\n"),
+            Some(GIB + GIB / 2),
+            "v1"
+        );
+        assert_eq!(room("0::/free\n"), None, "no limit");
+        assert_eq!(room("0::/missing\n"), None, "no such group");
+        write("jobs/over", "memory.max", "1073741824");
+        write("jobs/over", "memory.current", "2147483648");
+        assert_eq!(room("0::/jobs/over"), Some(0), "over its limit already");
     }
 
     #[test]
