@@ -2,13 +2,13 @@
 //! user tried, written into a temporary folder. Each case says what a correct `vcm` does with
 //! it: refuses it with a message holding a given phrase, renders it, or either.
 
-use std::fmt::Write as _;
 use std::path::Path;
 use std::process::Command;
 
-use base64::Engine;
 use glam::Vec3;
-use vcm_rs::scene::testing::{exr_claiming, png_claiming};
+use vcm_rs::scene::testing::{
+    data_uri, deep_chain, doubling_chain, exr_claiming, glb, png_claiming, triangle_positions,
+};
 use vcm_rs::vcm::image_io::RgbImage;
 
 /// What a correct `vcm` does with a case.
@@ -66,7 +66,7 @@ impl Document<'_> {
         let buffer = if self.buffer.is_empty() {
             format!(
                 r#"{{"byteLength": 36, "uri": "{}"}}"#,
-                data_uri(&triangle())
+                data_uri(&triangle_positions())
             )
         } else {
             self.buffer.to_string()
@@ -91,57 +91,6 @@ impl Document<'_> {
             extra = self.extra,
         )
     }
-}
-
-/// One triangle's positions (36 bytes).
-fn triangle() -> Vec<u8> {
-    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-    positions.iter().flat_map(|f| f.to_le_bytes()).collect()
-}
-
-fn data_uri(bytes: &[u8]) -> String {
-    let data = base64::engine::general_purpose::STANDARD.encode(bytes);
-    format!("data:application/octet-stream;base64,{data}")
-}
-
-/// `json` and `binary` as a GLB container.
-fn glb(json: &str, binary: &[u8]) -> Vec<u8> {
-    let mut json = json.as_bytes().to_vec();
-    json.resize(json.len().next_multiple_of(4), b' ');
-    let mut binary = binary.to_vec();
-    binary.resize(binary.len().next_multiple_of(4), 0);
-    let length = 12 + 8 + json.len() + 8 + binary.len();
-    let mut out = Vec::new();
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(length as u32).to_le_bytes());
-    for (kind, chunk) in [(b"JSON", &json), (b"BIN\0", &binary)] {
-        out.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
-        out.extend_from_slice(kind);
-        out.extend_from_slice(chunk);
-    }
-    out
-}
-
-/// `levels` nodes, each listing the next one twice; the last draws the triangle: 2^(levels−1)
-/// instances.
-fn doubling_chain(levels: usize) -> String {
-    let mut nodes: Vec<String> = (1..levels)
-        .map(|next| format!(r#"{{"children": [{next}, {next}]}}"#))
-        .collect();
-    nodes.push(r#"{"mesh": 0}"#.into());
-    format!("[{}]", nodes.join(", "))
-}
-
-/// A chain of `depth` nodes, each the only child of the one before; the last draws the
-/// triangle.
-fn deep_chain(depth: usize) -> String {
-    let mut nodes = String::from("[");
-    for next in 1..depth {
-        write!(nodes, r#"{{"children": [{next}]}}, "#).unwrap();
-    }
-    nodes.push_str(r#"{"mesh": 0}]"#);
-    nodes
 }
 
 /// A valid OBJ triangle lit by an emissive material, and its MTL library.
@@ -324,7 +273,7 @@ impl<'a> Generator<'a> {
                 "huge-buffer.gltf",
                 format!(
                     r#"{{"byteLength": 1000000000000000, "uri": "{}"}}"#,
-                    data_uri(&triangle())
+                    data_uri(&triangle_positions())
                 ),
             ),
             (
@@ -332,7 +281,7 @@ impl<'a> Generator<'a> {
                 r#"{"byteLength": 1000000000000, "uri": "tri.bin"}"#.into(),
             ),
         ];
-        std::fs::write(self.dir.join("tri.bin"), triangle()).unwrap();
+        std::fs::write(self.dir.join("tri.bin"), triangle_positions()).unwrap();
         for (name, buffer) in buffers {
             let json = Document {
                 buffer: &buffer,
@@ -351,7 +300,7 @@ impl<'a> Generator<'a> {
             Expect::Error("error:"),
         );
         // A GLB whose header and chunk claim 4 GB.
-        let mut binary = glb(&Document::default().json(), &triangle());
+        let mut binary = glb(&Document::default().json(), &triangle_positions());
         binary[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
         self.scene(class, "huge-length.glb", &binary, Expect::Error("error:"));
         // Images whose headers claim 16384² (EXR environment) and 20000² (PNG texture)

@@ -6,22 +6,10 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Duration;
 
-use base64::Engine;
-
 use super::{LoadOptions, load_gltf_from_bytes, load_gltf_from_bytes_with, load_with};
 use crate::error::SceneError;
 use crate::scene::Scene;
-
-/// One triangle in the z = 0 plane (36 bytes of positions).
-fn triangle_bytes() -> Vec<u8> {
-    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-    positions.iter().flat_map(|f| f.to_le_bytes()).collect()
-}
-
-fn data_uri(bytes: &[u8]) -> String {
-    let data = base64::engine::general_purpose::STANDARD.encode(bytes);
-    format!("data:application/octet-stream;base64,{data}")
-}
+use crate::testing::{data_uri, doubling_chain, triangle_positions};
 
 /// A document whose buffer 0 is `buffer` (a URI of 36 bytes, one triangle's positions) and
 /// mesh 0 that triangle; `nodes`, `roots` and `extra` (properties after a comma) complete it.
@@ -39,20 +27,11 @@ fn document_with(buffer: &str, roots: &str, nodes: &str, extra: &str) -> String 
 
 /// [`document_with`] the triangle embedded, drawn by node 0.
 fn document(nodes: &str, extra: &str) -> String {
-    document_with(&data_uri(&triangle_bytes()), "[0]", nodes, extra)
+    document_with(&data_uri(&triangle_positions()), "[0]", nodes, extra)
 }
 
 fn load(json: &str) -> Result<Scene, SceneError> {
     load_gltf_from_bytes(Path::new("memory.gltf"), json.as_bytes())
-}
-
-/// `levels` nodes, each listing the next one twice; the last draws the triangle.
-fn doubling_chain(levels: usize) -> String {
-    let mut nodes: Vec<String> = (1..levels)
-        .map(|next| format!(r#"{{"children": [{next}, {next}]}}"#))
-        .collect();
-    nodes.push(r#"{"mesh": 0}"#.into());
-    format!("[{}]", nodes.join(", "))
 }
 
 /// Runs `work` on another thread and returns its result, or `None` when it takes longer than
@@ -97,7 +76,7 @@ fn exponential_instancing_is_refused_before_it_is_expanded() {
     );
     // A scene listing its root several times instances it that often.
     let twice = document_with(
-        &data_uri(&triangle_bytes()),
+        &data_uri(&triangle_positions()),
         "[0, 0]",
         r#"[{"mesh": 0}]"#,
         "",
@@ -206,7 +185,7 @@ fn folder_with_a_secret_beside() -> (tempfile::TempDir, PathBuf) {
     let root = tempfile::tempdir().unwrap();
     let scene = root.path().join("scene");
     std::fs::create_dir(&scene).unwrap();
-    std::fs::write(root.path().join("secret.bin"), triangle_bytes()).unwrap();
+    std::fs::write(root.path().join("secret.bin"), triangle_positions()).unwrap();
     std::fs::write(
         root.path().join("secret.png"),
         crate::testing::png_claiming(2, 1),
@@ -471,7 +450,7 @@ fn impossible_camera_aspect_ratios_are_errors_and_extreme_ones_are_ignored() {
 
 #[test]
 fn vertices_too_far_out_are_named_as_such_not_as_degenerate() {
-    let mut positions = triangle_bytes();
+    let mut positions = triangle_positions();
     positions[12..16].copy_from_slice(&1e38f32.to_le_bytes());
     let json = document_with(&data_uri(&positions), "[0]", r#"[{"mesh": 0}]"#, "");
     let error = load(&json).unwrap_err();

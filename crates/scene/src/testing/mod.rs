@@ -10,17 +10,21 @@
 //!   (sampling vs pdf; directional albedo ∫ f_cos dωi by importance sampling).
 //! * [`exr_claiming`], [`png_claiming`]: OpenEXR and PNG files whose headers claim a given
 //!   size (for size limits).
+//! * [`triangle_positions`], [`data_uri`], [`glb`], [`doubling_chain`], [`deep_chain`]: pieces
+//!   of glTF files for loader tests.
 //!
 //! Available to other crates' tests through the `testing` feature.
 
 mod bsdf;
 mod chi2;
 mod estimate;
+mod gltf_files;
 mod image_headers;
 mod integrate;
 
 pub use bsdf::{bsdf_chi2_test, estimate_albedo};
 pub use chi2::{Chi2Config, Chi2Result, chi2_test, sidak_significance};
 pub use estimate::{Estimate, estimate_mean};
+pub use gltf_files::{data_uri, deep_chain, doubling_chain, glb, triangle_positions};
 pub use image_headers::{exr_claiming, png_claiming};
 pub use integrate::{integrate_cell, integrate_sphere, spherical_direction};
