@@ -35,14 +35,54 @@ pub const FORMAT_VERSION: u32 = 1;
 /// The tensors, in the order the checksum covers them.
 const TENSORS: [&str; 3] = ["sum", "sum_exact", "samples"];
 
-/// Writes `state` to `path` through a temporary file in the same folder, renamed over `path`
-/// once complete.
-pub fn write(path: &Path, state: &RenderState) -> Result<(), StateError> {
+/// What a state file holds: a state's settings and provenance with a film and the samples
+/// it holds, which need not be the state's own (a render writes its film in progress).
+#[derive(Clone, Copy)]
+pub struct Contents<'a> {
+    pub state: &'a RenderState,
+    pub film: &'a Film,
+    pub samples: &'a SampleRanges,
+}
+
+impl<'a> Contents<'a> {
+    /// `state` as it is.
+    pub fn of(state: &'a RenderState) -> Contents<'a> {
+        Contents {
+            state,
+            film: &state.film,
+            samples: &state.samples,
+        }
+    }
+
+    /// The text metadata, but the checksum.
+    fn metadata(&self) -> BTreeMap<String, String> {
+        let state = self.state;
+        let mut metadata = state.settings.to_metadata();
+        let mut put = |key: &str, value: String| metadata.insert(key.to_string(), value);
+        put("format", FORMAT_NAME.into());
+        put("format_version", FORMAT_VERSION.to_string());
+        put("scene", state.scene_path.display().to_string());
+        put("scene_hash", format!("xxh3:{:016x}", state.scene_hash));
+        put("samples", self.samples.to_string());
+        put("dropped", self.film.dropped().to_string());
+        if let Some(output) = &state.output {
+            put("output", output.display().to_string());
+        }
+        if let Some(spp) = state.target_spp {
+            put("target_spp", spp.to_string());
+        }
+        metadata
+    }
+}
+
+/// Writes `contents` to `path` through a temporary file in the same folder, renamed over
+/// `path` once complete.
+pub fn write(path: &Path, contents: Contents) -> Result<(), StateError> {
     let failed = |reason: String| StateError::Write {
         path: path.to_path_buf(),
         reason,
     };
-    let bytes = encode(state).map_err(failed)?;
+    let bytes = encode(contents).map_err(failed)?;
     // A plain write, so the file gets the permissions the umask gives new files.
     write_atomically(
         path,
@@ -51,9 +91,9 @@ pub fn write(path: &Path, state: &RenderState) -> Result<(), StateError> {
     )
 }
 
-/// The bytes of the state file of `state`; the error says why it cannot be encoded.
-pub fn encode(state: &RenderState) -> Result<Vec<u8>, String> {
-    let film = &state.film;
+/// The bytes of the state file of `contents`; the error says why it cannot be encoded.
+pub fn encode(contents: Contents) -> Result<Vec<u8>, String> {
+    let film = contents.film;
     let (width, height) = (film.width() as usize, film.height() as usize);
     let rounded: Vec<u8> = film
         .sums()
@@ -82,7 +122,7 @@ pub fn encode(state: &RenderState) -> Result<Vec<u8>, String> {
         ),
         ("samples", view(Dtype::U64, vec![height, width], &samples)?),
     ];
-    let mut metadata = state.metadata();
+    let mut metadata = contents.metadata();
     let checksum = checksum(&metadata, tensors.iter().map(|(_, t)| t));
     metadata.insert("checksum".into(), checksum);
     let metadata: HashMap<String, String> = metadata.into_iter().collect();

@@ -12,12 +12,13 @@ mod ranges;
 mod scene_hash;
 mod settings;
 
-use std::collections::BTreeMap;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use vcm::Film;
 use vcm::image_io::RgbImage;
 
+use file::Contents;
 pub use file::{FORMAT_NAME, FORMAT_VERSION};
 pub use ranges::{SampleRanges, parse_range};
 pub use scene_hash::scene_hash;
@@ -119,13 +120,32 @@ impl RenderState {
 
     /// Writes the state file atomically: through a temporary file renamed over `path`.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), StateError> {
-        file::write(path.as_ref(), self)
+        file::write(path.as_ref(), Contents::of(self))
+    }
+
+    /// Writes, as [`RenderState::save`] does, the state this one becomes once it holds
+    /// `film`, rendered from it, with the samples `rendered` added: without copying the film
+    /// (a render's checkpoints and last save).
+    pub fn save_with(
+        &self,
+        film: &Film,
+        rendered: Range<u32>,
+        path: impl AsRef<Path>,
+    ) -> Result<(), StateError> {
+        let mut samples = self.samples.clone();
+        samples.insert(rendered);
+        let contents = Contents {
+            state: self,
+            film,
+            samples: &samples,
+        };
+        file::write(path.as_ref(), contents)
     }
 
     /// The state as the bytes of a state file (what [`RenderState::save`] writes), to send
     /// elsewhere; the error says why it cannot be encoded.
     pub fn to_bytes(&self) -> Result<Vec<u8>, String> {
-        file::encode(self)
+        file::encode(Contents::of(self))
     }
 
     /// A state from the bytes of a state file, checked as [`RenderState::load`] checks a
@@ -187,25 +207,6 @@ impl RenderState {
         self.samples.insert_all(&other.samples);
         self.target_spp = self.target_spp.max(other.target_spp);
         Ok(())
-    }
-
-    /// The text metadata of the state file (everything but the checksum).
-    fn metadata(&self) -> BTreeMap<String, String> {
-        let mut metadata = self.settings.to_metadata();
-        let mut put = |key: &str, value: String| metadata.insert(key.to_string(), value);
-        put("format", FORMAT_NAME.into());
-        put("format_version", FORMAT_VERSION.to_string());
-        put("scene", self.scene_path.display().to_string());
-        put("scene_hash", format!("xxh3:{:016x}", self.scene_hash));
-        put("samples", self.samples.to_string());
-        put("dropped", self.film.dropped().to_string());
-        if let Some(output) = &self.output {
-            put("output", output.display().to_string());
-        }
-        if let Some(spp) = self.target_spp {
-            put("target_spp", spp.to_string());
-        }
-        metadata
     }
 }
 

@@ -250,3 +250,21 @@ fn bytes_read_back_as_the_file_does_and_are_checked() {
     let error = RenderState::from_bytes(&bytes[..bytes.len() - 1], "sent").unwrap_err();
     assert!(error.to_string().starts_with("sent: "), "{error}");
 }
+
+#[test]
+fn saving_with_a_film_in_progress_writes_the_state_that_film_makes() {
+    let scene = scene();
+    let settings = settings(Algorithm::Bpt, SamplerKind::Sobol);
+    let before = render(&scene, &settings, 0..2);
+    let after = render(&scene, &settings, 0..4);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("state.safetensors");
+    // The earlier state's settings and samples, the later film with samples 2..4 added.
+    before.save_with(&after.film, 2..4, &path).unwrap();
+    assert_eq!(RenderState::load(&path).unwrap(), after);
+    assert_eq!(
+        before.samples.to_string(),
+        "0..2",
+        "the state itself is unchanged"
+    );
+}

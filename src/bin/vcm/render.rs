@@ -363,10 +363,7 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     let first = plan.first_sample;
     let mut write_checkpoint = |film: &Film, spp: u32| -> anyhow::Result<()> {
         if let (Some(state), Some(path)) = (&state, &plan.state_path) {
-            let mut checkpoint = state.clone();
-            checkpoint.film = film.clone();
-            checkpoint.samples.insert(first..first + spp);
-            checkpoint.save(path)?;
+            state.save_with(film, first..first + spp, path)?;
         }
         Ok(())
     };
@@ -401,11 +398,10 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     let png = png_beside(&plan.output);
     image.write_png(&png, 0.0)?;
     if let (Some(mut state), Some(path)) = (state, &plan.state_path) {
-        state.film = film.clone();
-        state.samples.insert(first..first + outcome.spp);
         let start = std::time::Instant::now();
-        state.save(path)?;
+        state.save_with(&film, first..first + outcome.spp, path)?;
         let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+        state.samples.insert(first..first + outcome.spp);
         say!(
             "wrote the render state {} (samples {}, {:.1} MiB in {:.2} s)",
             path.display(),
