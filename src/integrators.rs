@@ -208,7 +208,8 @@ impl ScheduleOptions {
 }
 
 /// The integrator of `algorithm` for a `width` × `height` image. With `options.no_prune`
-/// it renders a copy of the scene whose shading runs every part ([`ShadingPlan::FULL`]).
+/// it renders a copy of the scene whose shading runs every part ([`ShadingPlan::FULL`]),
+/// every vertex through the general BSDF (no SIMD lanes).
 pub fn build(
     algorithm: Algorithm,
     scene: &Arc<Scene>,
@@ -231,6 +232,7 @@ pub fn build(
                 seed: options.seed,
                 sequence: options.sampler.sequence(),
                 max_depth: options.max_depth,
+                lambert_lanes: !options.no_prune,
                 ..PtSettings::new(width, height)
             };
             Box::new(PathTracer::new(scene, traversal, settings)?)
@@ -244,6 +246,7 @@ pub fn build(
                 radius_fraction: options.radius,
                 alpha: options.alpha,
                 prune: !options.no_prune,
+                lambert_lanes: !options.no_prune,
                 ..VcmSettings::new(vcm_algorithm, width, height)
             };
             Box::new(Vcm::new(scene, traversal, settings)?)

@@ -145,6 +145,11 @@ pub struct VcmSettings {
     /// Leave out what the scene does not need (see [`Integrator::decisions`]); `false` runs every
     /// part of the algorithm, for comparisons.
     pub prune: bool,
+    /// Shade light vertices, and camera vertices where nothing merges, on plain Lambertian
+    /// surfaces in SIMD lanes where the scene allows it (every light a constant area light;
+    /// the same image bit for bit, faster); `false`: every vertex goes through the general
+    /// BSDF, for comparisons.
+    pub lambert_lanes: bool,
 }
 
 impl VcmSettings {
@@ -161,6 +166,7 @@ impl VcmSettings {
             radius_fraction: DEFAULT_RADIUS_FRACTION,
             alpha: DEFAULT_ALPHA,
             prune: true,
+            lambert_lanes: true,
         }
     }
 }
@@ -250,7 +256,7 @@ impl Vcm {
         let plan = BidirPlan::new(settings.algorithm, &scene.features, settings.prune);
         let mut vcm = Vcm {
             projection: scene.camera.projection(width, height),
-            lambert_lanes: LambertLanes::for_scene(&scene),
+            lambert_lanes: LambertLanes::for_scene(&scene, settings.lambert_lanes),
             scene,
             traversal,
             settings,
