@@ -5,48 +5,14 @@ use std::sync::Arc;
 
 use crate::Backend;
 use crate::frames::FrameSizes;
+pub use vcm::Algorithm;
 use vcm::{
-    Algorithm as VcmAlgorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer,
-    PtSettings, RenderError, Schedule, Scheduler, Vcm, VcmSettings,
+    DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer, PtSettings, RenderError,
+    Schedule, Scheduler, Vcm, VcmSettings,
 };
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Scene, ShadingPlan};
 use vcm_traversal::Traversal;
-
-/// Light transport algorithms.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Algorithm {
-    /// Path tracing with next event estimation and MIS (the reference unidirectional tracer).
-    Pt,
-    /// Light tracing: light paths connected to the camera.
-    Lt,
-    /// Bidirectional path tracing (light vertex cache connections).
-    Bpt,
-    /// Progressive photon mapping: merging at the first diffuse or glossy camera vertex.
-    Ppm,
-    /// Bidirectional photon mapping: merging at every camera vertex.
-    Bpm,
-    /// Vertex connection and merging: all of the above, combined by MIS.
-    Vcm,
-}
-
-impl Algorithm {
-    /// The lower-case name used on the command line.
-    pub fn name(self) -> &'static str {
-        self.vcm_algorithm().map_or("pt", VcmAlgorithm::name)
-    }
-
-    fn vcm_algorithm(self) -> Option<VcmAlgorithm> {
-        match self {
-            Algorithm::Pt => None,
-            Algorithm::Lt => Some(VcmAlgorithm::LightTracing),
-            Algorithm::Bpt => Some(VcmAlgorithm::Bpt),
-            Algorithm::Ppm => Some(VcmAlgorithm::Ppm),
-            Algorithm::Bpm => Some(VcmAlgorithm::Bpm),
-            Algorithm::Vcm => Some(VcmAlgorithm::Vcm),
-        }
-    }
-}
 
 /// How the samples of a pixel relate.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -226,8 +192,8 @@ pub fn build(
     } else {
         Arc::clone(scene)
     };
-    Ok(match algorithm.vcm_algorithm() {
-        None => {
+    Ok(match algorithm {
+        Algorithm::Pt => {
             let settings = PtSettings {
                 seed: options.seed,
                 sequence: options.sampler.sequence(),
@@ -237,7 +203,7 @@ pub fn build(
             };
             Box::new(PathTracer::new(scene, traversal, settings)?)
         }
-        Some(vcm_algorithm) => {
+        bidirectional => {
             let settings = VcmSettings {
                 seed: options.seed,
                 sequence: options.sampler.sequence(),
@@ -247,7 +213,7 @@ pub fn build(
                 alpha: options.alpha,
                 prune: !options.no_prune,
                 lambert_lanes: !options.no_prune,
-                ..VcmSettings::new(vcm_algorithm, width, height)
+                ..VcmSettings::new(bidirectional, width, height)
             };
             Box::new(Vcm::new(scene, traversal, settings)?)
         }

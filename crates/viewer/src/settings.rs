@@ -4,16 +4,6 @@
 use vcm_rs::Backend;
 use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
 
-/// Every algorithm, in the order the algorithm menu lists them.
-pub const ALGORITHMS: [Algorithm; 6] = [
-    Algorithm::Pt,
-    Algorithm::Lt,
-    Algorithm::Bpt,
-    Algorithm::Ppm,
-    Algorithm::Bpm,
-    Algorithm::Vcm,
-];
-
 /// The render settings the viewer's controls edit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
