@@ -9,8 +9,8 @@ use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
 use vcm::Scheduler;
 use vcm_rs::Backend;
-use vcm_rs::frames::Frames;
-use vcm_rs::integrators::{Algorithm, ScheduleOptions, SchedulerKind};
+use vcm_rs::integrators::Algorithm;
+use vcm_rs::render_loop::{Frames, ScheduleOptions, SchedulerKind};
 
 use crate::app::{LoadedScene, STATE_EXTENSION, ViewerApp};
 use crate::camera_controller::CameraController;

@@ -2,7 +2,8 @@
 //! and the schedule (scheduler, tile size, samples per pixel per frame). Any change restarts the accumulation (see [`crate::session`]).
 
 use vcm_rs::Backend;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
+use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+use vcm_rs::render_loop::ScheduleOptions;
 
 /// The render settings the viewer's controls edit.
 #[derive(Clone, Debug, PartialEq)]

@@ -17,9 +17,9 @@ use vcm::Film;
 use vcm::image_io::{RgbImage, write_error_png};
 use vcm::metrics::relative_error_per_pixel;
 use vcm_rs::Backend;
-use vcm_rs::frames::Frames;
-use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, ScheduleOptions, image_size};
+use vcm_rs::integrators::{Algorithm, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse};
+use vcm_rs::render_loop::{Frames, ScheduleOptions};
 use vcm_rs::scene::Scene;
 use vcm_rs::traversal::Traversal;
 
@@ -344,14 +344,16 @@ fn render(
         size,
     } = setup;
     let traversal = traversals.get(options.backend, scene)?;
-    let mut integrator =
-        integrators::build(options.algo, scene, traversal, size, &options.integrator)?;
-    let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
-    let schedule = options
-        .schedule
-        .first_schedule_on(options.backend, samples_left);
-    integrator.set_schedule(schedule)?;
     let frames = Frames::new(options.schedule, options.backend);
+    let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
+    let mut integrator = frames.integrator(
+        options.algo,
+        scene,
+        traversal,
+        size,
+        &options.integrator,
+        samples_left,
+    )?;
     let mut film = Film::new(size.0, size.1);
     let outcome = progressive::render(
         integrator.as_mut(),
