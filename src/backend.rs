@@ -85,3 +85,36 @@ impl Backend {
         })
     }
 }
+
+/// One scene's traversal structures, one per backend, each built on first use and kept for
+/// every later render of the scene (`vcm experiment`'s runs, the Python package's renders).
+pub struct Traversals {
+    scene: Arc<Scene>,
+    built: Vec<(Backend, Arc<dyn Traversal>)>,
+}
+
+impl Traversals {
+    /// None built yet for `scene`.
+    pub fn new(scene: Arc<Scene>) -> Traversals {
+        Traversals {
+            scene,
+            built: Vec::new(),
+        }
+    }
+
+    /// The structure of `backend`, built now if none was yet (then `on_build` is told what
+    /// the backend runs on).
+    pub fn get(
+        &mut self,
+        backend: Backend,
+        on_build: impl FnOnce(&BuiltTraversal),
+    ) -> Result<Arc<dyn Traversal>, BackendError> {
+        if let Some((_, traversal)) = self.built.iter().find(|(b, _)| *b == backend) {
+            return Ok(Arc::clone(traversal));
+        }
+        let built = backend.build(&self.scene)?;
+        on_build(&built);
+        self.built.push((backend, Arc::clone(&built.traversal)));
+        Ok(built.traversal)
+    }
+}

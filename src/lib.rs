@@ -74,7 +74,7 @@ pub use vcm_scene as scene;
 pub use vcm_traversal as traversal;
 pub use vcm_traversal_wgpu as traversal_wgpu;
 
-pub use backend::{Backend, BackendError, BuiltTraversal};
+pub use backend::{Backend, BackendError, BuiltTraversal, Traversals};
 
 use vcm_scene::texture::{Filter, UvTransform, WrapMode};
 use vcm_scene::{Scene, Texture};

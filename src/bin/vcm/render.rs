@@ -18,7 +18,7 @@ use vcm::{Film, Integrator, RenderError, StopFlag};
 use vcm_rs::scene::{LoadOptions, Scene, ShadingPlan};
 use vcm_rs::state::{RenderSettings, RenderState, SETTINGS, parse_range, scene_hash};
 use vcm_rs::traversal::Traversal;
-use vcm_rs::Backend;
+use vcm_rs::{Backend, BuiltTraversal};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic};
 use vcm_rs::integrators::{Algorithm, IntegratorOptions, image_size};
@@ -504,8 +504,13 @@ pub fn build_traversal(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<A
     let built = backend
         .build(scene)
         .context("building the ray traversal backend")?;
-    tell!("traversal: {}", built.description);
+    tell_traversal(&built);
     Ok(built.traversal)
+}
+
+/// Says what a traversal backend just built runs on.
+pub fn tell_traversal(built: &BuiltTraversal) {
+    tell!("traversal: {}", built.description);
 }
 
 /// Sets the number of worker threads (default: all cores).
