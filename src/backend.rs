@@ -3,9 +3,6 @@
 
 use std::sync::Arc;
 
-use vcm::Scheduler;
-
-use crate::frames::{FrameSizes, Frames};
 use vcm_scene::{Decision, Scene};
 use vcm_traversal::{BuildError, Traversal};
 use vcm_traversal_wgpu::GpuError;
@@ -50,40 +47,6 @@ impl Backend {
         }
     }
 
-    /// The scheduler to run frames of `samples_per_frame` with on this backend when the user
-    /// picks none (`docs/schedulers.md`). On the CPU tiles ([`Scheduler::default`]) are
-    /// fastest at any frame size. On the GPU every traversal call pays a dispatch and two
-    /// transfers, so a tile's batches must be big: one batch per pass is fastest at one or
-    /// two samples per frame, 64-pixel tiles from [`GPU_TILE_SAMPLES`] on (H100, 16 threads:
-    /// 1.1–1.9× over one batch at 4 samples per frame, 2.4–2.5× at 16).
-    ///
-    /// [`GPU_TILE_SAMPLES`]: Self::GPU_TILE_SAMPLES
-    pub fn preferred_scheduler(self, samples_per_frame: u32) -> Scheduler {
-        match self {
-            Backend::Cpu => Scheduler::default(),
-            Backend::Gpu if samples_per_frame >= Self::GPU_TILE_SAMPLES => Scheduler::Tile {
-                size: 64,
-                merge_below: Scheduler::DEFAULT_MERGE_BELOW,
-            },
-            Backend::Gpu => Scheduler::None,
-        }
-    }
-
-    /// Samples per pixel per frame from which the GPU backend prefers tiles.
-    pub const GPU_TILE_SAMPLES: u32 = 4;
-
-    /// How this backend sizes frames when the user names no `--spp-per-frame`: one sample
-    /// per pixel per frame on the CPU (more make no backend faster there and VCM slower,
-    /// `docs/schedulers.md`), paced frames of up to [`Frames::MOST_PACED`] on the GPU.
-    ///
-    /// [`Frames::MOST_PACED`]: crate::frames::Frames::MOST_PACED
-    pub fn preferred_frame_sizes(self) -> FrameSizes {
-        match self {
-            Backend::Cpu => FrameSizes::Fixed(1),
-            Backend::Gpu => FrameSizes::Paced(Frames::MOST_PACED),
-        }
-    }
-
     /// Whether this backend's traversal tests alpha masks for `scene`, and why: the test
     /// (on the CPU a callback, on the GPU the `alpha_masks.wgsl` module and its buffers)
     /// exists only where some material is alpha-masked.
@@ -120,5 +83,38 @@ impl Backend {
                 }
             }
         })
+    }
+}
+
+/// One scene's traversal structures, one per backend, each built on first use and kept for
+/// every later render of the scene (`vcm experiment`'s runs, the Python package's renders).
+pub struct Traversals {
+    scene: Arc<Scene>,
+    built: Vec<(Backend, Arc<dyn Traversal>)>,
+}
+
+impl Traversals {
+    /// None built yet for `scene`.
+    pub fn new(scene: Arc<Scene>) -> Traversals {
+        Traversals {
+            scene,
+            built: Vec::new(),
+        }
+    }
+
+    /// The structure of `backend`, built now if none was yet (then `on_build` is told what
+    /// the backend runs on).
+    pub fn get(
+        &mut self,
+        backend: Backend,
+        on_build: impl FnOnce(&BuiltTraversal),
+    ) -> Result<Arc<dyn Traversal>, BackendError> {
+        if let Some((_, traversal)) = self.built.iter().find(|(b, _)| *b == backend) {
+            return Ok(Arc::clone(traversal));
+        }
+        let built = backend.build(&self.scene)?;
+        on_build(&built);
+        self.built.push((backend, Arc::clone(&built.traversal)));
+        Ok(built.traversal)
     }
 }

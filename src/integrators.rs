@@ -1,52 +1,17 @@
 //! The light transport algorithms, their options and one builder for any of them, shared by
-//! `vcm render`, `vcm convergence` and the viewer.
+//! `vcm render`, `vcm convergence` and the viewer. How the frames of a render are sized and
+//! scheduled is the [render loop](crate::render_loop)'s.
 
 use std::sync::Arc;
 
-use crate::Backend;
-use crate::frames::FrameSizes;
+pub use vcm::Algorithm;
 use vcm::{
-    Algorithm as VcmAlgorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer,
-    PtSettings, RenderError, Schedule, Scheduler, Vcm, VcmSettings,
+    DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer, PtSettings, RenderError, Vcm,
+    VcmSettings,
 };
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Scene, ShadingPlan};
 use vcm_traversal::Traversal;
-
-/// Light transport algorithms.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Algorithm {
-    /// Path tracing with next event estimation and MIS (the reference unidirectional tracer).
-    Pt,
-    /// Light tracing: light paths connected to the camera.
-    Lt,
-    /// Bidirectional path tracing (light vertex cache connections).
-    Bpt,
-    /// Progressive photon mapping: merging at the first diffuse or glossy camera vertex.
-    Ppm,
-    /// Bidirectional photon mapping: merging at every camera vertex.
-    Bpm,
-    /// Vertex connection and merging: all of the above, combined by MIS.
-    Vcm,
-}
-
-impl Algorithm {
-    /// The lower-case name used on the command line.
-    pub fn name(self) -> &'static str {
-        self.vcm_algorithm().map_or("pt", VcmAlgorithm::name)
-    }
-
-    fn vcm_algorithm(self) -> Option<VcmAlgorithm> {
-        match self {
-            Algorithm::Pt => None,
-            Algorithm::Lt => Some(VcmAlgorithm::LightTracing),
-            Algorithm::Bpt => Some(VcmAlgorithm::Bpt),
-            Algorithm::Ppm => Some(VcmAlgorithm::Ppm),
-            Algorithm::Bpm => Some(VcmAlgorithm::Bpm),
-            Algorithm::Vcm => Some(VcmAlgorithm::Vcm),
-        }
-    }
-}
 
 /// How the samples of a pixel relate.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -123,92 +88,9 @@ impl Default for IntegratorOptions {
     }
 }
 
-/// How paths are grouped into batches.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum SchedulerKind {
-    /// One batch of all active paths per pass.
-    None,
-    /// Worker threads trace tiles to completion, merging in the next tile when few paths
-    /// are left.
-    Tile,
-    /// A pool of queues over tiles: one thread submits every traversal while the others
-    /// shade, so shading overlaps GPU traversal.
-    Queue,
-}
-
-/// How frames are scheduled; the image a seed gives does not depend on it. Options left out
-/// keep the integrator's own schedule (tiles of 32 pixels, one sample per pixel per frame).
-#[derive(clap::Args, Clone, Copy, Debug, Default, PartialEq)]
-pub struct ScheduleOptions {
-    /// How paths are grouped into batches (default tile).
-    #[arg(long, value_enum)]
-    pub scheduler: Option<SchedulerKind>,
-    /// Tile side in pixels (--scheduler tile or queue; default 32).
-    #[arg(long)]
-    pub tile_size: Option<u32>,
-    /// Fraction of a tile's paths below which a worker or queue merges in the next tile
-    /// (--scheduler tile or queue; 0 disables merging; default 0.5).
-    #[arg(long)]
-    pub tile_merge: Option<f32>,
-    /// Queues in the pool, which bounds the paths in flight (--scheduler queue; default
-    /// threads + 1: one per shading thread and one being traversed).
-    #[arg(long)]
-    pub queues: Option<usize>,
-    /// Samples per pixel each frame renders (default: 1 on the CPU backend; on the GPU as
-    /// many as keep a frame within a second, up to 16).
-    #[arg(long)]
-    pub spp_per_frame: Option<u32>,
-}
-
-impl ScheduleOptions {
-    /// The scheduler these options name: `--scheduler`, or tiles where only a tile option is
-    /// given; `None` where they name neither.
-    fn named_scheduler(&self) -> Option<Scheduler> {
-        let size = self.tile_size.unwrap_or(Scheduler::DEFAULT_TILE_SIZE);
-        let merge_below = self.tile_merge.unwrap_or(Scheduler::DEFAULT_MERGE_BELOW);
-        let tiles = Scheduler::Tile { size, merge_below };
-        match self.scheduler {
-            Some(SchedulerKind::None) => Some(Scheduler::None),
-            Some(SchedulerKind::Tile) => Some(tiles),
-            Some(SchedulerKind::Queue) => Some(Scheduler::Queue {
-                queues: self.queues.unwrap_or_else(Scheduler::default_queues),
-                size,
-                merge_below,
-            }),
-            None => (self.tile_size.is_some() || self.tile_merge.is_some()).then_some(tiles),
-        }
-    }
-
-    /// The schedule of a frame of `samples_per_frame` on `backend`: the scheduler these
-    /// options name, else the backend's [preferred one](Backend::preferred_scheduler) for
-    /// that frame size.
-    pub fn schedule_on(&self, backend: Backend, samples_per_frame: u32) -> Schedule {
-        Schedule {
-            scheduler: self
-                .named_scheduler()
-                .unwrap_or_else(|| backend.preferred_scheduler(samples_per_frame)),
-            samples_per_frame,
-        }
-    }
-
-    /// The schedule of the first frame on `backend` (what an integrator is set up with, which
-    /// also checks the options and the memory they need), of at most `samples_left` samples
-    /// per pixel where a render has no more to do: a frame never renders past it.
-    pub fn first_schedule_on(&self, backend: Backend, samples_left: Option<u32>) -> Schedule {
-        let first = self.frame_sizes(backend).first();
-        self.schedule_on(backend, samples_left.map_or(first, |left| first.min(left)))
-    }
-
-    /// How frames are sized on `backend`: `--spp-per-frame` in every frame where given, else
-    /// the backend's [preference](Backend::preferred_frame_sizes).
-    pub fn frame_sizes(&self, backend: Backend) -> FrameSizes {
-        self.spp_per_frame
-            .map_or_else(|| backend.preferred_frame_sizes(), FrameSizes::Fixed)
-    }
-}
-
 /// The integrator of `algorithm` for a `width` × `height` image. With `options.no_prune`
-/// it renders a copy of the scene whose shading runs every part ([`ShadingPlan::FULL`]).
+/// it renders a copy of the scene whose shading runs every part ([`ShadingPlan::FULL`]),
+/// every vertex through the general BSDF (no SIMD lanes).
 pub fn build(
     algorithm: Algorithm,
     scene: &Arc<Scene>,
@@ -225,17 +107,18 @@ pub fn build(
     } else {
         Arc::clone(scene)
     };
-    Ok(match algorithm.vcm_algorithm() {
-        None => {
+    Ok(match algorithm {
+        Algorithm::Pt => {
             let settings = PtSettings {
                 seed: options.seed,
                 sequence: options.sampler.sequence(),
                 max_depth: options.max_depth,
+                lambert_lanes: !options.no_prune,
                 ..PtSettings::new(width, height)
             };
             Box::new(PathTracer::new(scene, traversal, settings)?)
         }
-        Some(vcm_algorithm) => {
+        bidirectional => {
             let settings = VcmSettings {
                 seed: options.seed,
                 sequence: options.sampler.sequence(),
@@ -244,7 +127,8 @@ pub fn build(
                 radius_fraction: options.radius,
                 alpha: options.alpha,
                 prune: !options.no_prune,
-                ..VcmSettings::new(vcm_algorithm, width, height)
+                lambert_lanes: !options.no_prune,
+                ..VcmSettings::new(bidirectional, width, height)
             };
             Box::new(Vcm::new(scene, traversal, settings)?)
         }
@@ -259,71 +143,4 @@ pub fn image_size(scene: &Scene, width: u32, height: Option<u32>) -> (u32, u32) 
         ((width as f32 / aspect).round() as u32).max(1)
     });
     (width, height)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_backend_picks_the_scheduler_only_where_the_options_name_none() {
-        let none = ScheduleOptions::default();
-        assert_eq!(none.schedule_on(Backend::Cpu, 1), Schedule::default());
-        assert_eq!(none.schedule_on(Backend::Gpu, 1), Schedule::ONE_BATCH);
-        // The GPU takes tiles once frames are big enough to fill their batches.
-        let big = none.schedule_on(Backend::Gpu, Backend::GPU_TILE_SAMPLES);
-        assert!(matches!(big.scheduler, Scheduler::Tile { size: 64, .. }));
-        let one_batch = ScheduleOptions {
-            scheduler: Some(SchedulerKind::None),
-            ..ScheduleOptions::default()
-        };
-        assert_eq!(
-            one_batch.schedule_on(Backend::Gpu, 16),
-            Schedule {
-                scheduler: Scheduler::None,
-                samples_per_frame: 16
-            }
-        );
-        let tiles = ScheduleOptions {
-            tile_size: Some(48),
-            ..ScheduleOptions::default()
-        };
-        assert!(matches!(
-            tiles.schedule_on(Backend::Gpu, 1).scheduler,
-            Scheduler::Tile { size: 48, .. }
-        ));
-        assert_eq!(
-            one_batch.schedule_on(Backend::Cpu, 1).scheduler,
-            Scheduler::None
-        );
-    }
-
-    #[test]
-    fn frames_are_paced_on_the_gpu_unless_the_options_fix_their_size() {
-        let none = ScheduleOptions::default();
-        assert_eq!(none.frame_sizes(Backend::Cpu), FrameSizes::Fixed(1));
-        assert_eq!(
-            none.frame_sizes(Backend::Gpu),
-            FrameSizes::Paced(crate::frames::Frames::MOST_PACED)
-        );
-        let four = ScheduleOptions {
-            spp_per_frame: Some(4),
-            ..ScheduleOptions::default()
-        };
-        for backend in Backend::ALL {
-            assert_eq!(four.frame_sizes(*backend), FrameSizes::Fixed(4));
-        }
-    }
-
-    #[test]
-    fn the_first_frame_never_renders_past_the_samples_left() {
-        let many = ScheduleOptions {
-            spp_per_frame: Some(100_000),
-            ..ScheduleOptions::default()
-        };
-        let first = |left| many.first_schedule_on(Backend::Cpu, left).samples_per_frame;
-        assert_eq!(first(Some(1)), 1);
-        assert_eq!(first(Some(300_000)), 100_000);
-        assert_eq!(first(None), 100_000);
-    }
 }

@@ -9,7 +9,8 @@
 //! - [`vcm`]: the integrators themselves, the [`vcm::Film`] they accumulate into and image I/O.
 //! - [`Backend`]: the traversal backends, chosen at run time.
 //! - [`integrators`]: the light transport algorithms, their options and one builder for all.
-//! - [`progressive`]: the render loop: frames until a sample or time budget is spent.
+//! - [`render_loop`]: the render loop: each frame's schedule and size, frames until a sample
+//!   or time budget is spent.
 //! - [`plot`]: PNG plots of error, CPU utilization and scheduler speed-ups.
 //! - [`state`]: a render's state as a value and a file: checkpoint, resume, shards, merge.
 //!
@@ -63,10 +64,9 @@
 use std::sync::Arc;
 
 mod backend;
-pub mod frames;
 pub mod integrators;
 pub mod plot;
-pub mod progressive;
+pub mod render_loop;
 pub mod state;
 
 pub use vcm;
@@ -74,7 +74,7 @@ pub use vcm_scene as scene;
 pub use vcm_traversal as traversal;
 pub use vcm_traversal_wgpu as traversal_wgpu;
 
-pub use backend::{Backend, BackendError, BuiltTraversal};
+pub use backend::{Backend, BackendError, BuiltTraversal, Traversals};
 
 use vcm_scene::texture::{Filter, UvTransform, WrapMode};
 use vcm_scene::{Scene, Texture};

@@ -9,9 +9,7 @@ use numpy::PyArray3;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vcm_rs::frames::Frames;
-use vcm_rs::integrators;
-use vcm_rs::progressive::{self, Budget};
+use vcm_rs::render_loop::{self, Budget, Frames};
 use vcm_rs::state::RenderState as State;
 use vcm_rs::vcm::{Film, StopFlag};
 
@@ -142,22 +140,17 @@ fn run(
     let traversal = py
         .detach(|| scene.traversal(request.backend))
         .map_err(vcm_error)?;
-    let mut integrator = integrators::build(
-        settings.algorithm,
-        &scene.data,
-        traversal,
-        size,
-        &settings.options,
-    )
-    .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    integrator
-        .set_schedule(
-            request
-                .schedule
-                .first_schedule_on(request.backend, samples_left),
+    let mut frames = Frames::new(request.schedule, request.backend).starting_at(first);
+    let mut integrator = frames
+        .integrator(
+            settings.algorithm,
+            &scene.data,
+            traversal,
+            size,
+            &settings.options,
+            samples_left,
         )
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let mut frames = Frames::new(request.schedule, request.backend).starting_at(first);
     let stop = StopFlag::new();
     // (samples per pixel, seconds) after the latest frame, and what was last reported.
     let latest = Mutex::new((0, 0.0));
@@ -180,7 +173,7 @@ fn run(
     };
     let rendered = run_released(py, &stop, report, || {
         let mut film = Film::new(size.0, size.1);
-        let rendered = progressive::render(
+        let rendered = render_loop::render(
             integrator.as_mut(),
             &mut frames,
             &mut film,

@@ -6,8 +6,8 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use vcm_rs::Backend;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions, SamplerKind, ScheduleOptions, image_size};
-use vcm_rs::progressive::Budget;
+use vcm_rs::integrators::{Algorithm, IntegratorOptions, SamplerKind, image_size};
+use vcm_rs::render_loop::{Budget, ScheduleOptions};
 use vcm_rs::state::{RenderSettings, SETTING_OPTIONS};
 
 use crate::scene::Scene;

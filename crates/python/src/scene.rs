@@ -6,10 +6,10 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vcm_rs::Backend;
 use vcm_rs::scene::{LoadOptions, Scene as SceneData};
 use vcm_rs::state::scene_hash;
 use vcm_rs::traversal::Traversal;
+use vcm_rs::{Backend, Traversals};
 
 use crate::vcm_error;
 
@@ -26,7 +26,7 @@ pub struct Scene {
     /// The scene's content hash, computed when a state first needs it.
     hash: OnceLock<u64>,
     /// The traversal structures built so far, one per backend.
-    traversals: Mutex<Vec<(Backend, Arc<dyn Traversal>)>>,
+    traversals: Mutex<Traversals>,
 }
 
 impl Scene {
@@ -38,12 +38,7 @@ impl Scene {
     /// The traversal structure of `backend` for this scene, built on first use.
     pub fn traversal(&self, backend: Backend) -> anyhow::Result<Arc<dyn Traversal>> {
         let mut built = self.traversals.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((_, traversal)) = built.iter().find(|(b, _)| *b == backend) {
-            return Ok(Arc::clone(traversal));
-        }
-        let traversal = backend.traversal(&self.data)?;
-        built.push((backend, Arc::clone(&traversal)));
-        Ok(traversal)
+        Ok(built.get(backend, |_| ())?)
     }
 }
 
@@ -175,11 +170,11 @@ pub fn load_scene(
         }
         Ok(scene)
     });
-    let data = loaded.map_err(vcm_error)?;
+    let data = Arc::new(loaded.map_err(vcm_error)?);
     Ok(Scene {
-        data: Arc::new(data),
+        traversals: Mutex::new(Traversals::new(Arc::clone(&data))),
+        data,
         camera,
         hash: OnceLock::new(),
-        traversals: Mutex::new(Vec::new()),
     })
 }

@@ -16,11 +16,6 @@ pub struct ShadingPlan {
     /// Look up the emitter behind every hit triangle (else: no triangle emits, no hit finds
     /// emission).
     pub emitter_lookups: bool,
-    /// Let integrators that can shade vertices on plain Lambertian materials several at a
-    /// time in SIMD lanes do so, leaving the general BSDF out there (the path tracer, where
-    /// every light is a constant area light; the same image bit for bit). Off: every vertex
-    /// goes through the general BSDF.
-    pub lambert_lanes: bool,
 }
 
 impl ShadingPlan {
@@ -29,7 +24,6 @@ impl ShadingPlan {
         texture_coordinates: true,
         normal_maps: true,
         emitter_lookups: true,
-        lambert_lanes: false,
     };
 
     /// The parts a scene with `features` needs.
@@ -38,7 +32,6 @@ impl ShadingPlan {
             texture_coordinates: features.textures,
             normal_maps: features.normal_maps,
             emitter_lookups: features.lights.area > 0,
-            lambert_lanes: true,
         }
     }
 

@@ -2,7 +2,8 @@
 //! compute shaders dispatched through wgpu.
 //!
 //! The hierarchy is built on the CPU (obvhs's PLOC and reinsertion, as for the CPU backend),
-//! laid out for the GPU ([`layout`]) and uploaded once; kernels come from `shaders/*.wgsl`.
+//! laid out for the GPU ([`layout`]) and uploaded once; kernels come from the
+//! crate's `shaders/*.wgsl`.
 
 #![warn(missing_docs)]
 

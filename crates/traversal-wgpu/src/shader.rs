@@ -1,4 +1,4 @@
-//! Composing the traversal kernels from the WGSL sources in `shaders/`.
+//! Composing the traversal kernels from the WGSL sources in this crate's `shaders/`.
 //!
 //! WGSL has no includes: a module is the host-defined constants followed by `ray.wgsl`
 //! (rays, hits, the triangle test), the alpha test and the traversal file. The stack size is
@@ -9,15 +9,15 @@
 use crate::layout::NodeLayout;
 
 /// The shared ray and triangle code.
-pub const RAY_WGSL: &str = include_str!("../../../shaders/ray.wgsl");
+pub const RAY_WGSL: &str = include_str!("../shaders/ray.wgsl");
 /// The alpha test of scenes without masks: always opaque.
-pub const ALPHA_NONE_WGSL: &str = include_str!("../../../shaders/alpha_none.wgsl");
+pub const ALPHA_NONE_WGSL: &str = include_str!("../shaders/alpha_none.wgsl");
 /// The alpha test of scenes with masks.
-pub const ALPHA_MASKS_WGSL: &str = include_str!("../../../shaders/alpha_masks.wgsl");
+pub const ALPHA_MASKS_WGSL: &str = include_str!("../shaders/alpha_masks.wgsl");
 /// Traversal of the binary layout.
-pub const TRAVERSE_BVH2_WGSL: &str = include_str!("../../../shaders/traverse_bvh2.wgsl");
+pub const TRAVERSE_BVH2_WGSL: &str = include_str!("../shaders/traverse_bvh2.wgsl");
 /// Traversal of the wide layout.
-pub const TRAVERSE_CWBVH_WGSL: &str = include_str!("../../../shaders/traverse_cwbvh.wgsl");
+pub const TRAVERSE_CWBVH_WGSL: &str = include_str!("../shaders/traverse_cwbvh.wgsl");
 
 /// Entry point that writes one [`Hit`](vcm_traversal::HitBatch) per ray.
 pub const CLOSEST_HIT_ENTRY: &str = "closest_hit";

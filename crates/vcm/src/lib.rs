@@ -41,6 +41,7 @@
 
 #![warn(missing_docs)]
 
+mod algorithm;
 pub mod atomic_write;
 mod bidir;
 mod camera_rays;
@@ -67,9 +68,8 @@ mod shadow;
 mod surface_hit;
 mod wave;
 
-pub use bidir::{
-    Algorithm, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, MAX_CONNECTIONS, Vcm, VcmSettings,
-};
+pub use algorithm::Algorithm;
+pub use bidir::{DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, MAX_CONNECTIONS, Vcm, VcmSettings};
 pub use error::RenderError;
 pub use film::{Film, FilmBand, PixelSum, rounded_sum};
 pub use integrator::{FrameStats, Integrator, Schedule};

@@ -36,11 +36,15 @@ pub struct PtSettings {
     /// Longest path in segments (a directly seen light is 1); `None`: unlimited, ended by
     /// Russian roulette only.
     pub max_depth: Option<u32>,
+    /// Shade vertices on plain Lambertian surfaces in SIMD lanes where the scene allows it
+    /// (every light a constant area light; the same image bit for bit, faster); `false`:
+    /// every vertex goes through the general BSDF, for comparisons.
+    pub lambert_lanes: bool,
 }
 
 impl PtSettings {
     /// Default settings for a `width` × `height` image: seed 0, stratified samples, paths
-    /// ended by Russian roulette only.
+    /// ended by Russian roulette only, plain Lambert vertices in lanes.
     pub fn new(width: u32, height: u32) -> PtSettings {
         PtSettings {
             width,
@@ -48,6 +52,7 @@ impl PtSettings {
             seed: 0,
             sequence: SampleSequence::default(),
             max_depth: None,
+            lambert_lanes: true,
         }
     }
 }
@@ -81,7 +86,7 @@ impl PathTracer {
     ) -> Result<PathTracer, RenderError> {
         check_image_size(settings.width, settings.height)?;
         let tracer = PathTracer {
-            lambert_lanes: LambertLanes::for_scene(&scene),
+            lambert_lanes: LambertLanes::for_scene(&scene, settings.lambert_lanes),
             scene,
             traversal,
             settings,

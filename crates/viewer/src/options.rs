@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use clap::Parser;
 use vcm_rs::Backend;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
+use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+use vcm_rs::render_loop::ScheduleOptions;
 use vcm_rs::state::SETTING_OPTIONS;
 
 use crate::settings::RenderSettings;
@@ -77,7 +78,7 @@ impl Options {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vcm_rs::integrators::SchedulerKind;
+    use vcm_rs::render_loop::SchedulerKind;
 
     fn parse(args: &[&str]) -> Result<Options, clap::Error> {
         Options::try_parse_from(std::iter::once("vcm-viewer").chain(args.iter().copied()))

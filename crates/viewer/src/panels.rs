@@ -9,12 +9,12 @@ use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
 use vcm::Scheduler;
 use vcm_rs::Backend;
-use vcm_rs::frames::Frames;
-use vcm_rs::integrators::{Algorithm, ScheduleOptions, SchedulerKind};
+use vcm_rs::integrators::Algorithm;
+use vcm_rs::render_loop::{Frames, ScheduleOptions, SchedulerKind};
 
 use crate::app::{LoadedScene, STATE_EXTENSION, ViewerApp};
 use crate::camera_controller::CameraController;
-use crate::settings::{ALGORITHMS, RenderSettings};
+use crate::settings::RenderSettings;
 use crate::stats::LiveStats;
 
 /// Longest path offered by the max depth control (segments).
@@ -114,7 +114,7 @@ fn render_section(settings: &mut RenderSettings, ui: &mut egui::Ui) {
             egui::ComboBox::from_id_salt("algorithm")
                 .selected_text(settings.algorithm.name())
                 .show_ui(ui, |ui| {
-                    for algorithm in ALGORITHMS {
+                    for algorithm in Algorithm::ALL {
                         ui.selectable_value(&mut settings.algorithm, algorithm, algorithm.name());
                     }
                 });

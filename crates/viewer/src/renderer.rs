@@ -13,8 +13,7 @@ use glam::Vec3;
 use vcm::image_io::RgbImage;
 use vcm::{Film, FrameStats, Integrator};
 use vcm_rs::Backend;
-use vcm_rs::frames::{Frames, Remaining};
-use vcm_rs::integrators;
+use vcm_rs::render_loop::{Frames, Remaining};
 use vcm_rs::state::SampleRanges;
 use vcm_scene::Scene;
 use vcm_traversal::Traversal;
@@ -228,19 +227,16 @@ impl Worker {
             })
         };
         let name = settings.algorithm.name();
-        let mut integrator = integrators::build(
-            settings.algorithm,
-            &scene,
-            traversal,
-            job.view.size,
-            &settings.integrator,
-        )
-        .map_err(|e| format!("cannot start {name}: {e}"))?;
-        let schedule = settings.schedule.first_schedule_on(settings.backend, None);
-        integrator
-            .set_schedule(schedule)
-            .map_err(|e| format!("cannot schedule {name}: {e}"))?;
-        Ok(integrator)
+        Frames::new(settings.schedule, settings.backend)
+            .integrator(
+                settings.algorithm,
+                &scene,
+                traversal,
+                job.view.size,
+                &settings.integrator,
+                None,
+            )
+            .map_err(|e| format!("cannot start {name}: {e}"))
     }
 
     fn traversal(
@@ -414,7 +410,8 @@ pub(crate) mod tests {
     use std::path::Path;
     use std::sync::mpsc;
 
-    use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
+    use vcm_rs::integrators::{self, Algorithm, IntegratorOptions};
+    use vcm_rs::render_loop::ScheduleOptions;
 
     use crate::settings::RenderSettings;
 

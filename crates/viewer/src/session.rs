@@ -52,7 +52,8 @@ impl Session {
 mod tests {
     use super::*;
     use vcm_rs::Backend;
-    use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions, SchedulerKind};
+    use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+    use vcm_rs::render_loop::{ScheduleOptions, SchedulerKind};
     use vcm_scene::Bounds;
 
     fn view() -> View {

@@ -2,17 +2,8 @@
 //! and the schedule (scheduler, tile size, samples per pixel per frame). Any change restarts the accumulation (see [`crate::session`]).
 
 use vcm_rs::Backend;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions, ScheduleOptions};
-
-/// Every algorithm, in the order the algorithm menu lists them.
-pub const ALGORITHMS: [Algorithm; 6] = [
-    Algorithm::Pt,
-    Algorithm::Lt,
-    Algorithm::Bpt,
-    Algorithm::Ppm,
-    Algorithm::Bpm,
-    Algorithm::Vcm,
-];
+use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+use vcm_rs::render_loop::ScheduleOptions;
 
 /// The render settings the viewer's controls edit.
 #[derive(Clone, Debug, PartialEq)]

@@ -16,16 +16,15 @@ use serde::Deserialize;
 use vcm::Film;
 use vcm::image_io::{RgbImage, write_error_png};
 use vcm::metrics::relative_error_per_pixel;
-use vcm_rs::Backend;
-use vcm_rs::frames::Frames;
-use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, ScheduleOptions, image_size};
+use vcm_rs::integrators::{Algorithm, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse};
+use vcm_rs::render_loop::{Frames, ScheduleOptions};
 use vcm_rs::scene::Scene;
-use vcm_rs::traversal::Traversal;
+use vcm_rs::{Backend, Traversals};
 
 use crate::progressive::{self, Budget, Checkpoint};
 use crate::render::{
-    SceneLimits, build_traversal, load_scene, relmse_points, stop_flag, write_report, write_text,
+    SceneLimits, load_scene, relmse_points, stop_flag, tell_traversal, write_report, write_text,
 };
 
 /// Arguments of `vcm experiment`.
@@ -170,7 +169,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         let folder = output.join(&name);
         std::fs::create_dir_all(&folder)
             .with_context(|| format!("{}: cannot create the folder", folder.display()))?;
-        let mut traversals = Traversals::default();
+        let mut traversals = Traversals::new(Arc::clone(&scene));
         // Loaded or rendered when the first run that is not finished needs it.
         let mut reference: Option<Vec<Vec3>> = None;
         let mut results = Vec::new();
@@ -306,22 +305,6 @@ fn reference_for(
     Ok(image.pixels)
 }
 
-/// The traversal structures built for a scene so far, one per backend.
-#[derive(Default)]
-struct Traversals(Vec<(Backend, Arc<dyn Traversal>)>);
-
-impl Traversals {
-    /// The structure of `backend` for `scene`, built on first use.
-    fn get(&mut self, backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<Arc<dyn Traversal>> {
-        if let Some((_, traversal)) = self.0.iter().find(|(b, _)| *b == backend) {
-            return Ok(Arc::clone(traversal));
-        }
-        let traversal = build_traversal(backend, scene)?;
-        self.0.push((backend, Arc::clone(&traversal)));
-        Ok(traversal)
-    }
-}
-
 /// What a render of one configuration needs.
 struct Setup<'a> {
     scene: &'a Arc<Scene>,
@@ -343,15 +326,19 @@ fn render(
         options,
         size,
     } = setup;
-    let traversal = traversals.get(options.backend, scene)?;
-    let mut integrator =
-        integrators::build(options.algo, scene, traversal, size, &options.integrator)?;
-    let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
-    let schedule = options
-        .schedule
-        .first_schedule_on(options.backend, samples_left);
-    integrator.set_schedule(schedule)?;
+    let traversal = traversals
+        .get(options.backend, tell_traversal)
+        .context("building the ray traversal backend")?;
     let frames = Frames::new(options.schedule, options.backend);
+    let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
+    let mut integrator = frames.integrator(
+        options.algo,
+        scene,
+        traversal,
+        size,
+        &options.integrator,
+        samples_left,
+    )?;
     let mut film = Film::new(size.0, size.1);
     let outcome = progressive::render(
         integrator.as_mut(),

@@ -8,10 +8,9 @@ use anyhow::bail;
 use glam::Vec3;
 use vcm::metrics::{ErrorMetrics, compare};
 use vcm::{Film, FrameStats, Integrator, StopFlag};
-use vcm_rs::frames::{FrameCounts, Frames};
-use vcm_rs::progressive::{self, Rendered};
+use vcm_rs::render_loop::{self, FrameCounts, Frames, Rendered};
 
-pub use vcm_rs::progressive::Budget;
+pub use vcm_rs::render_loop::Budget;
 
 use crate::process::cpu_seconds;
 
@@ -133,7 +132,7 @@ pub fn render(
     let cpu_start = cpu_seconds();
     let mut interval_start = (0.0, cpu_start);
     let mut last_periodic = Instant::now();
-    let rendered = progressive::render(integrator, &mut frames, film, budget, stop, |frame| {
+    let rendered = render_loop::render(integrator, &mut frames, film, budget, stop, |frame| {
         if let Some(periodic) = &mut periodic
             && last_periodic.elapsed() >= periodic.every
         {

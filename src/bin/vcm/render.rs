@@ -15,15 +15,15 @@ use vcm::atomic_write::{writable_target, write_atomically};
 use vcm::image_io::RgbImage;
 use vcm::memory::MemoryCause;
 use vcm::{Film, Integrator, RenderError, StopFlag};
-use vcm_rs::Backend;
-use vcm_rs::frames::Frames;
 use vcm_rs::scene::{LoadOptions, Scene, ShadingPlan};
 use vcm_rs::state::{RenderSettings, RenderState, SETTINGS, parse_range, scene_hash};
 use vcm_rs::traversal::Traversal;
+use vcm_rs::{Backend, BuiltTraversal};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic};
-use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, ScheduleOptions, image_size};
+use vcm_rs::integrators::{Algorithm, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
+use vcm_rs::render_loop::{Frames, ScheduleOptions};
 
 /// What `vcm render` and `vcm convergence` both need to set up a render.
 #[derive(clap::Args)]
@@ -82,10 +82,9 @@ const MAX_THREADS: u64 = 1024;
 
 impl RenderSetup {
     /// The integrator of `algorithm` with `options` for `scene` at `size`, traced by
-    /// `traversal`, with the schedule of the first frame these options ask for on their
-    /// backend (which checks it and the memory it needs), of at most `samples_left` samples
-    /// per pixel where the render has no more to do. A render over the memory budget fails
-    /// with the options to lower.
+    /// `traversal`, set up for the first of [these frames](Self::frames) (see
+    /// [`Frames::integrator`]). A render over the memory budget fails with the options to
+    /// lower.
     pub fn integrator(
         &self,
         algorithm: Algorithm,
@@ -95,12 +94,8 @@ impl RenderSetup {
         options: &IntegratorOptions,
         samples_left: Option<u32>,
     ) -> anyhow::Result<Box<dyn Integrator>> {
-        let schedule = self.schedule.first_schedule_on(self.backend, samples_left);
-        integrators::build(algorithm, scene, traversal, size, options)
-            .and_then(|mut integrator| {
-                integrator.set_schedule(schedule)?;
-                Ok(integrator)
-            })
+        self.frames()
+            .integrator(algorithm, scene, traversal, size, options, samples_left)
             .map_err(|error| self.explain(error, size))
     }
 
@@ -505,8 +500,13 @@ pub fn build_traversal(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<A
     let built = backend
         .build(scene)
         .context("building the ray traversal backend")?;
-    tell!("traversal: {}", built.description);
+    tell_traversal(&built);
     Ok(built.traversal)
+}
+
+/// Says what a traversal backend just built runs on.
+pub fn tell_traversal(built: &BuiltTraversal) {
+    tell!("traversal: {}", built.description);
 }
 
 /// Sets the number of worker threads (default: all cores).

@@ -42,6 +42,7 @@ use vcm_scene::{Decision, Projection, Scene};
 use vcm_scheduler::{SchedulerStats, StopFlag};
 use vcm_traversal::Traversal;
 
+use crate::algorithm::Algorithm;
 use crate::error::RenderError;
 use crate::film::Film;
 use crate::hash_grid::HashGrid;
@@ -66,60 +67,6 @@ pub const MAX_CONNECTIONS: u32 = 1024;
 /// Default radius reduction exponent α of progressive photon mapping.
 pub const DEFAULT_ALPHA: f32 = 0.75;
 
-/// The algorithms of the VCM integrator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Algorithm {
-    /// Light tracing: light paths connected to the camera (plus emission seen directly).
-    LightTracing,
-    /// Bidirectional path tracing: every connection technique, no merging.
-    Bpt,
-    /// Progressive photon mapping: merging at the first non-specular camera vertex only.
-    Ppm,
-    /// Bidirectional photon mapping: merging at every camera vertex, no connections; emission
-    /// found by the camera path is weighted against the merges (a glossy vertex lit by a
-    /// light is found by its own sampling, not only by a light vertex in its lobe).
-    Bpm,
-    /// Vertex connection and merging: all techniques.
-    Vcm,
-}
-
-impl Algorithm {
-    /// The lower-case short name (lt, bpt, ppm, bpm, vcm).
-    pub fn name(self) -> &'static str {
-        match self {
-            Algorithm::LightTracing => "lt",
-            Algorithm::Bpt => "bpt",
-            Algorithm::Ppm => "ppm",
-            Algorithm::Bpm => "bpm",
-            Algorithm::Vcm => "vcm",
-        }
-    }
-
-    /// Whether camera vertices connect to light samples and light vertices, and light vertices
-    /// to the camera.
-    pub fn connects(self) -> bool {
-        matches!(self, Algorithm::Bpt | Algorithm::Vcm)
-    }
-
-    /// Whether camera vertices merge with light vertices (needs the hash grid).
-    pub fn merges(self) -> bool {
-        matches!(self, Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm)
-    }
-
-    /// Whether light vertices are splatted onto the image through the camera.
-    fn splats(self) -> bool {
-        matches!(
-            self,
-            Algorithm::LightTracing | Algorithm::Bpt | Algorithm::Vcm
-        )
-    }
-
-    /// Whether light vertices are kept in the cache (for connections or merging).
-    fn caches(self) -> bool {
-        self.connects() || self.merges()
-    }
-}
-
 /// What a [`Vcm`] integrator renders.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VcmSettings {
@@ -134,7 +81,7 @@ pub struct VcmSettings {
     pub sequence: SampleSequence,
     /// Longest path in segments (a directly seen light is 1); `None`: unlimited.
     pub max_depth: Option<u32>,
-    /// Which techniques are used.
+    /// Which techniques are used: any algorithm but [`Algorithm::Pt`].
     pub algorithm: Algorithm,
     /// N_c, light vertices each camera vertex connects to (1 to [`MAX_CONNECTIONS`]).
     pub connections: u32,
@@ -145,6 +92,11 @@ pub struct VcmSettings {
     /// Leave out what the scene does not need (see [`Integrator::decisions`]); `false` runs every
     /// part of the algorithm, for comparisons.
     pub prune: bool,
+    /// Shade light vertices, and camera vertices where nothing merges, on plain Lambertian
+    /// surfaces in SIMD lanes where the scene allows it (every light a constant area light;
+    /// the same image bit for bit, faster); `false`: every vertex goes through the general
+    /// BSDF, for comparisons.
+    pub lambert_lanes: bool,
 }
 
 impl VcmSettings {
@@ -161,6 +113,7 @@ impl VcmSettings {
             radius_fraction: DEFAULT_RADIUS_FRACTION,
             alpha: DEFAULT_ALPHA,
             prune: true,
+            lambert_lanes: true,
         }
     }
 }
@@ -230,6 +183,11 @@ impl Vcm {
     ) -> Result<Vcm, RenderError> {
         let VcmSettings { width, height, .. } = settings;
         crate::integrator::check_image_size(width, height)?;
+        if !settings.algorithm.is_bidirectional() {
+            return Err(RenderError::InvalidSetting(
+                "path tracing is the path tracer's (`PathTracer`), not the VCM integrator's".into(),
+            ));
+        }
         if !(1..=MAX_CONNECTIONS).contains(&settings.connections) {
             return Err(RenderError::InvalidSetting(format!(
                 "connections per camera vertex must be 1 to {MAX_CONNECTIONS} (asked for {})",
@@ -250,7 +208,7 @@ impl Vcm {
         let plan = BidirPlan::new(settings.algorithm, &scene.features, settings.prune);
         let mut vcm = Vcm {
             projection: scene.camera.projection(width, height),
-            lambert_lanes: LambertLanes::for_scene(&scene),
+            lambert_lanes: LambertLanes::for_scene(&scene, settings.lambert_lanes),
             scene,
             traversal,
             settings,

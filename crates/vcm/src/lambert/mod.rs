@@ -63,10 +63,11 @@ pub(crate) struct LambertLanes {
 }
 
 impl LambertLanes {
-    /// The tables for `scene`, or why no vertex of it can be shaded in lanes.
-    pub fn for_scene(scene: &Scene) -> Result<LambertLanes, &'static str> {
-        if !scene.shading.lambert_lanes {
-            return Err("pruning is off: every vertex goes through the general BSDF");
+    /// The tables for `scene`, or why no vertex of it is shaded in lanes: the integrator's
+    /// settings leave them out (`wanted` false), or the scene allows none.
+    pub fn for_scene(scene: &Scene, wanted: bool) -> Result<LambertLanes, &'static str> {
+        if !wanted {
+            return Err("off in the integrator's settings: every vertex takes the general BSDF");
         }
         if scene.features.absorbing_volumes {
             return Err("a volume absorbs");

@@ -2,7 +2,7 @@
 //! lanes where it can (the path tracer's vertices, the VCM family's light vertices, and its
 //! camera vertices where nothing merges); every other vertex goes through the general BSDF.
 //! The lanes perform the general vertex's operations in the same order, so a render gives
-//! the same film with them and without them ([`ShadingPlan::lambert_lanes`] off), bit for
+//! the same film with them and without them (`lambert_lanes` off in the settings), bit for
 //! bit: on the Cornell scenes, with leaning shading normals, with path length limits,
 //! several samples per frame and several connections per camera vertex, and on a scene of
 //! one-sided and double-sided surfaces seen from both sides under two lights of different
@@ -10,7 +10,7 @@
 
 use glam::{Vec3, Vec4};
 use vcm::{Algorithm, Film, Integrator, PtSettings, Schedule, VcmSettings};
-use vcm_scene::{Material, Scene, ShadingPlan};
+use vcm_scene::{Material, Scene};
 
 use crate::common::{self, EVERY_ALGORITHM};
 
@@ -24,12 +24,15 @@ struct Options {
     max_depth: Option<u32>,
     samples_per_frame: u32,
     connections: u32,
+    /// Shade in lanes where the scene allows it (the settings' `lambert_lanes`).
+    lanes: bool,
 }
 
 const DEFAULT: Options = Options {
     max_depth: None,
     samples_per_frame: 1,
     connections: 1,
+    lanes: true,
 };
 
 /// The path tracer (`None`) or `algorithm` over `scene`, merging within 5% of the scene's
@@ -39,6 +42,7 @@ fn integrator(scene: Scene, algorithm: Option<Algorithm>, options: Options) -> B
         max_depth,
         samples_per_frame,
         connections,
+        lanes,
     } = options;
     let mut integrator: Box<dyn Integrator> = match algorithm {
         None => Box::new(common::path_tracer(
@@ -46,6 +50,7 @@ fn integrator(scene: Scene, algorithm: Option<Algorithm>, options: Options) -> B
             PtSettings {
                 seed: 3,
                 max_depth,
+                lambert_lanes: lanes,
                 ..common::pt_settings(SIZE, SIZE)
             },
         )),
@@ -56,6 +61,7 @@ fn integrator(scene: Scene, algorithm: Option<Algorithm>, options: Options) -> B
                 max_depth,
                 connections,
                 radius_fraction: 0.05,
+                lambert_lanes: lanes,
                 ..common::vcm_settings(algorithm, SIZE, SIZE)
             },
         )),
@@ -89,16 +95,13 @@ fn assert_lanes_change_nothing(
     algorithms: &[Option<Algorithm>],
     options: Options,
 ) {
-    let without = Scene {
-        shading: ShadingPlan {
-            lambert_lanes: false,
-            ..scene.shading
-        },
-        ..scene.clone()
+    let without = Options {
+        lanes: false,
+        ..options
     };
     for &algorithm in algorithms {
         let (with_lanes, ran) = render(integrator(scene.clone(), algorithm, options));
-        let (general, ran_without) = render(integrator(without.clone(), algorithm, options));
+        let (general, ran_without) = render(integrator(scene.clone(), algorithm, without));
         let label = format!("{name}, {algorithm:?}");
         assert!(
             ran && !ran_without,

@@ -1,12 +1,14 @@
 //! The progressive render loop: frames until a sample count or a time budget is spent or a
-//! stop is requested. `vcm render`, `vcm convergence` and the Python package run it, each
-//! watching the frames through its own callback (progress bars, checkpoints, error reports).
+//! stop is requested. `vcm render`, `vcm convergence`, `vcm experiment` and the Python
+//! package run it, each watching the frames through its own callback (progress bars,
+//! checkpoints, error reports).
 
 use std::time::{Duration, Instant};
 
 use vcm::{Film, FrameStats, Integrator, StopFlag};
 
-use crate::frames::{FrameCounts, Frames, Remaining};
+use super::frames::{FrameCounts, Frames};
+use super::pacer::Remaining;
 
 /// When to stop rendering.
 #[derive(Clone, Copy, Debug, PartialEq)]

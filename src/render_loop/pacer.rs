@@ -1,61 +1,9 @@
-//! Frame after frame: how many samples per pixel each frame renders, and the schedule it
-//! renders with. Shared by `vcm render`, `vcm convergence` and the viewer.
-//!
-//! A frame is the unit of progress, of `--time` budgets and of the viewer's refresh, so it
-//! must stay short; but a GPU wants big batches, which several samples per pixel per frame
-//! give. [`Frames`] therefore sizes each frame: a fixed number of samples where the options
-//! name one (or the backend wants one), else, on the GPU, as many as keep a frame within
-//! [`Frames::TARGET`] (up to [`Frames::MOST_PACED`]). Either way a frame never renders past a
-//! sample budget and, once the time per sample is known, never far past a time budget. The
-//! image does not depend on any of it: sample `s` is the same whatever frame renders it.
+//! Frame sizes from the time the frames so far took: fixed, or paced to a target duration,
+//! and never past what a budget leaves.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use vcm::{Film, FrameStats, Integrator, RenderError};
-
-use crate::Backend;
-use crate::integrators::ScheduleOptions;
-
-/// How the samples per pixel of each frame are chosen.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum FrameSizes {
-    /// This many in every frame (fewer in a last frame that reaches a budget).
-    Fixed(u32),
-    /// As many as fit [`Frames::TARGET`], a power of two from 1 up to this many.
-    Paced(u32),
-}
-
-impl FrameSizes {
-    /// Samples per pixel of the first frame (for `Fixed(0)` 0, which every integrator rejects).
-    pub fn first(self) -> u32 {
-        match self {
-            FrameSizes::Fixed(samples) => samples,
-            FrameSizes::Paced(_) => 1,
-        }
-    }
-}
-
-/// Renders an integrator frame by frame, choosing each frame's size and schedule.
-pub struct Frames {
-    options: ScheduleOptions,
-    backend: Backend,
-    pacer: Pacer,
-    /// The global index of the first sample rendered.
-    first: u32,
-    samples: u32,
-    counts: FrameCounts,
-}
-
-/// How many frames a render took and the range of their sizes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct FrameCounts {
-    /// Frames rendered.
-    pub count: u32,
-    /// Samples per pixel of the smallest frame (0 before any).
-    pub fewest: u32,
-    /// Samples per pixel of the largest frame.
-    pub most: u32,
-}
+use super::schedule::FrameSizes;
 
 /// What a frame may still use: samples per pixel and wall-clock time (`None`: no limit).
 #[derive(Clone, Copy, Debug, Default)]
@@ -66,84 +14,9 @@ pub struct Remaining {
     pub time: Option<Duration>,
 }
 
-impl Frames {
-    /// Longest frame a paced render aims at: short enough for `--time` checkpoints at 1 s
-    /// and an interactive refresh, long enough for a GPU's batches to fill it.
-    pub const TARGET: Duration = Duration::from_secs(1);
-    /// Most samples per pixel in a paced frame: the largest measured
-    /// (`docs/schedulers.md`, 16 samples per frame on an H100).
-    pub const MOST_PACED: u32 = 16;
-
-    /// Frames as `options` ask for on `backend` (see [`ScheduleOptions::frame_sizes`]).
-    pub fn new(options: ScheduleOptions, backend: Backend) -> Frames {
-        Frames {
-            options,
-            backend,
-            pacer: Pacer::new(options.frame_sizes(backend), Self::TARGET),
-            first: 0,
-            samples: 0,
-            counts: FrameCounts::default(),
-        }
-    }
-
-    /// These frames, rendering global samples from `first` on (a resumed render or a shard)
-    /// instead of from 0.
-    pub fn starting_at(self, first: u32) -> Frames {
-        Frames { first, ..self }
-    }
-
-    /// The global index of the next sample to render.
-    pub fn next_sample(&self) -> u32 {
-        self.first + self.samples
-    }
-
-    /// The frames rendered so far.
-    pub fn counts(&self) -> FrameCounts {
-        self.counts
-    }
-
-    /// Samples per pixel rendered so far.
-    pub fn samples(&self) -> u32 {
-        self.samples
-    }
-
-    /// Renders the next frame into `film` within `remaining` (which must leave at least one
-    /// sample), with the schedule its size asks for, and returns what it did; an invalid
-    /// schedule (a frame size or tile size of 0) is an error. A frame that a stop request
-    /// cuts short adds nothing and counts for nothing ([`FrameStats::interrupted`]).
-    pub fn render_next(
-        &mut self,
-        integrator: &mut dyn Integrator,
-        film: &mut Film,
-        remaining: Remaining,
-    ) -> Result<FrameStats, RenderError> {
-        let samples = self.pacer.next(remaining);
-        let schedule = self.options.schedule_on(self.backend, samples);
-        if integrator.samples_per_frame() != samples || self.samples == 0 {
-            integrator.set_schedule(schedule)?;
-        }
-        let start = Instant::now();
-        let stats = integrator.render_frame(film, self.next_sample());
-        if stats.interrupted {
-            return Ok(stats);
-        }
-        self.pacer.record(samples, start.elapsed());
-        self.samples += samples;
-        let counts = &mut self.counts;
-        counts.fewest = if counts.count == 0 {
-            samples
-        } else {
-            counts.fewest.min(samples)
-        };
-        counts.most = counts.most.max(samples);
-        counts.count += 1;
-        Ok(stats)
-    }
-}
-
 /// Picks frame sizes from the time the frames so far took per sample.
 #[derive(Clone, Debug)]
-struct Pacer {
+pub(super) struct Pacer {
     sizes: FrameSizes,
     target: Duration,
     /// The size of the next frame before the budget has its say.
@@ -153,7 +26,7 @@ struct Pacer {
 }
 
 impl Pacer {
-    fn new(sizes: FrameSizes, target: Duration) -> Pacer {
+    pub(super) fn new(sizes: FrameSizes, target: Duration) -> Pacer {
         Pacer {
             sizes,
             target,
@@ -163,7 +36,7 @@ impl Pacer {
     }
 
     /// Samples per pixel of the next frame: the chosen size, cut to what `remaining` allows.
-    fn next(&self, remaining: Remaining) -> u32 {
+    pub(super) fn next(&self, remaining: Remaining) -> u32 {
         let mut samples = self.next;
         if let Some(left) = remaining.samples {
             samples = samples.min(left);
@@ -177,7 +50,7 @@ impl Pacer {
     /// Notes that a frame of `samples` took `took`; a paced pacer grows the next frame by
     /// powers of two while it fits the target, and shrinks it once a frame takes more than
     /// 1.5 times the target (so that sizes do not flap from frame to frame).
-    fn record(&mut self, samples: u32, took: Duration) {
+    pub(super) fn record(&mut self, samples: u32, took: Duration) {
         let per_sample = took / samples.max(1);
         self.per_sample = Some(per_sample);
         let FrameSizes::Paced(most) = self.sizes else {
@@ -215,6 +88,7 @@ fn largest_power_of_two_up_to(n: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render_loop::Frames;
 
     const MS: Duration = Duration::from_millis(1);
 
