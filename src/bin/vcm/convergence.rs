@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use vcm::Film;
 
-use crate::progressive::{self, Outcome};
+use crate::progressive::{self, Outcome, Watch};
 use crate::render::{
     RenderSetup, build_traversal, check_outputs, load_scene, read_reference, relmse_points,
     set_threads, stop_flag, write_text,
@@ -72,9 +72,11 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
             args.setup.frames(),
             &mut film,
             budget,
-            Some(&reference),
             &interrupted,
-            None,
+            Watch {
+                reference: Some(&reference),
+                ..Watch::default()
+            },
         )?;
         outcomes.push((algorithm, outcome));
         if interrupted.is_raised() {

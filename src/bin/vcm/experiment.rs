@@ -22,7 +22,7 @@ use vcm_rs::render_loop::{Frames, ScheduleOptions};
 use vcm_rs::scene::Scene;
 use vcm_rs::{Backend, Traversals};
 
-use crate::progressive::{self, Budget, Checkpoint};
+use crate::progressive::{self, Budget, Checkpoint, Watch};
 use crate::render::{
     SceneLimits, load_scene, relmse_points, stop_flag, tell_traversal, write_report, write_text,
 };
@@ -160,8 +160,11 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     let mut table = String::from(
         "scene,run,spp,seconds,m_samples_per_second,frames_per_second,relmse,rmse,speedup\n",
     );
-    let total = experiment.scenes.len() * runs.len();
-    for (s, entry) in experiment.scenes.iter().enumerate() {
+    let mut position = Position {
+        total: experiment.scenes.len() * runs.len(),
+        ..Position::default()
+    };
+    for entry in &experiment.scenes {
         let path = base.join(&entry.path);
         let scene = load_scene(&path, entry.camera.as_deref(), &args.limits)?;
         let size = image_size(&scene, experiment.width, None);
@@ -173,8 +176,10 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         // Loaded or rendered when the first run that is not finished needs it.
         let mut reference: Option<Vec<Vec3>> = None;
         let mut results = Vec::new();
-        for (r, (run, options)) in runs.iter().enumerate() {
-            say!("[{}/{total}] {name}: {}", s * runs.len() + r + 1, run.name);
+        for (run, options) in &runs {
+            let label = position.label(budget, &name, &run.name);
+            say!("{label}");
+            position.done += 1;
             if let Some(measured) = finished(&folder, run) {
                 results.push(measured);
                 continue;
@@ -195,11 +200,13 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                 options,
                 size,
             };
-            let measured = measure(setup, budget, reference, &folder, run, &stop)?;
+            let measured = measure(setup, (budget, label), reference, &folder, run, &stop)?;
             if stop.is_raised() {
                 say!("interrupted: run the same command again to resume");
                 return Ok(());
             }
+            position.rendered += 1;
+            position.seconds += measured.seconds;
             results.push(measured);
         }
         let series: Vec<Series> = runs
@@ -296,13 +303,59 @@ fn reference_for(
         options: &options,
         size,
     };
-    let (film, _) = render(setup, Budget::Samples(spec.spp), None, stop)?;
+    let label = format!("reference of {}", file_stem(&scene.path));
+    let (film, _) = render(setup, (Budget::Samples(spec.spp), label), None, stop)?;
     if stop.is_raised() {
         bail!("interrupted while rendering the reference; nothing was written");
     }
     let image = film.image();
     image.write_exr(&path)?;
     Ok(image.pixels)
+}
+
+/// How far an experiment has come, for the label of each run's progress bar.
+#[derive(Default)]
+struct Position {
+    /// Renders in the experiment (scenes × runs).
+    total: usize,
+    /// Renders started or found finished, in this invocation or an earlier one.
+    done: usize,
+    /// Renders finished in this invocation, and the seconds they took.
+    rendered: usize,
+    seconds: f64,
+}
+
+impl Position {
+    /// `[k/total] scene: run`, and the time the experiment has left where it can tell: its
+    /// budgets for time budgets, else the mean time of the runs rendered so far.
+    fn label(&self, budget: Budget, scene: &str, run: &str) -> String {
+        let left = (self.total - self.done) as f64;
+        let seconds_left = match budget {
+            Budget::Seconds(seconds) => Some(seconds * left),
+            Budget::Samples(_) if self.rendered > 0 => {
+                Some(self.seconds / self.rendered as f64 * left)
+            }
+            Budget::Samples(_) => None,
+        };
+        let count = format!("[{}/{}] {scene}: {run}", self.done + 1, self.total);
+        match seconds_left {
+            Some(seconds) => format!("{count} (about {} left)", duration_text(seconds)),
+            None => count,
+        }
+    }
+}
+
+/// `seconds` rounded for people: "40 s", "12 min", "2 h 05 min".
+fn duration_text(seconds: f64) -> String {
+    let seconds = seconds.max(0.0).round() as u64;
+    match seconds {
+        0..90 => format!("{seconds} s"),
+        90..5400 => format!("{} min", (seconds + 30) / 60),
+        _ => {
+            let minutes = (seconds + 30) / 60;
+            format!("{} h {:02} min", minutes / 60, minutes % 60)
+        }
+    }
 }
 
 /// What a render of one configuration needs.
@@ -313,10 +366,11 @@ struct Setup<'a> {
     size: (u32, u32),
 }
 
-/// Renders `setup` within `budget`, measuring against `reference` if given.
+/// Renders `setup` within `budget`, measuring against `reference` if given, its progress bar
+/// after `label`.
 fn render(
     setup: Setup<'_>,
-    budget: Budget,
+    (budget, label): (Budget, String),
     reference: Option<&[Vec3]>,
     stop: &vcm::StopFlag,
 ) -> anyhow::Result<(Film, progressive::Outcome)> {
@@ -345,9 +399,12 @@ fn render(
         frames,
         &mut film,
         budget,
-        reference,
         stop,
-        None,
+        Watch {
+            reference,
+            periodic: None,
+            label: Some(label),
+        },
     )?;
     Ok((film, outcome))
 }
@@ -365,7 +422,7 @@ fn finished(folder: &Path, run: &Run) -> Option<Measured> {
 /// run); what it measured.
 fn measure(
     setup: Setup<'_>,
-    budget: Budget,
+    budget: (Budget, String),
     reference: &[Vec3],
     folder: &Path,
     run: &Run,
@@ -560,4 +617,40 @@ fn slug(name: &str) -> String {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_read_in_seconds_minutes_or_hours() {
+        assert_eq!(duration_text(40.4), "40 s");
+        assert_eq!(duration_text(720.0), "12 min");
+        assert_eq!(duration_text(2.0 * 3600.0 + 5.0 * 60.0), "2 h 05 min");
+        assert_eq!(duration_text(-1.0), "0 s");
+    }
+
+    #[test]
+    fn the_time_left_counts_the_runs_not_yet_started() {
+        let mut position = Position {
+            total: 6,
+            done: 2,
+            ..Position::default()
+        };
+        let time = Budget::Seconds(30.0);
+        let samples = Budget::Samples(64);
+        // Four runs of 30 s, this one included.
+        assert_eq!(
+            position.label(time, "water", "vcm"),
+            "[3/6] water: vcm (about 2 min left)"
+        );
+        // Sample budgets: unknown until a run has been timed, then their mean.
+        assert_eq!(position.label(samples, "water", "vcm"), "[3/6] water: vcm");
+        (position.rendered, position.seconds) = (2, 40.0);
+        assert_eq!(
+            position.label(samples, "water", "vcm"),
+            "[3/6] water: vcm (about 80 s left)"
+        );
+    }
 }

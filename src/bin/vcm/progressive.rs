@@ -26,18 +26,25 @@ pub fn budget_from_options(spp: Option<u32>, time: Option<f64>) -> anyhow::Resul
     })
 }
 
-/// A progress bar for `budget`: samples per pixel, or tenths of a second.
-fn progress_bar(budget: Budget) -> indicatif::ProgressBar {
+/// A progress bar for `budget`: samples per pixel, or tenths of a second; after `label`,
+/// where there is one.
+fn progress_bar(budget: Budget, label: Option<&str>) -> indicatif::ProgressBar {
     let (length, template) = match budget {
         Budget::Samples(n) => (
             u64::from(n),
-            "{bar:40} {pos}/{len} spp, {elapsed} elapsed, {eta} left",
+            "{prefix}{bar:40} {pos}/{len} spp, {elapsed} elapsed, {eta} left",
         ),
-        Budget::Seconds(s) => ((s * 10.0) as u64, "{bar:40} {elapsed} of the time budget"),
+        Budget::Seconds(s) => (
+            (s * 10.0) as u64,
+            "{prefix}{bar:40} {elapsed} of the time budget",
+        ),
     };
     let bar = indicatif::ProgressBar::new(length);
     if let Ok(style) = indicatif::ProgressStyle::with_template(template) {
         bar.set_style(style);
+    }
+    if let Some(label) = label {
+        bar.set_prefix(format!("{label} "));
     }
     bar
 }
@@ -112,19 +119,34 @@ pub struct Periodic<'a> {
     pub action: &'a mut dyn FnMut(&Film, u32) -> anyhow::Result<()>,
 }
 
+/// What a render does besides rendering: all optional.
+#[derive(Default)]
+pub struct Watch<'a> {
+    /// The image to record the error against, at 1, 2, 4, … seconds and at the end.
+    pub reference: Option<&'a [Vec3]>,
+    /// Something to do with the film every so often.
+    pub periodic: Option<Periodic<'a>>,
+    /// Shown before the progress bar (where in an experiment the render is).
+    pub label: Option<String>,
+}
+
 /// Renders `frames` into `film` until `budget` is spent or `stop` is raised (which also cuts
 /// the frame in progress short, dropping it whole), showing a progress bar, recording the
-/// error against `reference` and the CPU utilization, and calling `periodic` between frames.
+/// CPU utilization and doing what `watch` asks between frames.
 pub fn render(
     integrator: &mut dyn Integrator,
     mut frames: Frames,
     film: &mut Film,
     budget: Budget,
-    reference: Option<&[Vec3]>,
     stop: &StopFlag,
-    mut periodic: Option<Periodic<'_>>,
+    watch: Watch<'_>,
 ) -> anyhow::Result<Outcome> {
-    let progress = progress_bar(budget);
+    let Watch {
+        reference,
+        mut periodic,
+        label,
+    } = watch;
+    let progress = progress_bar(budget, label.as_deref());
     let mut checkpoints = Vec::new();
     let mut next_checkpoint = 1.0;
     let mut utilization = Vec::new();

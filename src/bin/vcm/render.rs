@@ -20,7 +20,7 @@ use vcm_rs::state::{RenderSettings, RenderState, SETTINGS, parse_range, scene_ha
 use vcm_rs::traversal::Traversal;
 use vcm_rs::{Backend, BuiltTraversal};
 
-use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic};
+use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic, Watch};
 use vcm_rs::integrators::{Algorithm, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
@@ -378,9 +378,12 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
         frames,
         &mut film,
         plan.budget,
-        reference.as_deref(),
         &stop,
-        periodic,
+        Watch {
+            reference: reference.as_deref(),
+            periodic,
+            label: None,
+        },
     )?;
     if stop.is_raised() {
         tell!(
