@@ -36,6 +36,10 @@ Usage:
         --width 256 --height 256 --spp 1024 [--seed 0] [--max-depth -1] [--rr-depth 5] \
         [--variant scalar_rgb]
 
+With several seeds (`--seed 1 2 3`) the scene is loaded once and rendered once per seed,
+each image written to the output path with `{seed}` replaced by its seed
+(`ref-{seed}.exr`).
+
 `--variant llvm_ad_rgb` renders with Mitsuba's vectorized LLVM back end instead of the
 scalar one (the cross-check's): it needs a libLLVM that Dr.Jit can compile with, e.g.
 Debian's `apt-get install libllvm19` and `DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so`
@@ -493,7 +497,8 @@ def main():
     parser.add_argument("--width", type=int, default=256)
     parser.add_argument("--height", type=int, default=256)
     parser.add_argument("--spp", type=int, default=1024)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, nargs="+", default=[0],
+                        help="one render per seed; with several, OUTPUT names them with {seed}")
     parser.add_argument("--max-depth", type=int, default=-1,
                         help="segments, as `vcm render --max-depth`; -1: unlimited")
     parser.add_argument("--rr-depth", type=int, default=5,
@@ -503,27 +508,35 @@ def main():
                         default="scalar_rgb",
                         help="Mitsuba back end: scalar, or vectorized through LLVM")
     args = parser.parse_args()
+    if len(args.seed) > 1 and "{seed}" not in args.output:
+        parser.error("with several seeds, the output path must contain {seed}")
 
     mi.set_variant(args.variant)
     with tempfile.TemporaryDirectory() as work_dir:
         try:
             scene = scene_dict(args.scene, args.width, args.height, args.max_depth,
-                               args.rr_depth, args.spp, args.seed, work_dir)
+                               args.rr_depth, args.spp, args.seed[0], work_dir)
         except Unsupported as error:
             sys.exit(f"{args.scene}: not converted to Mitsuba: {error}")
         except (OSError, ValueError, KeyError, IndexError) as error:
             sys.exit(f"{args.scene}: cannot read it: {error!r}")
         scene = mi.load_dict(scene)
-        start = time.perf_counter()
-        image = mi.render(scene, spp=args.spp, seed=args.seed)
-        # The LLVM back end records the render and runs it when its result is needed.
-        dr.eval(image)
-        dr.sync_thread()
-        seconds = time.perf_counter() - start
-        samples = args.width * args.height * args.spp
-        print(f"rendered {args.spp} spp at {args.width}x{args.height} in {seconds:.2f} s: "
-              f"{samples / seconds / 1e6:.2f} M samples/s", file=sys.stderr)
-        mi.util.write_bitmap(args.output, image)
+        for seed in args.seed:
+            render(scene, args, seed)
+
+
+def render(scene, args, seed):
+    """Renders `scene` with `seed` and writes the image to the output path of that seed."""
+    start = time.perf_counter()
+    image = mi.render(scene, spp=args.spp, seed=seed)
+    # The LLVM back end records the render and runs it when its result is needed.
+    dr.eval(image)
+    dr.sync_thread()
+    seconds = time.perf_counter() - start
+    samples = args.width * args.height * args.spp
+    print(f"rendered {args.spp} spp at {args.width}x{args.height} in {seconds:.2f} s: "
+          f"{samples / seconds / 1e6:.2f} M samples/s", file=sys.stderr)
+    mi.util.write_bitmap(args.output.replace("{seed}", str(seed)), image)
 
 
 if __name__ == "__main__":

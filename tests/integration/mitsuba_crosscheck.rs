@@ -12,6 +12,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::{Quat, Vec3};
 use serde_json::{Value, json};
@@ -609,14 +610,19 @@ impl Case {
     }
 }
 
-/// Runs `command`, which writes the image `out`, and reads it.
-fn render_to(command: &mut Command, out: &Path) -> RgbImage {
+/// Runs `command`, failing with its error output if it fails.
+fn run(command: &mut Command) {
     let output = command.output().unwrap();
     assert!(
         output.status.success(),
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
+}
+
+/// Runs `command`, which writes the image `out`, and reads it.
+fn render_to(command: &mut Command, out: &Path) -> RgbImage {
+    run(command);
     RgbImage::read_exr(out).unwrap()
 }
 
@@ -633,27 +639,34 @@ fn render_both(dir: &Path, case: &Case, scene: &Path) -> [Vec<RgbImage>; 2] {
         .chain(depth_args)
         .collect();
     let name = case.name;
-    let mut ours = Vec::new();
-    let mut theirs = Vec::new();
-    for seed in 1..=RENDERS {
-        let out = dir.join(format!("{name}-vcm-{seed}.exr"));
-        let mut vcm = Command::new(env!("CARGO_BIN_EXE_vcm"));
-        vcm.arg("render").arg(scene).args(&common);
-        vcm.args([
-            "--algo",
-            case.algo,
-            "--seed",
-            &(seed + 100).to_string(),
-            "-o",
-        ]);
-        ours.push(render_to(vcm.arg(&out), &out));
-
-        let out = dir.join(format!("{name}-mitsuba-{seed}.exr"));
-        let mut mitsuba = Command::new(python());
-        mitsuba.arg(root().join("tools/mitsuba_reference.py"));
-        mitsuba.arg(scene).arg(&out).args(&common);
-        theirs.push(render_to(mitsuba.args(["--seed", &seed.to_string()]), &out));
-    }
+    let ours = (1..=RENDERS)
+        .map(|seed| {
+            let out = dir.join(format!("{name}-vcm-{seed}.exr"));
+            let mut vcm = Command::new(env!("CARGO_BIN_EXE_vcm"));
+            vcm.arg("render").arg(scene).args(&common);
+            vcm.args([
+                "--algo",
+                case.algo,
+                "--seed",
+                &(seed + 100).to_string(),
+                "-o",
+            ]);
+            render_to(vcm.arg(&out), &out)
+        })
+        .collect();
+    // One Mitsuba process renders every seed: its start (Python, Mitsuba, the scene) cost
+    // more than the renders.
+    let seeds: Vec<String> = (1..=RENDERS).map(|seed| seed.to_string()).collect();
+    let mut mitsuba = Command::new(python());
+    mitsuba.arg(root().join("tools/mitsuba_reference.py"));
+    mitsuba
+        .arg(scene)
+        .arg(dir.join(format!("{name}-mitsuba-{{seed}}.exr")));
+    run(mitsuba.args(&common).arg("--seed").args(&seeds));
+    let theirs = seeds
+        .iter()
+        .map(|seed| RgbImage::read_exr(&dir.join(format!("{name}-mitsuba-{seed}.exr"))).unwrap())
+        .collect();
     [ours, theirs]
 }
 
@@ -772,41 +785,60 @@ fn vcm_render_agrees_with_mitsuba() {
         only.as_ref()
             .is_none_or(|o| o.split(',').any(|c| c == name))
     };
-    let mut failures = Vec::new();
-    for case in cases.iter().filter(|case| wanted(case.name)) {
-        let name = case.name;
-        let scene: PathBuf = dir.path().join(format!("{name}.gltf"));
-        std::fs::write(&scene, serde_json::to_string(&case.scene).unwrap()).unwrap();
-        let [ours, theirs] = render_both(dir.path(), case, &scene);
-        let t = welch_t(&ours, &theirs);
-        let (image, blocks) = t.split_last().unwrap();
-        // Welch's t between two sets of 6 renders has about 10 degrees of freedom when the two
-        // renderers are equally noisy, 5 when one dominates. The image means: |t| > 8 has a
-        // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 60
-        // channels tested. The blocks: a block is off when any channel has |t| > 4 (at most
-        // 3 × 1% at 5 degrees of freedom, 3 × 0.25% at 10); more than 8 of 48 such blocks has
-        // a binomial probability below 10⁻⁴ at 3% per block. Caustics through glass are heavy
-        // tailed, so 6 renders can underestimate their variance: the margins are wide (runs
-        // with other seeds and sizes reached an image |t| of 4.7 and 4 blocks off). A region
-        // that differs by a few percent moves many blocks at once: GGX with α = r instead of
-        // r² on the rough scene puts 27% of the blocks' channels above 4 and the image at
-        // t = 15.
-        let image_ok = image.iter().all(|t| t.abs() < 8.0);
-        let off = blocks
-            .iter()
-            .filter(|b| b.iter().any(|t| t.abs() > 4.0))
-            .count();
-        let worst = blocks.iter().flatten().fold(0.0f64, |m, t| m.max(t.abs()));
-        eprintln!(
-            "{name}: image t {:.2?}, {off} of {} blocks with |t| > 4, largest block |t| {worst:.2}",
-            image,
-            blocks.len()
-        );
-        if !image_ok || off > 8 {
-            failures.push(format!("{name}: image t {image:.2?}, {off} blocks off"));
-        }
-    }
+    let wanted: Vec<&Case> = cases.iter().filter(|case| wanted(case.name)).collect();
+    // The cases run side by side, one per core: a Mitsuba render of this size keeps one core
+    // busy, and the test is the longest of the suite.
+    let next = AtomicUsize::new(0);
+    let workers = std::thread::available_parallelism().map_or(1, usize::from);
+    let failures: Vec<String> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..workers)
+            .map(|_| {
+                scope.spawn(|| {
+                    std::iter::from_fn(|| wanted.get(next.fetch_add(1, Ordering::Relaxed)))
+                        .filter_map(|case| check_case(dir.path(), case))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|handle| handle.join().unwrap())
+            .collect()
+    });
     assert!(failures.is_empty(), "differs from Mitsuba: {failures:?}");
+}
+
+/// Renders `case` with both renderers in `dir` and compares them; what differs, if anything.
+fn check_case(dir: &Path, case: &Case) -> Option<String> {
+    let name = case.name;
+    let scene: PathBuf = dir.join(format!("{name}.gltf"));
+    std::fs::write(&scene, serde_json::to_string(&case.scene).unwrap()).unwrap();
+    let [ours, theirs] = render_both(dir, case, &scene);
+    let t = welch_t(&ours, &theirs);
+    let (image, blocks) = t.split_last().unwrap();
+    // Welch's t between two sets of 6 renders has about 10 degrees of freedom when the two
+    // renderers are equally noisy, 5 when one dominates. The image means: |t| > 8 has a
+    // probability of 5·10⁻⁴ at 5 degrees of freedom (10⁻⁵ at 10), for each of the 60
+    // channels tested. The blocks: a block is off when any channel has |t| > 4 (at most
+    // 3 × 1% at 5 degrees of freedom, 3 × 0.25% at 10); more than 8 of 48 such blocks has
+    // a binomial probability below 10⁻⁴ at 3% per block. Caustics through glass are heavy
+    // tailed, so 6 renders can underestimate their variance: the margins are wide (runs
+    // with other seeds and sizes reached an image |t| of 4.7 and 4 blocks off). A region
+    // that differs by a few percent moves many blocks at once: GGX with α = r instead of
+    // r² on the rough scene puts 27% of the blocks' channels above 4 and the image at
+    // t = 15.
+    let image_ok = image.iter().all(|t| t.abs() < 8.0);
+    let off = blocks
+        .iter()
+        .filter(|b| b.iter().any(|t| t.abs() > 4.0))
+        .count();
+    let worst = blocks.iter().flatten().fold(0.0f64, |m, t| m.max(t.abs()));
+    eprintln!(
+        "{name}: image t {:.2?}, {off} of {} blocks with |t| > 4, largest block |t| {worst:.2}",
+        image,
+        blocks.len()
+    );
+    (!image_ok || off > 8).then(|| format!("{name}: image t {image:.2?}, {off} blocks off"))
 }
 
 #[test]
