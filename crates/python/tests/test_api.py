@@ -185,7 +185,10 @@ def test_progress_is_reported_until_done_and_its_errors_stop_the_render(box):
 def test_ctrl_c_interrupts_a_render_with_keyboard_interrupt(scenes):
     script = textwrap.dedent(
         f"""
-        import time, vcm_rs
+        import signal, time, vcm_rs
+        # Python raises KeyboardInterrupt on SIGINT unless it started with SIGINT ignored,
+        # as every process started in the background by a non-interactive shell does.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         scene = vcm_rs.load_scene({str(scenes / "cornell-water.gltf")!r})
         print("rendering", flush=True)
         start = time.perf_counter()
