@@ -66,6 +66,7 @@ mod roulette;
 mod shade;
 mod shadow;
 mod surface_hit;
+mod vertex_numbers;
 mod wave;
 
 pub use algorithm::Algorithm;

@@ -16,11 +16,7 @@ use vcm_scene::sampling::{Sampler, SobolSampler, power_heuristic};
 use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
 use crate::shadow::LightSample;
 use crate::surface_hit::{Hit, SurfaceHit};
-
-/// Pairs of sample dimensions a vertex draws: a light and a point on it, a lobe, a
-/// direction and Russian roulette. Vertex k starts at pair k · this, so the paths of a pixel
-/// draw the same stratified pairs for the same decisions.
-const PAIRS_PER_VERTEX: u32 = 5;
+use crate::vertex_numbers::PATH_TRACER;
 
 /// What shading needs besides the path: the scene and the path length limit.
 pub(crate) struct ShadeContext<'a> {
@@ -30,9 +26,10 @@ pub(crate) struct ShadeContext<'a> {
     pub max_segments: u32,
 }
 
-/// The sampler of `path`, moved to the numbers of the vertex it has reached.
+/// The sampler of `path`, moved to the numbers of the vertex it has reached
+/// ([`PATH_TRACER`]'s layout).
 pub(crate) fn vertex_sampler(path: &mut PathState) -> &mut SobolSampler {
-    path.rng.start_step(path.segments, PAIRS_PER_VERTEX);
+    path.rng.start_step(path.segments, PATH_TRACER.pairs());
     &mut path.rng
 }
 

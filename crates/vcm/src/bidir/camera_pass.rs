@@ -26,6 +26,7 @@ use crate::prefetch::prefetch;
 use crate::roulette::Roulette;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
+use crate::vertex_numbers::{CAMERA, Draw};
 use crate::wave::{Ahead, NoLanes, fill_extension_rays, shade_in_parallel, start_paths};
 
 mod lanes;
@@ -33,10 +34,6 @@ mod lanes;
 /// Shadow rays a camera path state holds without a heap allocation: the light sample and
 /// one connection, the default (`--connections 1`).
 const INLINE_SHADOW_RAYS: usize = 2;
-
-/// Pairs of sample dimensions a camera vertex draws: the light vertices it connects to, a
-/// light and a point on it, a lobe, a direction and Russian roulette.
-const PAIRS_PER_VERTEX: u32 = 6;
 
 /// What the camera paths of one iteration read: the iteration, and its light pass's results.
 pub(crate) struct CameraContext<'a> {
@@ -257,7 +254,7 @@ fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
 
 /// The sampler of `path`, moved to the numbers of the vertex it has reached.
 fn vertex_sampler(path: &mut CameraPathState) -> &mut SobolSampler {
-    path.walk.start_vertex(PAIRS_PER_VERTEX)
+    path.walk.start_vertex(CAMERA.pairs())
 }
 
 /// What a camera vertex computes before its chunk of paths is shaded
@@ -366,7 +363,7 @@ fn shade(
         if ctx.plan.connects {
             // `prepare` picked them and started loading their vertices.
             let picks = path.picks.take().expect("a connecting hit is prepared");
-            path.walk.rng.skip(1);
+            path.walk.rng.skip(const { CAMERA.index(Draw::LightPick) });
             if let Some(shadow) = light_sample(ctx, path, surface, &seen) {
                 path.shadows.push(shadow);
             }

@@ -22,13 +22,10 @@ use crate::path_state::ShadowRay;
 use crate::roulette::Roulette;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
+use crate::vertex_numbers::{EMISSION, LIGHT};
 use crate::wave::{fill_extension_rays, for_started_in_lanes, shade_in_parallel, start_paths};
 
 mod lanes;
-
-/// Pairs of sample dimensions a light vertex draws (a lobe, a direction and Russian
-/// roulette), as many as the emission draws (a light, a point and a direction).
-const PAIRS_PER_VERTEX: u32 = 3;
 
 /// Random stream tag of light paths (camera paths use 0).
 const LIGHT_STREAM: u64 = 1;
@@ -373,7 +370,7 @@ impl LightPathState {
         // The light paths of one iteration are the samples of one stratified sequence.
         let key = [ctx.settings.seed, ctx.iteration, stream];
         let mut rng = ctx.settings.sequence.sampler(&key, u64::from(index));
-        rng.start_step(0, PAIRS_PER_VERTEX);
+        rng.start_step(0, EMISSION.pairs());
         LightPathState {
             index,
             sample,
@@ -429,7 +426,7 @@ fn emit(ctx: &FrameContext, path: &mut LightPathState) {
 
 /// The sampler of `path`, moved to the numbers of the vertex it has reached.
 fn vertex_sampler(path: &mut LightPathState) -> &mut SobolSampler {
-    path.walk.start_vertex(PAIRS_PER_VERTEX)
+    path.walk.start_vertex(LIGHT.pairs())
 }
 
 /// Shades the vertex where a light path hit the scene (`None`: it escaped and ends): records

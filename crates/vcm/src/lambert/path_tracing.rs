@@ -14,6 +14,7 @@ use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
 use crate::shade::vertex_sampler;
 use crate::shadow::segment_to;
 use crate::surface_hit::Hit;
+use crate::vertex_numbers::{Draw, LAMBERT_CAMERA_DRAWS, PATH_TRACER};
 use crate::wave::LaneShading;
 
 /// [`LambertLanes`] at work in one pass of the path tracer.
@@ -41,14 +42,6 @@ impl LaneShading<PathState> for LambertShading<'_> {
     }
 }
 
-/// Pairs of numbers a vertex draws: light pick (first number), point on the light, lobe,
-/// direction, Russian roulette (first number).
-const PAIRS: u32 = 5;
-
-/// Those it uses (one lobe needs no choice): the light pick, the point, the direction and
-/// Russian roulette.
-const USED: [u32; 4] = [0, 1, 3, 4];
-
 /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`]), as
 /// [`crate::shade::shade`] would.
 fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &[(usize, Hit)]) {
@@ -59,7 +52,10 @@ fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &
     // Lanes past the group repeat its last path; their results are dropped.
     let at = |lane: usize| group[lane.min(group.len() - 1)];
     let samplers = std::array::from_fn(|lane| &paths[at(lane).0].rng);
-    let numbers = SobolSampler::peek_lanes(samplers, USED);
+    let numbers = SobolSampler::peek_lanes(
+        samplers,
+        const { PATH_TRACER.indices(LAMBERT_CAMERA_DRAWS) },
+    );
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
     let mut surface = SurfaceInputs::default();
     let mut light = LightInputs::default();
@@ -154,7 +150,7 @@ impl Continuation {
             }
         });
         // Light pick, light point, lobe and direction.
-        path.rng.skip(PAIRS - 1);
+        path.rng.skip(const { PATH_TRACER.index(Draw::Roulette) });
         if !self.next.valid.get(lane) {
             path.alive = false;
             return;

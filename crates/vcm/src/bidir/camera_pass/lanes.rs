@@ -21,15 +21,8 @@ use crate::light_vertex_cache::LightVertex;
 use crate::path_state::ShadowRay;
 use crate::shadow::segment_to;
 use crate::surface_hit::{Hit, SurfaceHit};
+use crate::vertex_numbers::{CAMERA, Draw, LAMBERT_CAMERA_DRAWS};
 use crate::wave::LaneShading;
-
-/// Pairs of numbers a vertex draws: the cache picks' stream, light pick (first number),
-/// point on the light, lobe, direction, Russian roulette (first number).
-const PAIRS: u32 = 6;
-
-/// Those it uses as numbers (one lobe needs no choice): the light pick, the point, the
-/// direction and Russian roulette.
-const USED: [u32; 4] = [1, 2, 4, 5];
 
 /// The camera pass's vertices in lanes, where the frame and the scene allow them.
 pub(super) struct CameraLanes<'a> {
@@ -91,7 +84,8 @@ fn shade(
     let ctx = |lane: usize| &iterations[paths[at(lane).0].sample as usize];
     let scene = iterations[0].scene;
     let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
-    let numbers = SobolSampler::peek_lanes(samplers, USED);
+    let numbers =
+        SobolSampler::peek_lanes(samplers, const { CAMERA.indices(LAMBERT_CAMERA_DRAWS) });
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
     let mut surface = SurfaceInputs::default();
     let mut light = LightInputs::default();
@@ -152,7 +146,7 @@ fn shade(
             continue;
         }
         // The picks' stream, then the light sample's two pairs and the continuation's two.
-        path.walk.rng.skip(PAIRS - 1);
+        path.walk.rng.skip(const { CAMERA.index(Draw::Roulette) });
         // One push per ray: `extend` from an iterator did not inline.
         let rays = std::iter::once(&sample).chain(&connected);
         for ray in rays.filter_map(|shadows| shadows.ray(lane)) {

@@ -17,11 +17,8 @@ use crate::light_vertex_cache::LightVertex;
 use crate::path_state::ShadowRay;
 use crate::shadow::segment_to;
 use crate::surface_hit::Hit;
+use crate::vertex_numbers::{Draw, LAMBERT_LIGHT_DRAWS, LIGHT};
 use crate::wave::LaneShading;
-
-/// The numbers a vertex uses, of the pairs it draws (a lobe, a direction, Russian roulette):
-/// one lobe needs no choice.
-const USED: [u32; 2] = [1, 2];
 
 /// The light pass's vertices in lanes, where the scene allows them.
 pub(super) struct LightLanes<'a> {
@@ -75,7 +72,7 @@ fn shade(
     let ctx = |lane: usize| &lanes.iterations[samples[lane]];
     let scene = lanes.iterations[0].scene;
     let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
-    let numbers = SobolSampler::peek_lanes(samplers, USED);
+    let numbers = SobolSampler::peek_lanes(samplers, const { LIGHT.indices(LAMBERT_LIGHT_DRAWS) });
     let mut surface = SurfaceInputs::default();
     let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
     let mut mis = SubpathMis::<F32s>::default();
@@ -145,7 +142,7 @@ fn shade(
             continue;
         }
         // The lobe and the direction.
-        walk.rng.skip(2);
+        walk.rng.skip(const { LIGHT.index(Draw::Roulette) });
         if !next.valid.get(lane) {
             path.alive = false;
             continue;
