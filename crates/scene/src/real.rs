@@ -14,6 +14,18 @@ pub trait Real:
 
     /// [`f32::abs`] (in every lane).
     fn abs(self) -> Self;
+
+    /// The truth of a comparison (in every lane).
+    type Mask: Copy;
+
+    /// Lanes where `self > other`.
+    fn gt(self, other: Self) -> Self::Mask;
+
+    /// Lanes holding +∞ or −∞ ([`f32::is_infinite`]).
+    fn is_infinite(self) -> Self::Mask;
+
+    /// `yes` in the lanes of `mask`, `no` elsewhere.
+    fn select(mask: Self::Mask, yes: Self, no: Self) -> Self;
 }
 
 impl Real for f32 {
@@ -25,5 +37,22 @@ impl Real for f32 {
     #[inline(always)]
     fn abs(self) -> f32 {
         f32::abs(self)
+    }
+
+    type Mask = bool;
+
+    #[inline(always)]
+    fn gt(self, other: f32) -> bool {
+        self > other
+    }
+
+    #[inline(always)]
+    fn is_infinite(self) -> bool {
+        f32::is_infinite(self)
+    }
+
+    #[inline(always)]
+    fn select(mask: bool, yes: f32, no: f32) -> f32 {
+        if mask { yes } else { no }
     }
 }

@@ -56,6 +56,23 @@ impl Real for F32s {
     fn abs(self) -> F32s {
         F32s::abs(self)
     }
+
+    type Mask = Mask;
+
+    #[inline(always)]
+    fn gt(self, other: F32s) -> Mask {
+        F32s::gt(self, other)
+    }
+
+    #[inline(always)]
+    fn is_infinite(self) -> Mask {
+        self.abs().eq(F32s::splat(f32::INFINITY))
+    }
+
+    #[inline(always)]
+    fn select(mask: Mask, yes: F32s, no: F32s) -> F32s {
+        mask.select(yes, no)
+    }
 }
 
 impl F32s {

@@ -100,15 +100,15 @@ pub fn sample_uniform_triangle(u: Vec2) -> Vec3 {
 /// Veach's power heuristic (β = 2) for `nf` samples from a technique with pdf `f_pdf`
 /// combined with `ng` samples from one with pdf `g_pdf`: (nf·f)² / ((nf·f)² + (ng·g)²).
 /// Returns 1 when `f_pdf` is infinite (delta) and 0 when both pdfs are zero.
-#[inline]
-pub fn power_heuristic(nf: f32, f_pdf: f32, ng: f32, g_pdf: f32) -> f32 {
-    let f = nf * f_pdf;
-    let g = ng * g_pdf;
-    if f.is_infinite() {
-        return 1.0;
-    }
+/// Written once for one weight and for SIMD lanes ([`Real`]).
+#[inline(always)]
+pub fn power_heuristic<T: Real>(nf: f32, f_pdf: T, ng: f32, g_pdf: T) -> T {
+    let f = T::splat(nf) * f_pdf;
+    let g = T::splat(ng) * g_pdf;
     let (f2, g2) = (f * f, g * g);
-    if f2 + g2 > 0.0 { f2 / (f2 + g2) } else { 0.0 }
+    let sum = f2 + g2;
+    let weight = T::select(sum.gt(T::splat(0.0)), f2 / sum, T::splat(0.0));
+    T::select(f.is_infinite(), T::splat(1.0), weight)
 }
 
 #[cfg(test)]

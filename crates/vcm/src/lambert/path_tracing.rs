@@ -4,7 +4,7 @@
 
 use vcm_scene::Scene;
 use vcm_scene::bsdf::TransportMode;
-use vcm_scene::sampling::SobolSampler;
+use vcm_scene::sampling::{SobolSampler, power_heuristic};
 
 use super::LambertLanes;
 use super::light_sample::{LightInputs, illuminate};
@@ -94,7 +94,7 @@ fn light_sample(
     let direction = illumination.direction;
     let eval = vertex.eval(surface.f, direction, TransportMode::Radiance, false);
     let light_pdf_w = illumination.direct_pdf_w * light.pick_pmf;
-    let weight = power_heuristic(light_pdf_w, eval.pdf);
+    let weight = power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf);
     let contribution = throughput
         .mul(light.emission)
         .mul(eval.f_cos)
@@ -105,17 +105,6 @@ fn light_sample(
         target: illumination.target,
         contribution,
     }
-}
-
-/// `power_heuristic(1, f_pdf, 1, g_pdf)` in each lane.
-#[inline(always)]
-fn power_heuristic(f_pdf: F32s, g_pdf: F32s) -> F32s {
-    let zero = F32s::splat(0.0);
-    let (f2, g2) = (f_pdf * f_pdf, g_pdf * g_pdf);
-    let sum = f2 + g2;
-    let weight = sum.gt(zero).select(f2 / sum, zero);
-    let infinite = F32s::splat(f32::INFINITY);
-    f_pdf.abs().eq(infinite).select(F32s::splat(1.0), weight)
 }
 
 /// The lanes' shadow rays.
