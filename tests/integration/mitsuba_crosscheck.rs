@@ -656,16 +656,16 @@ fn render_both(dir: &Path, case: &Case, scene: &Path) -> [Vec<RgbImage>; 2] {
         .collect();
     // One Mitsuba process renders every seed: its start (Python, Mitsuba, the scene) cost
     // more than the renders.
+    // Its output path names each image with `{seed}`.
+    let out = |seed: &str| dir.join(format!("{name}-mitsuba-{seed}.exr"));
     let seeds: Vec<String> = (1..=RENDERS).map(|seed| seed.to_string()).collect();
     let mut mitsuba = Command::new(python());
     mitsuba.arg(root().join("tools/mitsuba_reference.py"));
-    mitsuba
-        .arg(scene)
-        .arg(dir.join(format!("{name}-mitsuba-{{seed}}.exr")));
+    mitsuba.arg(scene).arg(out("{seed}"));
     run(mitsuba.args(&common).arg("--seed").args(&seeds));
     let theirs = seeds
         .iter()
-        .map(|seed| RgbImage::read_exr(&dir.join(format!("{name}-mitsuba-{seed}.exr"))).unwrap())
+        .map(|seed| RgbImage::read_exr(&out(seed)).unwrap())
         .collect();
     [ours, theirs]
 }

@@ -199,8 +199,9 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                 traversals: &mut traversals,
                 options,
                 size,
+                label,
             };
-            let measured = measure(setup, (budget, label), reference, &folder, run, &stop)?;
+            let measured = measure(setup, budget, reference, &folder, run, &stop)?;
             if stop.is_raised() {
                 say!("interrupted: run the same command again to resume");
                 return Ok(());
@@ -302,9 +303,9 @@ fn reference_for(
         traversals,
         options: &options,
         size,
+        label: format!("reference of {}", file_stem(&scene.path)),
     };
-    let label = format!("reference of {}", file_stem(&scene.path));
-    let (film, _) = render(setup, (Budget::Samples(spec.spp), label), None, stop)?;
+    let (film, _) = render(setup, Budget::Samples(spec.spp), None, stop)?;
     if stop.is_raised() {
         bail!("interrupted while rendering the reference; nothing was written");
     }
@@ -364,13 +365,15 @@ struct Setup<'a> {
     traversals: &'a mut Traversals,
     options: &'a RunOptions,
     size: (u32, u32),
+    /// Shown before the render's progress bar.
+    label: String,
 }
 
 /// Renders `setup` within `budget`, measuring against `reference` if given, its progress bar
-/// after `label`.
+/// after the setup's label.
 fn render(
     setup: Setup<'_>,
-    (budget, label): (Budget, String),
+    budget: Budget,
     reference: Option<&[Vec3]>,
     stop: &vcm::StopFlag,
 ) -> anyhow::Result<(Film, progressive::Outcome)> {
@@ -379,6 +382,7 @@ fn render(
         traversals,
         options,
         size,
+        label,
     } = setup;
     let traversal = traversals
         .get(options.backend, tell_traversal)
@@ -422,7 +426,7 @@ fn finished(folder: &Path, run: &Run) -> Option<Measured> {
 /// run); what it measured.
 fn measure(
     setup: Setup<'_>,
-    budget: (Budget, String),
+    budget: Budget,
     reference: &[Vec3],
     folder: &Path,
     run: &Run,
