@@ -787,7 +787,8 @@ fn vcm_render_agrees_with_mitsuba() {
     };
     let wanted: Vec<&Case> = cases.iter().filter(|case| wanted(case.name)).collect();
     // The cases run side by side, one per core: a Mitsuba render of this size keeps one core
-    // busy, and the test is the longest of the suite.
+    // busy, and the test is the longest of the suite. On threads of their own: rayon's pool,
+    // on which the other tests of this binary render, would sit blocked on the processes.
     let next = AtomicUsize::new(0);
     let workers = std::thread::available_parallelism().map_or(1, usize::from);
     let failures: Vec<String> = std::thread::scope(|scope| {
