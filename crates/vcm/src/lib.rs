@@ -67,6 +67,7 @@ mod shade;
 mod shadow;
 mod surface_hit;
 mod vertex_numbers;
+mod walk;
 mod wave;
 
 pub use algorithm::Algorithm;

@@ -6,6 +6,7 @@ use vcm_traversal::RayBatch;
 
 use crate::medium::Medium;
 use crate::roulette::Roulette;
+use crate::walk::Walk;
 
 /// How the direction of a path's current segment was chosen, which decides the MIS weight of
 /// emission found at its end.
@@ -48,24 +49,10 @@ pub(crate) struct PathState {
     pub pixel: u32,
     /// Which of the frame's samples of that pixel it is (from 0).
     pub sample: u32,
-    /// The path's numbers: its pixel's stratified sequence at its sample index.
-    pub rng: SobolSampler,
-    /// Origin of the current segment.
-    pub origin: Vec3,
-    /// Unit direction of the current segment.
-    pub direction: Vec3,
-    /// Product of f·cos / pdf, transmittances and Russian roulette factors so far.
-    pub throughput: Vec3,
-    /// What the current segment runs through.
-    pub medium: Medium,
-    /// How Russian roulette judges the throughput.
-    pub roulette: Roulette,
+    /// The random walk, remembering how its current segment was sampled.
+    pub walk: Walk<SegmentOrigin>,
     /// Radiance gathered so far (RGB), added to the film when the path ends.
     pub radiance: Vec3,
-    /// Number of segments including the current one (the camera ray is segment 1).
-    pub segments: u32,
-    /// How the current segment was sampled.
-    pub segment_origin: SegmentOrigin,
     /// The shadow ray queued by the last shading step, if any.
     pub shadow: Option<ShadowRay>,
     /// False once the path has ended (missed, absorbed, terminated or reached `max_depth`).
@@ -73,7 +60,7 @@ pub(crate) struct PathState {
 }
 
 impl PathState {
-    /// A path at the camera: unit throughput, no radiance yet.
+    /// A path at the camera, its pixel's numbers `rng`: unit throughput, no radiance yet.
     pub fn new(
         pixel: u32,
         sample: u32,
@@ -84,15 +71,17 @@ impl PathState {
         PathState {
             pixel,
             sample,
-            rng,
-            origin,
-            direction,
-            throughput: Vec3::ONE,
-            medium: Medium::OUTSIDE,
-            roulette: Roulette::UNIT,
+            walk: Walk {
+                rng,
+                origin,
+                direction,
+                throughput: Vec3::ONE,
+                medium: Medium::OUTSIDE,
+                mis: SegmentOrigin::Deterministic,
+                segments: 1,
+                roulette: Roulette::UNIT,
+            },
             radiance: Vec3::ZERO,
-            segments: 1,
-            segment_origin: SegmentOrigin::Deterministic,
             shadow: None,
             alive: true,
         }

@@ -280,10 +280,11 @@ impl Wavefront for PtWavefront<'_> {
             PathState::new(pixel, sample, rng, camera.position, Vec3::ZERO)
         });
         for_started_in_lanes(&mut self.paths[first_new..], |paths| {
-            let directions = jittered_directions(paths, &projection, width, |p| (p.pixel, &p.rng));
+            let directions =
+                jittered_directions(paths, &projection, width, |p| (p.pixel, &p.walk.rng));
             for (path, direction) in paths.iter_mut().zip(directions) {
-                path.direction = direction;
-                path.rng.skip(1);
+                path.walk.direction = direction;
+                path.walk.rng.skip(1);
             }
         });
     }
@@ -297,7 +298,7 @@ impl Wavefront for PtWavefront<'_> {
     }
 
     fn extension_rays(&self, rays: &mut RayBatch) {
-        let segments = self.paths.iter().map(|p| (p.origin, p.direction));
+        let segments = self.paths.iter().map(|p| (p.walk.origin, p.walk.direction));
         fill_extension_rays(rays, segments);
     }
 

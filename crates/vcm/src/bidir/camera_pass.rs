@@ -15,7 +15,6 @@ use super::mis::{
     ConnectionPdfs, LightSamplePdfs, SubpathMis, connection_weight, emission_hit_weight,
     light_sample_weight, merge_weight,
 };
-use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::hash_grid::{GridCells, HashGrid};
 use crate::integrator::FrameStats;
@@ -27,6 +26,7 @@ use crate::roulette::Roulette;
 use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::vertex_numbers::{CAMERA, Draw};
+use crate::walk::Walk;
 use crate::wave::{Ahead, NoLanes, fill_extension_rays, shade_in_parallel, start_paths};
 
 mod lanes;
@@ -58,7 +58,7 @@ struct CameraPathState {
     pixel: u32,
     /// The path's sample of the frame: the iteration it belongs to.
     sample: u32,
-    walk: Walk,
+    walk: Walk<SubpathMis>,
     radiance: Vec3,
     alive: bool,
     /// Occlusion rays queued by the last shading step: the light sample and connections
@@ -379,9 +379,12 @@ fn shade(
             }
         }
     }
+    let transport = (TransportMode::Radiance, Pdfs::Both);
     path.alive = path
         .walk
-        .scatter(scene, surface, &seen, TransportMode::Radiance, &ctx.factors)
+        .scatter(scene, surface, &seen, transport, |mis, sample| {
+            mis.scattered(surface, sample, &ctx.factors)
+        })
         .is_some();
 }
 

@@ -13,7 +13,6 @@ use vcm_traversal::{HitBatch, RayBatch};
 
 use super::mis::{SubpathMis, camera_connection_weight};
 use super::path_order::{in_path_order, path_key};
-use super::walk::Walk;
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::integrator::FrameStats;
 use crate::light_vertex_cache::LightVertex;
@@ -23,6 +22,7 @@ use crate::roulette::Roulette;
 use crate::shadow::{offset_off_light, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::vertex_numbers::{EMISSION, LIGHT};
+use crate::walk::Walk;
 use crate::wave::{fill_extension_rays, for_started_in_lanes, shade_in_parallel, start_paths};
 
 mod lanes;
@@ -49,7 +49,7 @@ struct LightPathState {
     index: u32,
     /// The path's sample of the frame: the iteration it belongs to.
     sample: u32,
-    walk: Walk,
+    walk: Walk<SubpathMis>,
     /// The path starts at a light at infinity (its first segment has no length).
     from_infinity: bool,
     alive: bool,
@@ -471,14 +471,11 @@ fn shade(
     // A further vertex has segments + 1 segments, and using it takes one more.
     path.alive = path.walk.segments.saturating_add(2) <= max_segments
         && seen.is_some_and(|seen| {
+            let transport = (TransportMode::Importance, Pdfs::Both);
             path.walk
-                .scatter(
-                    scene,
-                    surface,
-                    &seen,
-                    TransportMode::Importance,
-                    &ctx.factors,
-                )
+                .scatter(scene, surface, &seen, transport, |mis, sample| {
+                    mis.scattered(surface, sample, &ctx.factors)
+                })
                 .is_some()
         });
 }

@@ -26,9 +26,10 @@
 //!   subpath's starting d_VM the emission hit is kept while connections are dropped
 //!   ([`MisFactors::hit`], [`MisFactors::connections`]).
 
-#[cfg(doc)]
-use crate::lanes::F32s;
-use crate::lanes::Real;
+use vcm_scene::bsdf::{BsdfSample, LobeKind};
+
+use crate::lanes::{F32s, Real};
+use crate::surface_hit::SurfaceHit;
 
 /// Per-frame constants of the weights: which technique families exist and how many samples
 /// each takes (`T`: one frame's, or [`F32s`] of the frames of a lane group's paths).
@@ -49,6 +50,21 @@ pub(crate) struct MisFactors<T = f32> {
     pub connections: T,
     /// N_p, the number of light paths per frame (the sample count of light tracing splats).
     pub light_paths: T,
+}
+
+impl MisFactors<F32s> {
+    /// The factors of lane `lane`'s frame, `of(lane)`, in each lane.
+    #[inline(always)]
+    pub fn lanes<'a>(of: impl Fn(usize) -> &'a MisFactors) -> MisFactors<F32s> {
+        let lanes = |field: fn(&MisFactors) -> f32| F32s::from_fn(|lane| field(of(lane)));
+        MisFactors {
+            merge: lanes(|f| f.merge),
+            connect: lanes(|f| f.connect),
+            hit: lanes(|f| f.hit),
+            connections: lanes(|f| f.connections),
+            light_paths: lanes(|f| f.light_paths),
+        }
+    }
 }
 
 impl MisFactors {
@@ -117,6 +133,32 @@ impl SubpathMis {
             d_vcm: direct_pdf / emission_pdf_w,
             d_vc,
             d_vm: d_vc * factors.hit,
+        }
+    }
+
+    /// [`SubpathMis::scatter`] for the BSDF sample `sample` drawn at `surface`.
+    pub fn scattered(&mut self, surface: &SurfaceHit, sample: &BsdfSample, factors: &MisFactors) {
+        let specular = sample.lobe == LobeKind::Specular;
+        let cos_out = surface.cos_geometric(sample.wi);
+        self.scatter(cos_out, sample.pdf_fwd, sample.pdf_rev, specular, factors);
+    }
+}
+
+impl SubpathMis<F32s> {
+    /// Sets lane `lane` to one subpath's quantities.
+    #[inline(always)]
+    pub fn set(&mut self, lane: usize, mis: &SubpathMis) {
+        (self.d_vcm.0[lane], self.d_vc.0[lane], self.d_vm.0[lane]) =
+            (mis.d_vcm, mis.d_vc, mis.d_vm);
+    }
+
+    /// Lane `lane`'s quantities.
+    #[inline(always)]
+    pub fn lane(&self, lane: usize) -> SubpathMis {
+        SubpathMis {
+            d_vcm: self.d_vcm.0[lane],
+            d_vc: self.d_vc.0[lane],
+            d_vm: self.d_vm.0[lane],
         }
     }
 }

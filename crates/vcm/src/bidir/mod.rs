@@ -30,7 +30,6 @@ mod memory;
 pub(crate) mod mis;
 mod path_order;
 mod plan;
-mod walk;
 
 use std::sync::Arc;
 use std::time::Instant;

@@ -1,13 +1,16 @@
 //! Light samples from eight vertices at once: a light picked by power, a uniform point on
-//! its triangle (`AreaLight::illuminate`), and the shadow ray toward it
-//! (`LightSample::shadow_ray`).
+//! its triangle (`AreaLight::illuminate`), the BSDF toward it, and the shadow ray that
+//! carries its MIS-weighted contribution (`LightSample::shadow_ray`).
 
 use std::f32::consts::FRAC_1_PI;
 
 use vcm_scene::Scene;
 
+use vcm_scene::bsdf::TransportMode;
+
 use super::LambertLanes;
-use super::surface::Vertex;
+use super::shadow_rays::ShadowLanes;
+use super::surface::{Evaluation, Vertex};
 use crate::lanes::{F32s, Mask, Vec3s};
 use crate::ray_offset::offset_ray_origins;
 
@@ -89,5 +92,34 @@ pub(crate) fn illuminate(
         lit: cos_at_light.gt(zero) & distance.gt(zero),
         emission_pdf_w: light.inv_area * (cos_at_light.max(zero) * F32s::splat(FRAC_1_PI)),
         target: offset_ray_origins(target, light.error, light.normal, -direction),
+    }
+}
+
+/// One light sample per lane, with the numbers `numbers`, from `vertex` whose Lambert lobe
+/// is `f`, for paths with throughput `throughput` (the path tracer's `next_event`, the
+/// camera pass's `light_sample`): the BSDF toward the point in radiance transport
+/// (`reverse`: with the reverse pdf), weighted by `weight` of the point and the BSDF's
+/// values. The shadow ray carries β · L_e · f·|cos| · w / p_light, with
+/// p_light = pick pmf · the point's solid-angle pdf.
+#[inline(always)]
+pub(crate) fn light_samples(
+    (vertex, f, light): (&Vertex, Vec3s, &LightInputs),
+    throughput: Vec3s,
+    (numbers, reverse): ((F32s, F32s), bool),
+    weight: impl FnOnce(&Illumination, &Evaluation) -> F32s,
+) -> ShadowLanes {
+    let illumination = illuminate(light, vertex, numbers);
+    let direction = illumination.direction;
+    let eval = vertex.eval(f, direction, TransportMode::Radiance, reverse);
+    let light_pdf_w = illumination.direct_pdf_w * light.pick_pmf;
+    let weight = weight(&illumination, &eval);
+    ShadowLanes {
+        queued: vertex.alive & illumination.lit & eval.valid & eval.f_cos.is_nonzero(),
+        origin: vertex.spawn(direction),
+        target: illumination.target,
+        contribution: throughput
+            .mul(light.emission)
+            .mul(eval.f_cos)
+            .scale(weight / light_pdf_w),
     }
 }

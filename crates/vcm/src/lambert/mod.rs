@@ -15,16 +15,21 @@
 //! same order, on the same random numbers, so a path's result is bit for bit the same
 //! whichever way it is shaded (the tests render both ways and compare the films).
 
+pub(crate) mod continuation;
 pub(crate) mod light_sample;
 pub(crate) mod path_tracing;
+pub(crate) mod shadow_rays;
 pub(crate) mod surface;
 
 use glam::Vec3;
 use vcm_scene::Scene;
 use vcm_scene::light::Light;
 
+use crate::lanes::{LANES, Vec3s};
 use crate::ray_offset::barycentric_error;
 use crate::surface_hit::Hit;
+use crate::walk::Walk;
+use surface::SurfaceInputs;
 
 /// A material whose lobes are one plain Lambert lobe.
 #[derive(Clone, Copy, Debug)]
@@ -134,6 +139,42 @@ impl LambertLanes {
     #[inline]
     pub fn takes_surface(&self, hit: Hit) -> bool {
         self.lane_surfaces[hit.triangle as usize]
+    }
+}
+
+/// Eight walks arriving at plain Lambert surfaces, as the lanes read them.
+pub(crate) struct Arrivals {
+    /// The surfaces they reached.
+    pub surface: SurfaceInputs,
+    /// The directions of the segments that arrive.
+    pub direction: Vec3s,
+    /// The walks' throughputs.
+    pub throughput: Vec3s,
+}
+
+impl Arrivals {
+    /// Reads each lane's walk and the point it reached, `walk_of(lane)`, and lets `extra`
+    /// read what else an integrator's vertex needs of the lane.
+    #[inline(always)]
+    pub fn gather<'w, M: 'w>(
+        (tables, scene): (&LambertLanes, &Scene),
+        walk_of: impl Fn(usize) -> (Hit, &'w Walk<M>),
+        mut extra: impl FnMut(usize, Hit, &Walk<M>),
+    ) -> Arrivals {
+        let mut arrivals = Arrivals {
+            surface: SurfaceInputs::default(),
+            direction: Vec3s::default(),
+            throughput: Vec3s::default(),
+        };
+        for lane in 0..LANES {
+            let (hit, walk) = walk_of(lane);
+            let point = (hit.triangle, hit.u, hit.v);
+            arrivals.surface.gather(tables, scene, lane, point);
+            arrivals.direction.set(lane, walk.direction);
+            arrivals.throughput.set(lane, walk.throughput);
+            extra(lane, hit, walk);
+        }
+        arrivals
     }
 }
 

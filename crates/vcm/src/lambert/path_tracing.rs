@@ -6,13 +6,13 @@ use vcm_scene::Scene;
 use vcm_scene::bsdf::TransportMode;
 use vcm_scene::sampling::{SobolSampler, power_heuristic};
 
-use super::LambertLanes;
-use super::light_sample::{LightInputs, illuminate};
-use super::surface::{Scattered, SurfaceInputs, Vertex};
-use crate::lanes::{F32s, LANES, Mask, Vec3s};
-use crate::path_state::{PathState, SegmentOrigin, ShadowRay};
+use super::continuation::Continuations;
+use super::light_sample::{LightInputs, light_samples};
+use super::surface::Vertex;
+use super::{Arrivals, LambertLanes};
+use crate::lanes::{F32s, LANES, Mask};
+use crate::path_state::{PathState, SegmentOrigin};
 use crate::shade::vertex_sampler;
-use crate::shadow::segment_to;
 use crate::surface_hit::Hit;
 use crate::vertex_numbers::{Draw, LAMBERT_CAMERA_DRAWS, PATH_TRACER};
 use crate::wave::LaneShading;
@@ -31,8 +31,9 @@ impl LaneShading<PathState> for LambertShading<'_> {
     /// A plain Lambert surface that does not emit, with room left for another segment.
     #[inline]
     fn takes(&self, path: &PathState, hit: Hit) -> bool {
-        self.tables
-            .is_some_and(|tables| path.segments < self.max_segments && tables.takes_surface(hit))
+        self.tables.is_some_and(|tables| {
+            path.walk.segments < self.max_segments && tables.takes_surface(hit)
+        })
     }
 
     fn shade(&self, paths: &mut [PathState], group: &[(usize, Hit)]) {
@@ -51,116 +52,48 @@ fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &
     }
     // Lanes past the group repeat its last path; their results are dropped.
     let at = |lane: usize| group[lane.min(group.len() - 1)];
-    let samplers = std::array::from_fn(|lane| &paths[at(lane).0].rng);
+    let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
     let numbers = SobolSampler::peek_lanes(
         samplers,
         const { PATH_TRACER.indices(LAMBERT_CAMERA_DRAWS) },
     );
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
-    let mut surface = SurfaceInputs::default();
     let mut light = LightInputs::default();
-    let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
-    for (lane, &u_pick) in numbers[0][0].iter().enumerate() {
-        let (i, hit) = at(lane);
-        surface.gather(tables, scene, lane, (hit.triangle, hit.u, hit.v));
-        light.gather(tables, scene, lane, u_pick);
-        direction.set(lane, paths[i].direction);
-        throughput.set(lane, paths[i].throughput);
-    }
+    let arrivals = Arrivals::gather(
+        (tables, scene),
+        |lane| (at(lane).1, &paths[at(lane).0].walk),
+        |lane, _, _| light.gather(tables, scene, lane, numbers[0][0][lane]),
+    );
+    let Arrivals {
+        surface,
+        direction,
+        throughput,
+    } = arrivals;
     let vertex = Vertex::new(&surface, -direction, Mask::first(group.len()));
-    let shadow = light_sample(&vertex, &surface, &light, throughput, pair(1));
-    let next = vertex.sample(surface.f, pair(2), TransportMode::Radiance, false);
-    let continuation = Continuation {
-        throughput: throughput.mul(next.eval.f_cos.div(next.eval.pdf)),
-        origin: vertex.spawn(next.wi),
-        roulette_numbers: F32s(numbers[3][0]),
-        next,
-    };
+    let shadows = light_samples(
+        (&vertex, surface.f, &light),
+        throughput,
+        (pair(1), false),
+        |illumination, eval| {
+            let light_pdf_w = illumination.direct_pdf_w * light.pick_pmf;
+            power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf)
+        },
+    );
+    let continuations = Continuations::sample(
+        (&vertex, surface.f),
+        throughput,
+        (pair(2), F32s(numbers[3][0])),
+        (TransportMode::Radiance, false),
+    );
+    let pdf_w = continuations.next.eval.pdf;
     for (lane, &(i, _)) in group.iter().enumerate() {
-        continuation.write(&mut paths[i], lane, &shadow);
-    }
-}
-
-/// `next_event`: one light sample, its contribution and its shadow ray.
-#[inline(always)]
-fn light_sample(
-    vertex: &Vertex,
-    surface: &SurfaceInputs,
-    light: &LightInputs,
-    throughput: Vec3s,
-    numbers: (F32s, F32s),
-) -> LaneShadow {
-    let illumination = illuminate(light, vertex, numbers);
-    let direction = illumination.direction;
-    let eval = vertex.eval(surface.f, direction, TransportMode::Radiance, false);
-    let light_pdf_w = illumination.direct_pdf_w * light.pick_pmf;
-    let weight = power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf);
-    let contribution = throughput
-        .mul(light.emission)
-        .mul(eval.f_cos)
-        .scale(weight / light_pdf_w);
-    LaneShadow {
-        queued: vertex.alive & illumination.lit & eval.valid & eval.f_cos.is_nonzero(),
-        origin: vertex.spawn(direction),
-        target: illumination.target,
-        contribution,
-    }
-}
-
-/// The lanes' shadow rays.
-struct LaneShadow {
-    queued: Mask,
-    origin: Vec3s,
-    target: Vec3s,
-    contribution: Vec3s,
-}
-
-/// The lanes' next segments, before Russian roulette.
-struct Continuation {
-    next: Scattered,
-    throughput: Vec3s,
-    origin: Vec3s,
-    roulette_numbers: F32s,
-}
-
-impl Continuation {
-    /// Writes lane `lane`'s results into its path: the shadow ray, Russian roulette (which
-    /// draws a number only where it plays) and the next segment, and moves the path's
-    /// numbers past those it drew.
-    fn write(&self, path: &mut PathState, lane: usize, shadow: &LaneShadow) {
-        path.shadow = shadow.queued.get(lane).then(|| {
-            let origin = shadow.origin.lane(lane);
-            let (direction, tmax) = segment_to(origin, shadow.target.lane(lane));
-            ShadowRay {
-                origin,
-                direction,
-                tmax,
-                contribution: shadow.contribution.lane(lane),
-            }
-        });
+        let path = &mut paths[i];
+        path.shadow = shadows.ray(lane);
         // Light pick, light point, lobe and direction.
-        path.rng.skip(const { PATH_TRACER.index(Draw::Roulette) });
-        if !self.next.valid.get(lane) {
-            path.alive = false;
-            return;
-        }
-        let mut throughput = self.throughput.lane(lane);
-        path.segment_origin = SegmentOrigin::Bsdf {
-            pdf_w: self.next.eval.pdf.0[lane],
+        let to_roulette = const { PATH_TRACER.index(Draw::Roulette) };
+        let mis = SegmentOrigin::Bsdf {
+            pdf_w: pdf_w.0[lane],
         };
-        let roulette_number = self.roulette_numbers.0[lane];
-        let mut drawn = false;
-        let survives = path.roulette.survives(path.segments, &mut throughput, || {
-            drawn = true;
-            roulette_number
-        });
-        path.rng.skip(u32::from(drawn));
-        path.throughput = throughput;
-        path.alive = survives;
-        if survives {
-            path.origin = self.origin.lane(lane);
-            path.direction = self.next.wi.lane(lane);
-            path.segments += 1;
-        }
+        path.alive = continuations.go_on(lane, &mut path.walk, to_roulette, mis);
     }
 }

@@ -13,13 +13,13 @@ use crate::bidir::Algorithm;
 use crate::bidir::mis::{
     ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight, light_sample_weight,
 };
-use crate::lambert::LambertLanes;
-use crate::lambert::light_sample::{LightInputs, illuminate};
+use crate::lambert::continuation::Continuations;
+use crate::lambert::light_sample::{LightInputs, light_samples};
+use crate::lambert::shadow_rays::ShadowLanes;
 use crate::lambert::surface::{SurfaceInputs, Vertex};
+use crate::lambert::{Arrivals, LambertLanes};
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::light_vertex_cache::LightVertex;
-use crate::path_state::ShadowRay;
-use crate::shadow::segment_to;
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::vertex_numbers::{CAMERA, Draw, LAMBERT_CAMERA_DRAWS};
 use crate::wave::LaneShading;
@@ -87,29 +87,41 @@ fn shade(
     let numbers =
         SobolSampler::peek_lanes(samplers, const { CAMERA.indices(LAMBERT_CAMERA_DRAWS) });
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
-    let mut surface = SurfaceInputs::default();
     let mut light = LightInputs::default();
-    let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
     let mut mis = SubpathMis::<F32s>::default();
     let mut t = F32s::default();
-    for (lane, &u_pick) in numbers[0][0].iter().enumerate() {
-        let (i, hit) = at(lane);
-        let walk = &paths[i].walk;
-        surface.gather(tables, scene, lane, (hit.triangle, hit.u, hit.v));
-        light.gather(tables, scene, lane, u_pick);
-        direction.set(lane, walk.direction);
-        throughput.set(lane, walk.throughput);
-        (mis.d_vcm.0[lane], mis.d_vc.0[lane], mis.d_vm.0[lane]) =
-            (walk.mis.d_vcm, walk.mis.d_vc, walk.mis.d_vm);
-        t.0[lane] = hit.t;
-    }
-    let factors = factors_of(|lane| &ctx(lane).factors);
+    let arrivals = Arrivals::gather(
+        (tables, scene),
+        |lane| (at(lane).1, &paths[at(lane).0].walk),
+        |lane, hit, walk| {
+            light.gather(tables, scene, lane, numbers[0][0][lane]);
+            mis.set(lane, &walk.mis);
+            t.0[lane] = hit.t;
+        },
+    );
+    let Arrivals {
+        surface,
+        direction,
+        throughput,
+    } = arrivals;
+    let factors = MisFactors::lanes(|lane| &ctx(lane).factors);
     let vertex = Vertex::new(&surface, -direction, Mask::first(group.len()));
     mis.arrive(Some(t * t), vertex.cos_geometric_out());
     let sample = light_samples(
-        (&vertex, &surface, &light),
-        (throughput, &mis, &factors),
-        pair(1),
+        (&vertex, surface.f, &light),
+        throughput,
+        (pair(1), true),
+        |illumination, eval| {
+            let pdfs = LightSamplePdfs {
+                direct_pdf_w: illumination.direct_pdf_w * light.pick_pmf,
+                emission_pdf_w: illumination.emission_pdf_w * light.pick_pmf,
+                cos_at_light: illumination.cos_at_light,
+                cos_at_receiver: vertex.cos_geometric(illumination.direction),
+                bsdf_fwd_pdf_w: eval.pdf,
+                bsdf_rev_pdf_w: eval.pdf_rev,
+            };
+            light_sample_weight(&mis, &pdfs, &factors)
+        },
     );
     let picks: [CachePicks; LANES] = std::array::from_fn(|lane| {
         let picks = paths[at(lane).0].picks.clone();
@@ -132,12 +144,13 @@ fn shade(
             any.then(|| connections(lanes, &pick, (throughput, &mis, &factors)))
         })
         .collect();
-    let next = vertex.sample(surface.f, pair(2), TransportMode::Radiance, true);
-    let mut next_mis = mis;
-    let cos_out = vertex.cos_geometric(next.wi);
-    next_mis.scatter(cos_out, next.eval.pdf, next.eval.pdf_rev, false, &factors);
-    let next_throughput = throughput.mul(next.eval.f_cos.div(next.eval.pdf));
-    let origin = vertex.spawn(next.wi);
+    let continuations = Continuations::sample(
+        (&vertex, surface.f),
+        throughput,
+        (pair(2), F32s(numbers[3][0])),
+        (TransportMode::Radiance, true),
+    );
+    let next_mis = continuations.scattered_mis(&vertex, &mis, &factors);
     for (lane, &(i, _)) in group.iter().enumerate() {
         let path = &mut paths[i];
         path.picks = None;
@@ -145,104 +158,14 @@ fn shade(
             path.alive = false;
             continue;
         }
-        // The picks' stream, then the light sample's two pairs and the continuation's two.
-        path.walk.rng.skip(const { CAMERA.index(Draw::Roulette) });
         // One push per ray: `extend` from an iterator did not inline.
         let rays = std::iter::once(&sample).chain(&connected);
         for ray in rays.filter_map(|shadows| shadows.ray(lane)) {
             path.shadows.push(ray);
         }
-        if !next.valid.get(lane) {
-            path.alive = false;
-            continue;
-        }
-        let walk = &mut path.walk;
-        walk.mis = SubpathMis {
-            d_vcm: next_mis.d_vcm.0[lane],
-            d_vc: next_mis.d_vc.0[lane],
-            d_vm: next_mis.d_vm.0[lane],
-        };
-        let mut throughput = next_throughput.lane(lane);
-        let roulette_number = numbers[3][0][lane];
-        let mut drawn = false;
-        let survives = walk.roulette.survives(walk.segments, &mut throughput, || {
-            drawn = true;
-            roulette_number
-        });
-        walk.rng.skip(u32::from(drawn));
-        walk.throughput = throughput;
-        path.alive = survives;
-        if survives {
-            walk.origin = origin.lane(lane);
-            walk.direction = next.wi.lane(lane);
-            walk.segments += 1;
-        }
-    }
-}
-
-/// Each lane's frame's factors.
-fn factors_of<'a>(factors: impl Fn(usize) -> &'a MisFactors) -> MisFactors<F32s> {
-    let lanes = |field: fn(&MisFactors) -> f32| F32s::from_fn(|lane| field(factors(lane)));
-    MisFactors {
-        merge: lanes(|f| f.merge),
-        connect: lanes(|f| f.connect),
-        hit: lanes(|f| f.hit),
-        connections: lanes(|f| f.connections),
-        light_paths: lanes(|f| f.light_paths),
-    }
-}
-
-/// A shadow ray per lane, where one is queued.
-struct ShadowLanes {
-    queued: Mask,
-    origin: Vec3s,
-    target: Vec3s,
-    contribution: Vec3s,
-}
-
-impl ShadowLanes {
-    /// Lane `lane`'s shadow ray, if it queued one.
-    fn ray(&self, lane: usize) -> Option<ShadowRay> {
-        self.queued.get(lane).then(|| {
-            let origin = self.origin.lane(lane);
-            let (direction, tmax) = segment_to(origin, self.target.lane(lane));
-            ShadowRay {
-                origin,
-                direction,
-                tmax,
-                contribution: self.contribution.lane(lane),
-            }
-        })
-    }
-}
-
-/// The light samples (`light_sample`), one per lane.
-#[inline(always)]
-fn light_samples(
-    (vertex, surface, light): (&Vertex, &SurfaceInputs, &LightInputs),
-    (throughput, mis, factors): (Vec3s, &SubpathMis<F32s>, &MisFactors<F32s>),
-    numbers: (F32s, F32s),
-) -> ShadowLanes {
-    let illumination = illuminate(light, vertex, numbers);
-    let direction = illumination.direction;
-    let eval = vertex.eval(surface.f, direction, TransportMode::Radiance, true);
-    let pdfs = LightSamplePdfs {
-        direct_pdf_w: illumination.direct_pdf_w * light.pick_pmf,
-        emission_pdf_w: illumination.emission_pdf_w * light.pick_pmf,
-        cos_at_light: illumination.cos_at_light,
-        cos_at_receiver: vertex.cos_geometric(direction),
-        bsdf_fwd_pdf_w: eval.pdf,
-        bsdf_rev_pdf_w: eval.pdf_rev,
-    };
-    let weight = light_sample_weight(mis, &pdfs, factors);
-    ShadowLanes {
-        queued: vertex.alive & illumination.lit & eval.valid & eval.f_cos.is_nonzero(),
-        origin: vertex.spawn(direction),
-        target: illumination.target,
-        contribution: throughput
-            .mul(light.emission)
-            .mul(eval.f_cos)
-            .scale(weight / pdfs.direct_pdf_w),
+        // The picks' stream, then the light sample's two pairs and the continuation's two.
+        let to_roulette = const { CAMERA.index(Draw::Roulette) };
+        path.alive = continuations.go_on(lane, &mut path.walk, to_roulette, next_mis.lane(lane));
     }
 }
 
@@ -280,11 +203,7 @@ fn connections(
         position.set(lane, light.position);
         wo.set(lane, light.wo);
         light_throughput.set(lane, light.throughput);
-        (
-            light_mis.d_vcm.0[lane],
-            light_mis.d_vc.0[lane],
-            light_mis.d_vm.0[lane],
-        ) = (light.mis.d_vcm, light.mis.d_vc, light.mis.d_vm);
+        light_mis.set(lane, &light.mis);
         // c = (1 / N_c) · (N_v / N_p): each pick stands for N_v / N_c vertices of N_p paths.
         let connections = ctx.settings.connections as f32;
         scale.0[lane] = ctx.cache.len() as f32 / (connections * ctx.factors.light_paths);

@@ -10,12 +10,12 @@ use vcm_scene::sampling::SobolSampler;
 use super::{LightPathState, Splat, path_length, vertex_sampler};
 use crate::bidir::mis::{MisFactors, SubpathMis, camera_connection_weight};
 use crate::bidir::{Algorithm, FrameContext, VcmSettings};
-use crate::lambert::LambertLanes;
+use crate::lambert::continuation::Continuations;
+use crate::lambert::shadow_rays::ShadowLanes;
 use crate::lambert::surface::{SurfaceInputs, Vertex};
+use crate::lambert::{Arrivals, LambertLanes};
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::light_vertex_cache::LightVertex;
-use crate::path_state::ShadowRay;
-use crate::shadow::segment_to;
 use crate::surface_hit::Hit;
 use crate::vertex_numbers::{Draw, LAMBERT_LIGHT_DRAWS, LIGHT};
 use crate::wave::LaneShading;
@@ -42,18 +42,6 @@ impl LaneShading<LightPathState> for LightLanes<'_> {
     }
 }
 
-/// Each lane's frame's factors.
-fn factors_of<'a>(factors: impl Fn(usize) -> &'a MisFactors) -> MisFactors<F32s> {
-    let lanes = |field: fn(&MisFactors) -> f32| F32s::from_fn(|lane| field(factors(lane)));
-    MisFactors {
-        merge: lanes(|f| f.merge),
-        connect: lanes(|f| f.connect),
-        hit: lanes(|f| f.hit),
-        connections: lanes(|f| f.connections),
-        light_paths: lanes(|f| f.light_paths),
-    }
-}
-
 /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`]), as
 /// [`super::shade`] would.
 fn shade(
@@ -73,24 +61,25 @@ fn shade(
     let scene = lanes.iterations[0].scene;
     let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
     let numbers = SobolSampler::peek_lanes(samplers, const { LIGHT.indices(LAMBERT_LIGHT_DRAWS) });
-    let mut surface = SurfaceInputs::default();
-    let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
     let mut mis = SubpathMis::<F32s>::default();
     let mut distance_sq = F32s::default();
-    for lane in 0..LANES {
-        let (i, hit) = at(lane);
-        let path = &paths[i];
-        surface.gather(tables, scene, lane, (hit.triangle, hit.u, hit.v));
-        direction.set(lane, path.walk.direction);
-        throughput.set(lane, path.walk.throughput);
-        let walk_mis = &path.walk.mis;
-        (mis.d_vcm.0[lane], mis.d_vc.0[lane], mis.d_vm.0[lane]) =
-            (walk_mis.d_vcm, walk_mis.d_vc, walk_mis.d_vm);
-        // The first segment from a light at infinity has no length: × 1 leaves d_VCM as is.
-        let has_length = path.walk.segments > 1 || !path.from_infinity;
-        distance_sq.0[lane] = if has_length { hit.t * hit.t } else { 1.0 };
-    }
-    let factors = factors_of(|lane| &ctx(lane).factors);
+    let arrivals = Arrivals::gather(
+        (tables, scene),
+        |lane| (at(lane).1, &paths[at(lane).0].walk),
+        |lane, hit, walk| {
+            mis.set(lane, &walk.mis);
+            // The first segment from a light at infinity has no length: × 1 leaves d_VCM
+            // as is.
+            let has_length = walk.segments > 1 || !paths[at(lane).0].from_infinity;
+            distance_sq.0[lane] = if has_length { hit.t * hit.t } else { 1.0 };
+        },
+    );
+    let Arrivals {
+        surface,
+        direction,
+        throughput,
+    } = arrivals;
+    let factors = MisFactors::lanes(|lane| &ctx(lane).factors);
     let wo = -direction;
     let vertex = Vertex::new(&surface, wo, Mask::first(group.len()));
     mis.arrive(Some(distance_sq), vertex.cos_geometric_out());
@@ -101,31 +90,25 @@ fn shade(
             (throughput, &mis, &factors),
         )
     });
-    let next = vertex.sample(
-        surface.f,
-        (F32s(numbers[0][0]), F32s(numbers[0][1])),
-        TransportMode::Importance,
-        true,
+    let continuations = Continuations::sample(
+        (&vertex, surface.f),
+        throughput,
+        (
+            (F32s(numbers[0][0]), F32s(numbers[0][1])),
+            F32s(numbers[1][0]),
+        ),
+        (TransportMode::Importance, true),
     );
-    let mut next_mis = mis;
-    let cos_out = vertex.cos_geometric(next.wi);
-    next_mis.scatter(cos_out, next.eval.pdf, next.eval.pdf_rev, false, &factors);
-    let next_throughput = throughput.mul(next.eval.f_cos.div(next.eval.pdf));
-    let origin = vertex.spawn(next.wi);
+    let next_mis = continuations.scattered_mis(&vertex, &mis, &factors);
     for (lane, &(i, hit)) in group.iter().enumerate() {
         let path = &mut paths[i];
         let max_segments = ctx(lane).max_segments();
         let walk = &mut path.walk;
-        let kept = SubpathMis {
-            d_vcm: mis.d_vcm.0[lane],
-            d_vc: mis.d_vc.0[lane],
-            d_vm: mis.d_vm.0[lane],
-        };
         let light_vertex = LightVertex {
             position: vertex.position.lane(lane),
             wo: wo.lane(lane),
             throughput: walk.throughput,
-            mis: kept,
+            mis: mis.lane(lane),
             triangle: hit.triangle,
             u: hit.u,
             v: hit.v,
@@ -137,46 +120,20 @@ fn shade(
         path.vertex = Some(light_vertex);
         // A further vertex has segments + 1 segments, and using it takes one more.
         let continues = walk.segments.saturating_add(2) <= max_segments;
-        if !(continues && vertex.alive.get(lane)) {
-            path.alive = false;
-            continue;
-        }
         // The lobe and the direction.
-        walk.rng.skip(const { LIGHT.index(Draw::Roulette) });
-        if !next.valid.get(lane) {
-            path.alive = false;
-            continue;
-        }
-        walk.mis = SubpathMis {
-            d_vcm: next_mis.d_vcm.0[lane],
-            d_vc: next_mis.d_vc.0[lane],
-            d_vm: next_mis.d_vm.0[lane],
-        };
-        let mut throughput = next_throughput.lane(lane);
-        let roulette_number = numbers[1][0][lane];
-        let mut drawn = false;
-        let survives = walk.roulette.survives(walk.segments, &mut throughput, || {
-            drawn = true;
-            roulette_number
-        });
-        walk.rng.skip(u32::from(drawn));
-        walk.throughput = throughput;
-        path.alive = survives;
-        if survives {
-            walk.origin = origin.lane(lane);
-            walk.direction = next.wi.lane(lane);
-            walk.segments += 1;
-        }
+        let to_roulette = const { LIGHT.index(Draw::Roulette) };
+        path.alive = continues
+            && vertex.alive.get(lane)
+            && continuations.go_on(lane, walk, to_roulette, next_mis.lane(lane));
     }
 }
 
 /// The lanes' connections to the camera (`connect_to_camera`), before the projection.
 struct CameraConnections {
-    queued: Mask,
     /// The light vertices.
     position: Vec3s,
-    origin: Vec3s,
-    contribution: Vec3s,
+    /// The shadow rays toward the camera.
+    shadows: ShadowLanes,
 }
 
 /// The light vertices `vertex` connected to the camera of `ctx` (which all iterations
@@ -204,35 +161,28 @@ fn camera_connections(
         camera_connection_weight(mis, camera_pdf_a, eval.pdf_rev, factors)
     };
     CameraConnections {
-        queued: vertex.alive & eval.valid & eval.f_cos.is_nonzero(),
         position: vertex.position,
-        origin: vertex.spawn(direction),
-        contribution: throughput
-            .mul(eval.f_cos)
-            .scale(weight * camera_pdf_w / (distance_sq * factors.light_paths)),
+        shadows: ShadowLanes {
+            queued: vertex.alive & eval.valid & eval.f_cos.is_nonzero(),
+            origin: vertex.spawn(direction),
+            target: Vec3s::splat(camera.position),
+            contribution: throughput
+                .mul(eval.f_cos)
+                .scale(weight * camera_pdf_w / (distance_sq * factors.light_paths)),
+        },
     }
 }
 
 impl CameraConnections {
     /// Lane `lane`'s splat in iteration `ctx`, if it connected and projects into the image.
     fn splat(&self, ctx: &FrameContext, lane: usize) -> Option<Splat> {
-        let position = ctx.scene.camera.position;
         let VcmSettings { width, height, .. } = *ctx.settings;
-        if !self.queued.get(lane) {
-            return None;
-        }
-        let origin = self.origin.lane(lane);
+        let ray = self.shadows.ray(lane)?;
         let raster = ctx.projection.raster_of(self.position.lane(lane))?;
-        let (direction, tmax) = segment_to(origin, position);
         let pixel = raster.as_uvec2().min(UVec2::new(width - 1, height - 1));
         Some(Splat {
             pixel: pixel.y * width + pixel.x,
-            ray: ShadowRay {
-                origin,
-                direction,
-                tmax,
-                contribution: self.contribution.lane(lane),
-            },
+            ray,
         })
     }
 }
