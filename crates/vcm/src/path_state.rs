@@ -59,6 +59,8 @@ pub(crate) struct PathState {
     pub alive: bool,
 }
 
+crate::walk::walker!(PathState, SegmentOrigin);
+
 impl PathState {
     /// A path at the camera, its pixel's numbers `rng`: unit throughput, no radiance yet.
     pub fn new(

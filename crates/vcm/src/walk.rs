@@ -101,3 +101,32 @@ impl<M> Walk<M> {
         self.segments += 1;
     }
 }
+
+/// A path that makes a [`Walk`] (the path tracer's and the VCM family's camera and light
+/// paths), for the code their vertices share.
+pub(crate) trait Walker {
+    /// What its MIS weights remember of the walk.
+    type Mis;
+    /// The walk.
+    fn walk(&self) -> &Walk<Self::Mis>;
+    /// The walk, to change.
+    fn walk_mut(&mut self) -> &mut Walk<Self::Mis>;
+}
+
+/// [`Walker`] for a path type whose walk is its field `walk`.
+macro_rules! walker {
+    ($path:ty, $mis:ty) => {
+        impl $crate::walk::Walker for $path {
+            type Mis = $mis;
+            #[inline(always)]
+            fn walk(&self) -> &$crate::walk::Walk<$mis> {
+                &self.walk
+            }
+            #[inline(always)]
+            fn walk_mut(&mut self) -> &mut $crate::walk::Walk<$mis> {
+                &mut self.walk
+            }
+        }
+    };
+}
+pub(crate) use walker;

@@ -71,6 +71,8 @@ struct CameraPathState {
     picks: Option<CachePicks>,
 }
 
+crate::walk::walker!(CameraPathState, SubpathMis);
+
 /// Bytes a camera path in flight takes with `connections` per vertex: its state, its rays
 /// and hit, and its light sample's and connections' shadow rays (those beyond the inline
 /// ones held twice: in the path's list and in the batch).

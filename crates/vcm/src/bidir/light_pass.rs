@@ -63,6 +63,8 @@ struct LightPathState {
     kept_splats: u32,
 }
 
+crate::walk::walker!(LightPathState, SubpathMis);
+
 /// Bytes a light path in flight takes: its state, its ray and hit, and its camera
 /// connection's shadow ray.
 pub(crate) const BYTES_PER_PATH: u64 = (size_of::<LightPathState>()

@@ -23,17 +23,17 @@ pub(crate) struct Continuations {
 }
 
 impl Continuations {
-    /// Samples the Lambert lobe `f` at `vertex` in `mode` (`reverse`: with the reverse
-    /// pdf) with the direction numbers `direction`, for walks with throughput `throughput`
-    /// and roulette's numbers `roulette`.
+    /// Samples the Lambert lobes at `vertex` in `mode` (`reverse`: with the reverse pdf)
+    /// with the direction numbers `direction`, for walks with throughput `throughput` and
+    /// roulette's numbers `roulette`.
     #[inline(always)]
     pub fn sample(
-        (vertex, f): (&Vertex, Vec3s),
+        vertex: &Vertex,
         throughput: Vec3s,
         (direction, roulette): ((F32s, F32s), F32s),
         (mode, reverse): (TransportMode, bool),
     ) -> Continuations {
-        let next = vertex.sample(f, direction, mode, reverse);
+        let next = vertex.sample(direction, mode, reverse);
         Continuations {
             // β ← β · f·|cos| / p
             throughput: throughput.mul(next.eval.f_cos.div(next.eval.pdf)),

@@ -24,12 +24,15 @@ pub(crate) mod surface;
 use glam::Vec3;
 use vcm_scene::Scene;
 use vcm_scene::light::Light;
+use vcm_scene::sampling::SobolSampler;
 
-use crate::lanes::{LANES, Vec3s};
+use crate::lanes::{LANES, Mask, Vec3s};
 use crate::ray_offset::barycentric_error;
 use crate::surface_hit::Hit;
+#[cfg(doc)]
 use crate::walk::Walk;
-use surface::SurfaceInputs;
+use crate::walk::Walker;
+use surface::{SurfaceInputs, Vertex};
 
 /// A material whose lobes are one plain Lambert lobe.
 #[derive(Clone, Copy, Debug)]
@@ -142,39 +145,63 @@ impl LambertLanes {
     }
 }
 
+/// The path and hit of lane `lane` of `group` (pairs of a path's index and its hit, at most
+/// [`LANES`]). Lanes past the group repeat its last path; their results are dropped.
+#[inline(always)]
+pub(crate) fn lane_of(group: &[(usize, Hit)], lane: usize) -> (usize, Hit) {
+    group[lane.min(group.len() - 1)]
+}
+
+/// Starts the vertices `group` reached: moves each path's numbers to its vertex, `pairs`
+/// pairs of dimensions per vertex ([`Walk::start_vertex`]), and reads the pairs at
+/// `indices` of every lane's numbers ahead, all lanes at once.
+#[inline(always)]
+pub(crate) fn start_vertices<P: Walker, const N: usize>(
+    paths: &mut [P],
+    group: &[(usize, Hit)],
+    pairs: u32,
+    indices: [u32; N],
+) -> [[[f32; LANES]; 2]; N] {
+    debug_assert!(!group.is_empty() && group.len() <= LANES);
+    for &(i, _) in group {
+        paths[i].walk_mut().start_vertex(pairs);
+    }
+    let samplers = std::array::from_fn(|lane| &paths[lane_of(group, lane).0].walk().rng);
+    SobolSampler::peek_lanes(samplers, indices)
+}
+
 /// Eight walks arriving at plain Lambert surfaces, as the lanes read them.
 pub(crate) struct Arrivals {
-    /// The surfaces they reached.
-    pub surface: SurfaceInputs,
-    /// The directions of the segments that arrive.
-    pub direction: Vec3s,
+    /// The vertices they reached, seen from where they came (in the lanes of the group).
+    pub vertex: Vertex,
     /// The walks' throughputs.
     pub throughput: Vec3s,
 }
 
 impl Arrivals {
-    /// Reads each lane's walk and the point it reached, `walk_of(lane)`, and lets `extra`
-    /// read what else an integrator's vertex needs of the lane.
+    /// Reads the walk of each lane's path in `group` and the point it reached, and lets
+    /// `extra` read what else an integrator's vertex needs of the lane's path; then makes
+    /// the vertices (`Vertex::new`).
     #[inline(always)]
-    pub fn gather<'w, M: 'w>(
+    pub fn gather<P: Walker>(
         (tables, scene): (&LambertLanes, &Scene),
-        walk_of: impl Fn(usize) -> (Hit, &'w Walk<M>),
-        mut extra: impl FnMut(usize, Hit, &Walk<M>),
+        (paths, group): (&[P], &[(usize, Hit)]),
+        mut extra: impl FnMut(usize, Hit, &P),
     ) -> Arrivals {
-        let mut arrivals = Arrivals {
-            surface: SurfaceInputs::default(),
-            direction: Vec3s::default(),
-            throughput: Vec3s::default(),
-        };
+        let mut surface = SurfaceInputs::default();
+        let (mut direction, mut throughput) = (Vec3s::default(), Vec3s::default());
         for lane in 0..LANES {
-            let (hit, walk) = walk_of(lane);
-            let point = (hit.triangle, hit.u, hit.v);
-            arrivals.surface.gather(tables, scene, lane, point);
-            arrivals.direction.set(lane, walk.direction);
-            arrivals.throughput.set(lane, walk.throughput);
-            extra(lane, hit, walk);
+            let (i, hit) = lane_of(group, lane);
+            let (path, point) = (&paths[i], (hit.triangle, hit.u, hit.v));
+            surface.gather(tables, scene, lane, point);
+            direction.set(lane, path.walk().direction);
+            throughput.set(lane, path.walk().throughput);
+            extra(lane, hit, path);
         }
-        arrivals
+        Arrivals {
+            vertex: Vertex::new(&surface, -direction, Mask::first(group.len())),
+            throughput,
+        }
     }
 }
 

@@ -4,15 +4,13 @@
 
 use vcm_scene::Scene;
 use vcm_scene::bsdf::TransportMode;
-use vcm_scene::sampling::{SobolSampler, power_heuristic};
+use vcm_scene::sampling::power_heuristic;
 
 use super::continuation::Continuations;
 use super::light_sample::{LightInputs, light_samples};
-use super::surface::Vertex;
-use super::{Arrivals, LambertLanes};
-use crate::lanes::{F32s, LANES, Mask};
+use super::{Arrivals, LambertLanes, start_vertices};
+use crate::lanes::F32s;
 use crate::path_state::{PathState, SegmentOrigin};
-use crate::shade::vertex_sampler;
 use crate::surface_hit::Hit;
 use crate::vertex_numbers::{Draw, LAMBERT_CAMERA_DRAWS, PATH_TRACER};
 use crate::wave::LaneShading;
@@ -43,35 +41,19 @@ impl LaneShading<PathState> for LambertShading<'_> {
     }
 }
 
-/// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`]), as
+/// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`](crate::lanes::LANES)), as
 /// [`crate::shade::shade`] would.
 fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &[(usize, Hit)]) {
-    debug_assert!(!group.is_empty() && group.len() <= LANES);
-    for &(i, _) in group {
-        vertex_sampler(&mut paths[i]);
-    }
-    // Lanes past the group repeat its last path; their results are dropped.
-    let at = |lane: usize| group[lane.min(group.len() - 1)];
-    let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
-    let numbers = SobolSampler::peek_lanes(
-        samplers,
-        const { PATH_TRACER.indices(LAMBERT_CAMERA_DRAWS) },
-    );
+    let indices = const { PATH_TRACER.indices(LAMBERT_CAMERA_DRAWS) };
+    let numbers = start_vertices(paths, group, PATH_TRACER.pairs(), indices);
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
     let mut light = LightInputs::default();
-    let arrivals = Arrivals::gather(
-        (tables, scene),
-        |lane| (at(lane).1, &paths[at(lane).0].walk),
-        |lane, _, _| light.gather(tables, scene, lane, numbers[0][0][lane]),
-    );
-    let Arrivals {
-        surface,
-        direction,
-        throughput,
-    } = arrivals;
-    let vertex = Vertex::new(&surface, -direction, Mask::first(group.len()));
+    let arrivals = Arrivals::gather((tables, scene), (paths, group), |lane, _, _| {
+        light.gather(tables, scene, lane, numbers[0][0][lane])
+    });
+    let Arrivals { vertex, throughput } = arrivals;
     let shadows = light_samples(
-        (&vertex, surface.f, &light),
+        (&vertex, &light),
         throughput,
         (pair(1), false),
         |illumination, eval| {
@@ -80,7 +62,7 @@ fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &
         },
     );
     let continuations = Continuations::sample(
-        (&vertex, surface.f),
+        &vertex,
         throughput,
         (pair(2), F32s(numbers[3][0])),
         (TransportMode::Radiance, false),

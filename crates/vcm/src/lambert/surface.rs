@@ -105,7 +105,10 @@ pub(crate) struct Vertex {
     /// Geometric normal (front orientation).
     pub n_g: Vec3s,
     frame: Frame,
-    wo: Vec3s,
+    /// f = albedo/π of each lane's Lambert lobe.
+    f: Vec3s,
+    /// The direction toward the previous vertex (unit).
+    pub wo: Vec3s,
     /// `wo · n_g`.
     cos_g_out: F32s,
     /// `wo` in the shading frame of its side: its z.
@@ -179,6 +182,7 @@ impl Vertex {
             },
             n_g,
             frame,
+            f: surface.f,
             wo,
             cos_g_out,
             wo_z,
@@ -208,7 +212,7 @@ impl Vertex {
     /// `FixedOutgoing::eval` toward `wi` (world, unit) in `mode`, with the reverse pdf where
     /// `reverse` (`Pdfs::Both`).
     #[inline(always)]
-    pub fn eval(&self, f: Vec3s, wi: Vec3s, mode: TransportMode, reverse: bool) -> Evaluation {
+    pub fn eval(&self, wi: Vec3s, mode: TransportMode, reverse: bool) -> Evaluation {
         let zero = F32s::splat(0.0);
         let grazing = F32s::splat(GRAZING_COS);
         // Bsdf::incoming and Bsdf::consistent.
@@ -219,7 +223,7 @@ impl Vertex {
         let consistent = cos_g.abs().ge(grazing) & wi_z.abs().ge(grazing) & same_side;
         let cos_g = cos_g.abs();
         // The lobe's value and pdf, then Bsdf::adjoint.
-        let f_cos = f.scale(wi_z);
+        let f_cos = self.f.scale(wi_z);
         let f_cos = match mode {
             TransportMode::Radiance => f_cos,
             TransportMode::Importance => {
@@ -246,13 +250,7 @@ impl Vertex {
     /// `FixedOutgoing::sample` of the Lambert lobe with the direction numbers (`ux`, `uy`):
     /// the cosine-weighted hemisphere of `wo`'s side, evaluated at the final direction.
     #[inline(always)]
-    pub fn sample(
-        &self,
-        f: Vec3s,
-        (ux, uy): (F32s, F32s),
-        mode: TransportMode,
-        reverse: bool,
-    ) -> Scattered {
+    pub fn sample(&self, (ux, uy): (F32s, F32s), mode: TransportMode, reverse: bool) -> Scattered {
         let zero = F32s::splat(0.0);
         let (dx, dy) = concentric_disk(ux, uy);
         let dz = (F32s::splat(1.0) - (dx * dx + dy * dy)).max(zero).sqrt();
@@ -262,7 +260,7 @@ impl Vertex {
             z: mirror(self.back, dz),
         };
         let wi = self.frame.to_world(local).normalize();
-        let eval = self.eval(f, wi, mode, reverse);
+        let eval = self.eval(wi, mode, reverse);
         let transmitted = (wi.dot(self.n_g) * self.cos_g_out).lt(zero);
         Scattered {
             valid: self.alive & dz.gt(zero) & eval.valid & !transmitted & wi.is_finite(),

@@ -6,9 +6,8 @@
 use glam::Vec3;
 use smallvec::SmallVec;
 use vcm_scene::bsdf::TransportMode;
-use vcm_scene::sampling::SobolSampler;
 
-use super::{CachePicks, CameraContext, CameraPathState, pick_and_prefetch, vertex_sampler};
+use super::{CachePicks, CameraContext, CameraPathState, pick_and_prefetch};
 use crate::bidir::Algorithm;
 use crate::bidir::mis::{
     ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight, light_sample_weight,
@@ -17,7 +16,7 @@ use crate::lambert::continuation::Continuations;
 use crate::lambert::light_sample::{LightInputs, light_samples};
 use crate::lambert::shadow_rays::ShadowLanes;
 use crate::lambert::surface::{SurfaceInputs, Vertex};
-use crate::lambert::{Arrivals, LambertLanes};
+use crate::lambert::{Arrivals, LambertLanes, lane_of, start_vertices};
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::light_vertex_cache::LightVertex;
 use crate::surface_hit::{Hit, SurfaceHit};
@@ -75,40 +74,25 @@ fn shade(
     paths: &mut [CameraPathState],
     group: &[(usize, Hit)],
 ) {
-    debug_assert!(!group.is_empty() && group.len() <= LANES);
-    for &(i, _) in group {
-        vertex_sampler(&mut paths[i]);
-    }
-    // Lanes past the group repeat its last path; their results are dropped.
-    let at = |lane: usize| group[lane.min(group.len() - 1)];
+    let indices = const { CAMERA.indices(LAMBERT_CAMERA_DRAWS) };
+    let numbers = start_vertices(paths, group, CAMERA.pairs(), indices);
+    let at = |lane: usize| lane_of(group, lane);
     let ctx = |lane: usize| &iterations[paths[at(lane).0].sample as usize];
     let scene = iterations[0].scene;
-    let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
-    let numbers =
-        SobolSampler::peek_lanes(samplers, const { CAMERA.indices(LAMBERT_CAMERA_DRAWS) });
     let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
     let mut light = LightInputs::default();
     let mut mis = SubpathMis::<F32s>::default();
     let mut t = F32s::default();
-    let arrivals = Arrivals::gather(
-        (tables, scene),
-        |lane| (at(lane).1, &paths[at(lane).0].walk),
-        |lane, hit, walk| {
-            light.gather(tables, scene, lane, numbers[0][0][lane]);
-            mis.set(lane, &walk.mis);
-            t.0[lane] = hit.t;
-        },
-    );
-    let Arrivals {
-        surface,
-        direction,
-        throughput,
-    } = arrivals;
+    let arrivals = Arrivals::gather((tables, scene), (paths, group), |lane, hit, path| {
+        light.gather(tables, scene, lane, numbers[0][0][lane]);
+        mis.set(lane, &path.walk.mis);
+        t.0[lane] = hit.t;
+    });
+    let Arrivals { vertex, throughput } = arrivals;
     let factors = MisFactors::lanes(|lane| &ctx(lane).factors);
-    let vertex = Vertex::new(&surface, -direction, Mask::first(group.len()));
     mis.arrive(Some(t * t), vertex.cos_geometric_out());
     let sample = light_samples(
-        (&vertex, surface.f, &light),
+        (&vertex, &light),
         throughput,
         (pair(1), true),
         |illumination, eval| {
@@ -140,12 +124,12 @@ fn shade(
                 (length <= ctx.max_segments()).then_some((ctx, light))
             });
             let any = pick.iter().any(Option::is_some);
-            let lanes = (tables, &vertex, &surface);
+            let lanes = (tables, &vertex);
             any.then(|| connections(lanes, &pick, (throughput, &mis, &factors)))
         })
         .collect();
     let continuations = Continuations::sample(
-        (&vertex, surface.f),
+        &vertex,
         throughput,
         (pair(2), F32s(numbers[3][0])),
         (TransportMode::Radiance, true),
@@ -177,7 +161,7 @@ type Pick<'c> = Option<(&'c CameraContext<'c>, &'c LightVertex)>;
 /// Lambert surfaces are evaluated in the lanes, the others by the general BSDF.
 #[inline(always)]
 fn connections(
-    (tables, vertex, surface): (&LambertLanes, &Vertex, &SurfaceInputs),
+    (tables, vertex): (&LambertLanes, &Vertex),
     picks: &[Pick; LANES],
     (throughput, mis, factors): (Vec3s, &SubpathMis<F32s>, &MisFactors<F32s>),
 ) -> ShadowLanes {
@@ -216,14 +200,14 @@ fn connections(
     let to_light: Vec3s = position - vertex.position;
     let distance_sq = to_light.length_squared();
     let direction = to_light.div(distance_sq.sqrt());
-    let camera = vertex.eval(surface.f, direction, TransportMode::Radiance, true);
+    let camera = vertex.eval(direction, TransportMode::Radiance, true);
     let camera_ok = vertex.alive
         & Mask::from_bools(connects)
         & !distance_sq.eq(zero)
         & camera.valid
         & camera.f_cos.is_nonzero();
     let light_vertex = Vertex::new(&light_surface, wo, Mask::from_bools(lambert));
-    let mut light = light_vertex.eval(light_surface.f, -direction, TransportMode::Importance, true);
+    let mut light = light_vertex.eval(-direction, TransportMode::Importance, true);
     let mut light_ok = light_vertex.alive.bools();
     for (ok, &valid) in light_ok.iter_mut().zip(&light.valid.bools()) {
         *ok &= valid;

@@ -5,16 +5,15 @@
 
 use glam::UVec2;
 use vcm_scene::bsdf::TransportMode;
-use vcm_scene::sampling::SobolSampler;
 
-use super::{LightPathState, Splat, path_length, vertex_sampler};
+use super::{LightPathState, Splat, path_length};
 use crate::bidir::mis::{MisFactors, SubpathMis, camera_connection_weight};
 use crate::bidir::{Algorithm, FrameContext, VcmSettings};
 use crate::lambert::continuation::Continuations;
 use crate::lambert::shadow_rays::ShadowLanes;
-use crate::lambert::surface::{SurfaceInputs, Vertex};
-use crate::lambert::{Arrivals, LambertLanes};
-use crate::lanes::{F32s, LANES, Mask, Vec3s};
+use crate::lambert::surface::Vertex;
+use crate::lambert::{Arrivals, LambertLanes, lane_of, start_vertices};
+use crate::lanes::{F32s, LANES, Vec3s};
 use crate::light_vertex_cache::LightVertex;
 use crate::surface_hit::Hit;
 use crate::vertex_numbers::{Draw, LAMBERT_LIGHT_DRAWS, LIGHT};
@@ -50,48 +49,29 @@ fn shade(
     paths: &mut [LightPathState],
     group: &[(usize, Hit)],
 ) {
-    debug_assert!(!group.is_empty() && group.len() <= LANES);
-    for &(i, _) in group {
-        vertex_sampler(&mut paths[i]);
-    }
-    // Lanes past the group repeat its last path; their results are dropped.
-    let at = |lane: usize| group[lane.min(group.len() - 1)];
+    let indices = const { LIGHT.indices(LAMBERT_LIGHT_DRAWS) };
+    let numbers = start_vertices(paths, group, LIGHT.pairs(), indices);
+    let at = |lane: usize| lane_of(group, lane);
     let samples: [usize; LANES] = std::array::from_fn(|lane| paths[at(lane).0].sample as usize);
     let ctx = |lane: usize| &lanes.iterations[samples[lane]];
     let scene = lanes.iterations[0].scene;
-    let samplers = std::array::from_fn(|lane| &paths[at(lane).0].walk.rng);
-    let numbers = SobolSampler::peek_lanes(samplers, const { LIGHT.indices(LAMBERT_LIGHT_DRAWS) });
     let mut mis = SubpathMis::<F32s>::default();
     let mut distance_sq = F32s::default();
-    let arrivals = Arrivals::gather(
-        (tables, scene),
-        |lane| (at(lane).1, &paths[at(lane).0].walk),
-        |lane, hit, walk| {
-            mis.set(lane, &walk.mis);
-            // The first segment from a light at infinity has no length: × 1 leaves d_VCM
-            // as is.
-            let has_length = walk.segments > 1 || !paths[at(lane).0].from_infinity;
-            distance_sq.0[lane] = if has_length { hit.t * hit.t } else { 1.0 };
-        },
-    );
-    let Arrivals {
-        surface,
-        direction,
-        throughput,
-    } = arrivals;
-    let factors = MisFactors::lanes(|lane| &ctx(lane).factors);
-    let wo = -direction;
-    let vertex = Vertex::new(&surface, wo, Mask::first(group.len()));
-    mis.arrive(Some(distance_sq), vertex.cos_geometric_out());
-    let splats = lanes.splat.then(|| {
-        camera_connections(
-            &lanes.iterations[0],
-            (&vertex, &surface),
-            (throughput, &mis, &factors),
-        )
+    let arrivals = Arrivals::gather((tables, scene), (paths, group), |lane, hit, path| {
+        mis.set(lane, &path.walk.mis);
+        // The first segment from a light at infinity has no length: × 1 leaves d_VCM
+        // as is.
+        let has_length = path.walk.segments > 1 || !path.from_infinity;
+        distance_sq.0[lane] = if has_length { hit.t * hit.t } else { 1.0 };
     });
+    let Arrivals { vertex, throughput } = arrivals;
+    let factors = MisFactors::lanes(|lane| &ctx(lane).factors);
+    mis.arrive(Some(distance_sq), vertex.cos_geometric_out());
+    let splats = lanes
+        .splat
+        .then(|| camera_connections(&lanes.iterations[0], &vertex, (throughput, &mis, &factors)));
     let continuations = Continuations::sample(
-        (&vertex, surface.f),
+        &vertex,
         throughput,
         (
             (F32s(numbers[0][0]), F32s(numbers[0][1])),
@@ -106,7 +86,7 @@ fn shade(
         let walk = &mut path.walk;
         let light_vertex = LightVertex {
             position: vertex.position.lane(lane),
-            wo: wo.lane(lane),
+            wo: vertex.wo.lane(lane),
             throughput: walk.throughput,
             mis: mis.lane(lane),
             triangle: hit.triangle,
@@ -141,14 +121,14 @@ struct CameraConnections {
 #[inline(always)]
 fn camera_connections(
     ctx: &FrameContext,
-    (vertex, surface): (&Vertex, &SurfaceInputs),
+    vertex: &Vertex,
     (throughput, mis, factors): (Vec3s, &SubpathMis<F32s>, &MisFactors<F32s>),
 ) -> CameraConnections {
     let camera = &ctx.scene.camera;
     let to_camera = Vec3s::splat(camera.position) - vertex.position;
     let distance_sq = to_camera.length_squared();
     let direction = to_camera.div(distance_sq.sqrt());
-    let eval = vertex.eval(surface.f, direction, TransportMode::Importance, true);
+    let eval = vertex.eval(direction, TransportMode::Importance, true);
     // The camera's solid-angle pdf per pixel sample is d_image² / (pixel_area · cos θ) with
     // d_image = 1 / cos θ; its area pdf at the vertex adds |cos θ_surface| / d².
     let cos_camera = Vec3s::splat(camera.forward).dot(-direction);
