@@ -4,11 +4,8 @@
 
 use std::sync::Arc;
 
-pub use vcm::Algorithm;
-use vcm::{
-    DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, Integrator, PathTracer, PtSettings, RenderError, Vcm,
-    VcmSettings,
-};
+pub use vcm::{Algorithm, MergeRadius};
+use vcm::{DEFAULT_ALPHA, Integrator, PathTracer, PtSettings, RenderError, Vcm, VcmSettings};
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Scene, ShadingPlan};
 use vcm_traversal::Traversal;
@@ -50,9 +47,10 @@ pub struct IntegratorOptions {
     #[arg(long, default_value_t = 1,
           value_parser = clap::value_parser!(u32).range(1..=i64::from(vcm::MAX_CONNECTIONS)))]
     pub connections: u32,
-    /// Initial merge radius as a fraction of the scene's bounding-sphere radius (ppm, bpm, vcm).
-    #[arg(long, default_value_t = DEFAULT_RADIUS_FRACTION, allow_negative_numbers = true)]
-    pub radius: f32,
+    /// Initial merge radius (ppm, bpm, vcm): pixel footprints at the surfaces the camera
+    /// sees (2px), or a fraction of the scene's bounding-sphere radius (0.003).
+    #[arg(long, default_value_t = MergeRadius::default(), allow_hyphen_values = true)]
+    pub radius: MergeRadius,
     /// Radius reduction exponent: frame i merges within r₀ · i^((α − 1) / 2) (ppm, bpm, vcm).
     #[arg(long, default_value_t = DEFAULT_ALPHA, allow_negative_numbers = true)]
     pub alpha: f32,
@@ -81,7 +79,7 @@ impl Default for IntegratorOptions {
             sampler: SamplerKind::Sobol,
             max_depth: None,
             connections: 1,
-            radius: DEFAULT_RADIUS_FRACTION,
+            radius: MergeRadius::default(),
             alpha: DEFAULT_ALPHA,
             no_prune: false,
         }
@@ -124,7 +122,7 @@ pub fn build(
                 sequence: options.sampler.sequence(),
                 max_depth: options.max_depth,
                 connections: options.connections,
-                radius_fraction: options.radius,
+                radius: options.radius,
                 alpha: options.alpha,
                 prune: !options.no_prune,
                 lambert_lanes: !options.no_prune,

@@ -152,6 +152,7 @@ impl RenderSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrators::MergeRadius;
 
     fn example() -> RenderSettings {
         RenderSettings {
@@ -164,7 +165,7 @@ mod tests {
                 sampler: SamplerKind::Independent,
                 max_depth: Some(7),
                 connections: 3,
-                radius: 0.003_141_592_7,
+                radius: MergeRadius::SceneFraction(0.003_141_592_7),
                 alpha: 0.75,
                 no_prune: true,
             },
@@ -178,6 +179,11 @@ mod tests {
             RenderSettings::from_metadata(&settings.to_metadata()),
             Ok(settings.clone())
         );
+        let mut in_pixels = example();
+        in_pixels.options.radius = MergeRadius::Pixels(1.618_034);
+        let text = in_pixels.to_metadata();
+        assert_eq!(text["radius"], "1.618034px");
+        assert_eq!(RenderSettings::from_metadata(&text), Ok(in_pixels));
         let defaults = RenderSettings {
             camera: None,
             options: IntegratorOptions::default(),

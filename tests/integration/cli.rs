@@ -153,7 +153,7 @@ fn every_algorithm_renders_from_the_command_line() {
 fn bad_input_is_a_clear_error_with_non_zero_status() {
     let folder = std::env::temp_dir();
     let folder = folder.to_str().expect("a UTF-8 temporary folder");
-    let cases: [(&[&str], &str); 16] = [
+    let cases: [(&[&str], &str); 18] = [
         (&["render", "no/such/scene.gltf"], "scene.gltf"),
         (&["render", "--spp", "0"], "--spp"),
         (
@@ -161,6 +161,11 @@ fn bad_input_is_a_clear_error_with_non_zero_status() {
             "connections",
         ),
         (&["render", "--algo", "ppm", "--radius", "0"], "radius"),
+        (&["render", "--algo", "vcm", "--radius", "-2px"], "radius"),
+        (
+            &["render", "--algo", "vcm", "--radius", "2 pixels"],
+            "2 pixels",
+        ),
         (&["render", "--algo", "bpm", "--alpha", "1.5"], "alpha"),
         (&["render", "-o", "/nonexistent-folder/out.exr"], "out.exr"),
         // The tone-mapped PNG would replace the EXR, the plot the CSV, the render its

@@ -34,7 +34,8 @@ use crate::vcm_error;
 ///     sampler: "sobol" (stratified, default) or "independent".
 ///     max_depth: most path segments (default: unlimited, with Russian roulette).
 ///     connections: light vertices each camera vertex connects to (bpt, vcm; default 1).
-///     radius: initial merge radius as a fraction of the scene's size (ppm, bpm, vcm).
+///     radius: initial merge radius (ppm, bpm, vcm): pixel footprints as a text ending in
+///         `px` ("2px", the default) or a fraction of the scene's radius (0.003).
 ///     alpha: the merge radius's reduction exponent (ppm, bpm, vcm).
 ///     no_prune: run every part of the algorithm, even those the scene does not need.
 ///     backend: "cpu" (default) or "gpu" (WGSL compute shaders through wgpu).

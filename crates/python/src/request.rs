@@ -6,7 +6,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use vcm_rs::Backend;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions, SamplerKind, image_size};
+use vcm_rs::integrators::{Algorithm, IntegratorOptions, MergeRadius, SamplerKind, image_size};
 use vcm_rs::render_loop::{Budget, ScheduleOptions};
 use vcm_rs::state::{RenderSettings, SETTING_OPTIONS};
 
@@ -72,7 +72,7 @@ impl Request {
                 "sampler" => options.sampler = choice::<SamplerKind>(key, value)?,
                 "max_depth" => options.max_depth = optional(value, |v| positive(key, v))?,
                 "connections" => options.connections = value_as(key, value)?,
-                "radius" => options.radius = value_as(key, value)?,
+                "radius" => options.radius = merge_radius(key, value)?,
                 "alpha" => options.alpha = value_as(key, value)?,
                 "no_prune" => options.no_prune = value_as(key, value)?,
                 "backend" => backend = choice(key, value)?,
@@ -150,6 +150,16 @@ fn positive(key: &str, value: &Bound<'_, PyAny>) -> PyResult<u32> {
     u32::try_from(n).ok().filter(|&n| n >= 1).ok_or_else(|| {
         PyValueError::new_err(format!("{key}: must be from 1 to 4294967295, not {n}"))
     })
+}
+
+/// `value` as a merge radius: a number (a fraction of the scene's radius) or a text as
+/// `vcm render --radius` reads it (`"2px"`: pixel footprints).
+fn merge_radius(key: &str, value: &Bound<'_, PyAny>) -> PyResult<MergeRadius> {
+    let radius = match value.extract::<String>() {
+        Ok(text) => text.parse(),
+        Err(_) => MergeRadius::SceneFraction(value_as(key, value)?).validated(),
+    };
+    radius.map_err(|e| PyValueError::new_err(format!("{key}: {e}")))
 }
 
 /// `value` as a positive, finite number of seconds.

@@ -61,6 +61,19 @@ def test_images_equal_the_command_lines_exr(box, vcm_cli, tmp_path, algo):
     assert np.array_equal(image, vcm_rs.read_exr(exr))
 
 
+def test_a_radius_in_pixels_is_the_command_lines(water, vcm_cli, tmp_path):
+    exr = tmp_path / "cli.exr"
+    subprocess.run(
+        [vcm_cli, "render", water.path, "--algo", "vcm", "--spp", "2", "--width", "32",
+         "--radius", "3px", "-o", exr],
+        check=True,
+        capture_output=True,
+    )
+    image = vcm_rs.render(water, algo="vcm", spp=2, width=32, radius="3px")
+    assert np.array_equal(image, vcm_rs.read_exr(exr))
+    assert not np.array_equal(image, vcm_rs.render(water, algo="vcm", spp=2, width=32))
+
+
 def test_shards_merge_into_the_whole_render_bit_for_bit(water):
     options = dict(algo="vcm", width=32, seed=3)
     whole = vcm_rs.render(water, spp=6, **options)
@@ -116,6 +129,9 @@ def test_merging_refuses_shared_samples_and_other_settings(water):
         (dict(progress=3), TypeError, "progress"),
         (dict(colour="red"), TypeError, "unexpected keyword argument 'colour'"),
         (dict(connections=0, algo="bpt"), ValueError, "connections"),
+        (dict(radius=0.0, algo="ppm"), ValueError, "radius"),
+        (dict(radius="2 pixels", algo="ppm"), ValueError, "radius: '2 pixels'"),
+        (dict(radius=[2], algo="ppm"), TypeError, "radius"),
     ],
 )
 def test_bad_arguments_raise_python_errors_naming_them(box, options, error, words):

@@ -71,7 +71,10 @@ mod walk;
 mod wave;
 
 pub use algorithm::Algorithm;
-pub use bidir::{DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, MAX_CONNECTIONS, Vcm, VcmSettings};
+pub use bidir::{
+    DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MAX_CONNECTIONS, MergeRadius,
+    Vcm, VcmSettings,
+};
 pub use error::RenderError;
 pub use film::{Film, FilmBand, PixelSum, rounded_sum};
 pub use integrator::{FrameStats, Integrator, Schedule};

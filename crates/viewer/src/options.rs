@@ -78,6 +78,7 @@ impl Options {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use vcm_rs::integrators::MergeRadius;
     use vcm_rs::render_loop::SchedulerKind;
 
     fn parse(args: &[&str]) -> Result<Options, clap::Error> {
@@ -116,7 +117,7 @@ mod tests {
         let settings = options.settings();
         assert_eq!(settings.algorithm, Algorithm::Vcm);
         assert_eq!(settings.integrator.max_depth, Some(5));
-        assert_eq!(settings.integrator.radius, 0.01);
+        assert_eq!(settings.integrator.radius, MergeRadius::SceneFraction(0.01));
         assert_eq!(settings.schedule.scheduler, Some(SchedulerKind::None));
         assert_eq!(settings.schedule.spp_per_frame, Some(4));
         assert_eq!(options.exposure, 0.0);

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use clap::ValueEnum;
 use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
-use vcm::Scheduler;
+use vcm::{DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MergeRadius, Scheduler};
 use vcm_rs::Backend;
 use vcm_rs::integrators::Algorithm;
 use vcm_rs::render_loop::{Frames, ScheduleOptions, SchedulerKind};
@@ -149,16 +149,35 @@ fn render_section(settings: &mut RenderSettings, ui: &mut egui::Ui) {
                 settings.algorithm,
                 Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm
             );
-            ui.add_enabled(
-                merges,
-                egui::Slider::new(&mut settings.integrator.radius, 1e-4..=0.1)
-                    .logarithmic(true)
-                    .text("× scene radius"),
-            );
+            ui.add_enabled_ui(merges, |ui| {
+                radius_row(&mut settings.integrator.radius, ui);
+            });
             ui.end_row();
 
             schedule_rows(&mut settings.schedule, settings.backend, ui);
         });
+}
+
+/// The merge radius's unit (a fraction of the scene's radius or pixel footprints) and its
+/// number.
+fn radius_row(radius: &mut MergeRadius, ui: &mut egui::Ui) {
+    ui.horizontal(|ui| {
+        let pixels = matches!(radius, MergeRadius::Pixels(_));
+        if ui.radio(!pixels, "× scene radius").clicked() && pixels {
+            *radius = MergeRadius::SceneFraction(DEFAULT_RADIUS_FRACTION);
+        }
+        if ui.radio(pixels, "pixels").clicked() && !pixels {
+            *radius = MergeRadius::Pixels(DEFAULT_RADIUS_PIXELS);
+        }
+        match radius {
+            MergeRadius::SceneFraction(fraction) => {
+                ui.add(egui::Slider::new(fraction, 1e-4..=0.1).logarithmic(true))
+            }
+            MergeRadius::Pixels(pixels) => {
+                ui.add(egui::Slider::new(pixels, 0.25..=32.0).logarithmic(true))
+            }
+        };
+    });
 }
 
 /// The scheduler (its backend's choice unless picked), the tile size where tiles are used,

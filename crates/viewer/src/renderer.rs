@@ -191,8 +191,8 @@ struct Worker {
 
 /// Why a render stopped.
 enum Next {
-    /// A new job replaced it.
-    Job(Job),
+    /// A new job replaced it (boxed: a job is far larger than `Quit`).
+    Job(Box<Job>),
     /// The renderer was dropped.
     Quit,
 }
@@ -202,7 +202,7 @@ impl Worker {
         let mut next = wait_for_job(inbox);
         while let Next::Job(job) = next {
             next = match self.start(&job) {
-                Ok(integrator) => self.render(job, integrator, inbox),
+                Ok(integrator) => self.render(*job, integrator, inbox),
                 Err(message) => {
                     self.publish(Update::Failed {
                         generation: job.generation,
@@ -397,7 +397,7 @@ fn latest_job(mut job: Job, inbox: &Receiver<Request>) -> Next {
         match inbox.try_recv() {
             Ok(Request::Job(newer)) => job = newer,
             Ok(Request::Film(_)) => {}
-            Err(TryRecvError::Empty) => return Next::Job(job),
+            Err(TryRecvError::Empty) => return Next::Job(Box::new(job)),
             Err(TryRecvError::Disconnected) => return Next::Quit,
         }
     }
@@ -410,7 +410,7 @@ pub(crate) mod tests {
     use std::path::Path;
     use std::sync::mpsc;
 
-    use vcm_rs::integrators::{self, Algorithm, IntegratorOptions};
+    use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, MergeRadius};
     use vcm_rs::render_loop::ScheduleOptions;
 
     use crate::settings::RenderSettings;
@@ -428,7 +428,7 @@ pub(crate) mod tests {
                 seed: 3,
                 max_depth: Some(6),
                 connections: 1,
-                radius: 0.01,
+                radius: MergeRadius::SceneFraction(0.01),
                 alpha: 0.75,
                 ..IntegratorOptions::default()
             },

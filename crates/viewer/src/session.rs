@@ -52,7 +52,7 @@ impl Session {
 mod tests {
     use super::*;
     use vcm_rs::Backend;
-    use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+    use vcm_rs::integrators::{Algorithm, IntegratorOptions, MergeRadius};
     use vcm_rs::render_loop::{ScheduleOptions, SchedulerKind};
     use vcm_scene::Bounds;
 
@@ -70,7 +70,7 @@ mod tests {
                     seed: 0,
                     max_depth: None,
                     connections: 1,
-                    radius: 0.003,
+                    radius: MergeRadius::SceneFraction(0.003),
                     alpha: 0.75,
                     ..IntegratorOptions::default()
                 },
@@ -97,7 +97,7 @@ mod tests {
             |v| v.scene = 2,
             |v| v.settings.algorithm = Algorithm::Vcm,
             |v| v.settings.integrator.max_depth = Some(4),
-            |v| v.settings.integrator.radius = 0.01,
+            |v| v.settings.integrator.radius = MergeRadius::SceneFraction(0.01),
             |v| v.settings.integrator.seed = 7,
             |v| v.settings.integrator.connections = 2,
             |v| v.settings.integrator.alpha = 0.5,

@@ -62,7 +62,7 @@ class RenderOptions(TypedDict, total=False):
     sampler: Literal["sobol", "independent"]
     max_depth: Optional[int]
     connections: int
-    radius: float
+    radius: Union[float, str]
     alpha: float
     no_prune: bool
     backend: Literal["cpu", "gpu"]

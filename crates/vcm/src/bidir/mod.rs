@@ -30,10 +30,12 @@ mod memory;
 pub(crate) mod mis;
 mod path_order;
 mod plan;
+mod radius;
 
 use std::sync::Arc;
 use std::time::Instant;
 
+use glam::Vec2;
 use rayon::prelude::*;
 
 use vcm_scene::sampling::SampleSequence;
@@ -51,12 +53,10 @@ use crate::light_vertex_cache::LightVertexCache;
 use light_pass::ResultBuffers;
 use mis::MisFactors;
 use plan::BidirPlan;
+pub use radius::{DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MergeRadius};
 
 /// Light paths traced by the preprocess that sizes the light vertex cache.
 const PREPROCESS_LIGHT_PATHS: u32 = 10_000;
-
-/// Default initial merge radius, as a fraction of the scene's bounding-sphere radius.
-pub const DEFAULT_RADIUS_FRACTION: f32 = 0.003;
 
 /// Most light vertices a camera vertex may connect to (N_c): each connection is a shadow ray
 /// held with its path, and a pass's waves must stay short enough to honour a stop request
@@ -84,8 +84,8 @@ pub struct VcmSettings {
     pub algorithm: Algorithm,
     /// N_c, light vertices each camera vertex connects to (1 to [`MAX_CONNECTIONS`]).
     pub connections: u32,
-    /// Merge radius of the first frame, as a fraction of the scene's bounding-sphere radius.
-    pub radius_fraction: f32,
+    /// How the first iteration's merge radius is chosen.
+    pub radius: MergeRadius,
     /// Radius reduction: frame i (from 1) merges within r₀ · i^((α − 1) / 2).
     pub alpha: f32,
     /// Leave out what the scene does not need (see [`Integrator::decisions`]); `false` runs every
@@ -109,7 +109,7 @@ impl VcmSettings {
             max_depth: None,
             algorithm,
             connections: 1,
-            radius_fraction: DEFAULT_RADIUS_FRACTION,
+            radius: MergeRadius::default(),
             alpha: DEFAULT_ALPHA,
             prune: true,
             lambert_lanes: true,
@@ -152,7 +152,10 @@ pub struct Vcm {
     /// The camera's projection onto the image.
     projection: Projection,
     plan: BidirPlan,
+    /// r₀, the first iteration's merge radius (world units).
     base_radius: f32,
+    /// How r₀ was found.
+    radius_reason: String,
     schedule: Schedule,
     /// The schedule of the last frame rendered: its buffers, and the film it rendered into,
     /// have been allocated (`None` before the first frame).
@@ -193,26 +196,31 @@ impl Vcm {
                 settings.connections
             )));
         }
-        if !(settings.radius_fraction.is_finite() && settings.radius_fraction > 0.0) {
-            return Err(RenderError::InvalidSetting(
-                "the merge radius must be a positive number".into(),
-            ));
-        }
+        settings
+            .radius
+            .validated()
+            .map_err(RenderError::InvalidSetting)?;
         if !(settings.alpha > 0.0 && settings.alpha <= 1.0) {
             return Err(RenderError::InvalidSetting(
                 "alpha must be in (0, 1]".into(),
             ));
         }
-        let base_radius = settings.radius_fraction * scene.features.bounds.radius();
         let plan = BidirPlan::new(settings.algorithm, &scene.features, settings.prune);
+        let projection = scene.camera.projection(width, height);
+        let size = Vec2::new(width as f32, height as f32);
+        let (base_radius, radius_reason) =
+            settings
+                .radius
+                .initial(&scene, traversal.as_ref(), (&projection, size));
         let mut vcm = Vcm {
-            projection: scene.camera.projection(width, height),
+            projection,
             lambert_lanes: LambertLanes::for_scene(&scene, settings.lambert_lanes),
             scene,
             traversal,
             settings,
             plan,
             base_radius,
+            radius_reason,
             schedule: Schedule::default(),
             last_frame: None,
             cache_capacity: 0,
@@ -424,6 +432,13 @@ impl Integrator for Vcm {
             Ok(_) => Decision::runs(LANES_PART, LANES_RUN),
             Err(why) => Decision::left_out(LANES_PART, *why),
         });
+        if self.plan.merges {
+            let reason = format!(
+                "r₀ = {} world units: {}",
+                self.base_radius, self.radius_reason
+            );
+            decisions.push(Decision::runs("merge radius", reason));
+        }
         decisions
     }
 

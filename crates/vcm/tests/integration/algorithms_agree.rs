@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
+use vcm::{Algorithm, Integrator, MergeRadius, PtSettings, VcmSettings};
 use vcm_scene::Scene;
 use vcm_scene::light::{Light, PointLight};
 
@@ -34,7 +34,7 @@ fn reference(name: &str) -> RegionSeries {
 fn vcm_family(name: &str, algorithm: Algorithm, radius_fraction: f32) -> Box<dyn Integrator> {
     let settings = VcmSettings {
         seed: 200,
-        radius_fraction,
+        radius: MergeRadius::SceneFraction(radius_fraction),
         ..common::vcm_settings(algorithm, SIZE, SIZE)
     };
     Box::new(common::vcm(common::scene_file(name), settings))
@@ -141,7 +141,7 @@ fn assert_every_technique_agrees(scene: &Scene, algorithms: &[Algorithm], label:
     for &algorithm in algorithms {
         let settings = VcmSettings {
             seed: 200,
-            radius_fraction: MERGE_RADIUS,
+            radius: MergeRadius::SceneFraction(MERGE_RADIUS),
             prune: false,
             ..common::vcm_settings(algorithm, SIZE, SIZE)
         };

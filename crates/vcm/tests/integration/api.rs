@@ -4,25 +4,13 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use vcm::{Film, Integrator, PathTracer, PtSettings, RenderError};
-use vcm_scene::Material;
-use vcm_scene::light::{Light, PointLight};
 use vcm_traversal::{CpuBvh, CpuBvhOptions, Traversal};
 
 use crate::common;
 
 /// A diffuse square at z = 0 filling the view, under a point light.
 fn lit_plane() -> vcm_scene::Scene {
-    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-    common::push_floor(&mut positions, &mut triangles, 5.0);
-    common::scene(
-        common::mesh(positions, triangles, vec![0, 0]),
-        vec![Material::diffuse("plane", Vec3::splat(0.5))],
-        vec![Light::Point(PointLight {
-            position: Vec3::new(0.0, 0.0, 1.0),
-            intensity: Vec3::ONE,
-        })],
-        common::camera(Vec3::new(0.0, 0.0, 2.0), 0.5),
-    )
+    common::lit_floor(5.0, common::camera(Vec3::new(0.0, 0.0, 2.0), 0.5))
 }
 
 fn settings(width: u32, height: u32) -> PtSettings {

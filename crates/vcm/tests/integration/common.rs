@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DVec3, Vec2, Vec3, Vec4};
-use vcm::{Algorithm, Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
+use vcm::{Algorithm, Film, Integrator, MergeRadius, PathTracer, PtSettings, Vcm, VcmSettings};
 use vcm_scene::light::{EnvironmentLight, EnvironmentMap, Light};
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Camera, Material, Mesh, Scene};
@@ -155,7 +155,7 @@ pub fn integrator(
             scene.clone(),
             VcmSettings {
                 seed,
-                radius_fraction,
+                radius: MergeRadius::SceneFraction(radius_fraction),
                 ..vcm_settings(algorithm, size, size)
             },
         )),
@@ -366,6 +366,22 @@ pub fn push_floor(positions: &mut Vec<Vec3>, triangles: &mut Vec<[u32; 3]>, half
     let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
         .map(|(x, y)| Vec3::new(x * half, y * half, 0.0));
     push_quad(positions, triangles, corners);
+}
+
+/// A diffuse square of half side `half` at z = 0 under a unit point light at (0, 0, 1),
+/// seen by `camera`.
+pub fn lit_floor(half: f32, camera: Camera) -> Scene {
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    push_floor(&mut positions, &mut triangles, half);
+    scene(
+        mesh(positions, triangles, vec![0, 0]),
+        vec![Material::diffuse("floor", Vec3::splat(0.5))],
+        vec![Light::Point(vcm_scene::light::PointLight {
+            position: Vec3::new(0.0, 0.0, 1.0),
+            intensity: Vec3::ONE,
+        })],
+        camera,
+    )
 }
 
 /// The scene `name` with every vertex normal leaning about 31° off its triangle's normal,

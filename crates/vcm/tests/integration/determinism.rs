@@ -2,7 +2,7 @@
 //! bit, for any number of threads, any scheduler and any frame sizes.
 
 use glam::Vec3;
-use vcm::{Algorithm, Film, Integrator, PtSettings, Schedule, Scheduler, VcmSettings};
+use vcm::{Algorithm, Film, Integrator, MergeRadius, PtSettings, Schedule, Scheduler, VcmSettings};
 use vcm_scene::Material;
 use vcm_scene::light::{Light, PointLight};
 
@@ -85,7 +85,7 @@ fn render_frames(
                 let settings = VcmSettings {
                     seed: settings.seed,
                     // Large enough that merges happen on 384 light paths a frame.
-                    radius_fraction: 0.05,
+                    radius: MergeRadius::SceneFraction(0.05),
                     ..VcmSettings::new(algorithm, settings.width, settings.height)
                 };
                 Box::new(common::vcm(scene, settings))

@@ -7,7 +7,7 @@
 use std::sync::Arc;
 
 use glam::Vec3;
-use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
+use vcm::{Algorithm, Integrator, MergeRadius, PtSettings, VcmSettings};
 use vcm_scene::light::EnvironmentMap;
 use vcm_scene::{Camera, Material, Scene};
 
@@ -80,7 +80,7 @@ fn a_floor_with_tilted_shading_normals_reflects_the_clipped_cosine() {
     let expected = f64::from(ALBEDO) * channel_mean(SKY) * (1.0 + f64::from(tilt.cos())) / 2.0;
     let every_part_of_vcm = VcmSettings {
         seed: 3,
-        radius_fraction: 0.1,
+        radius: MergeRadius::SceneFraction(0.1),
         // Nothing here is specular: pruned, VCM would run as BPT and never merge.
         prune: false,
         ..common::vcm_settings(Algorithm::Vcm, SIZE, SIZE)

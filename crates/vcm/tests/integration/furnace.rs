@@ -3,7 +3,7 @@
 //! without a limit, in every pixel and every direction, whatever the sphere's size.
 
 use glam::Vec3;
-use vcm::{Algorithm, Integrator, PtSettings, VcmSettings};
+use vcm::{Algorithm, Integrator, MergeRadius, PtSettings, VcmSettings};
 use vcm_scene::Material;
 use vcm_scene::sampling::SampleSequence;
 
@@ -83,7 +83,7 @@ fn furnace_of(
                 seed,
                 sequence,
                 max_depth,
-                radius_fraction: 0.1,
+                radius: MergeRadius::SceneFraction(0.1),
                 ..VcmSettings::new(algorithm, SIZE, SIZE)
             };
             Box::new(common::vcm(scene, settings))

@@ -9,7 +9,7 @@
 //! power, beside glossy and emitting ones.
 
 use glam::{Vec3, Vec4};
-use vcm::{Algorithm, Film, Integrator, PtSettings, Schedule, VcmSettings};
+use vcm::{Algorithm, Film, Integrator, MergeRadius, PtSettings, Schedule, VcmSettings};
 use vcm_scene::{Material, Scene};
 
 use crate::common::{self, EVERY_ALGORITHM};
@@ -60,7 +60,7 @@ fn integrator(scene: Scene, algorithm: Option<Algorithm>, options: Options) -> B
                 seed: 3,
                 max_depth,
                 connections,
-                radius_fraction: 0.05,
+                radius: MergeRadius::SceneFraction(0.05),
                 lambert_lanes: lanes,
                 ..common::vcm_settings(algorithm, SIZE, SIZE)
             },

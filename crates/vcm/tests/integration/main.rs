@@ -17,6 +17,7 @@ mod determinism;
 mod environment;
 mod furnace;
 mod lambert_lanes;
+mod merge_radius;
 mod pruning;
 mod punctual_lights;
 mod sds_caustic;

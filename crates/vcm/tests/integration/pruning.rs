@@ -5,7 +5,7 @@
 //! without specular surfaces, which is then BPT, bit for bit).
 
 use glam::Vec3;
-use vcm::{Algorithm, Film, FrameStats, Integrator, PtSettings, Vcm, VcmSettings};
+use vcm::{Algorithm, Film, FrameStats, Integrator, MergeRadius, PtSettings, Vcm, VcmSettings};
 use vcm_scene::light::{Light, PointLight};
 use vcm_scene::{Material, Scene, ShadingPlan};
 
@@ -35,7 +35,7 @@ fn vcm_family(scene: Scene, algorithm: Algorithm, prune: bool) -> Vcm {
     let settings = VcmSettings {
         seed: 5,
         prune,
-        radius_fraction: RADIUS_FRACTION,
+        radius: MergeRadius::SceneFraction(RADIUS_FRACTION),
         ..common::vcm_settings(algorithm, SIZE, SIZE)
     };
     common::vcm(scene, settings)

@@ -14,7 +14,7 @@
 
 use glam::Vec3;
 use vcm::metrics::compare;
-use vcm::{Algorithm, Film, Integrator, PtSettings, VcmSettings};
+use vcm::{Algorithm, Film, Integrator, MergeRadius, PtSettings, VcmSettings};
 use vcm_scene::{Camera, Material, Scene};
 
 use crate::common;
@@ -100,7 +100,7 @@ fn vcm_family(algorithm: Algorithm, seed: u64) -> vcm::Vcm {
     let settings = VcmSettings {
         seed,
         // 1024 light paths a frame: merge within 2% of the scene radius.
-        radius_fraction: 0.02,
+        radius: MergeRadius::SceneFraction(0.02),
         ..common::vcm_settings(algorithm, SIZE, SIZE)
     };
     common::vcm(sds_scene(), settings)

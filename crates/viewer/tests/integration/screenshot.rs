@@ -83,7 +83,7 @@ fn library_render(scene: &Arc<Scene>, seed: u64) -> Srgb {
         seed,
         max_depth: None,
         connections: 1,
-        radius: vcm::DEFAULT_RADIUS_FRACTION,
+        radius: vcm::MergeRadius::default(),
         alpha: vcm::DEFAULT_ALPHA,
         ..IntegratorOptions::default()
     };

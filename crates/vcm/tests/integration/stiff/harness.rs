@@ -1,6 +1,6 @@
 //! Rendering a generated scene with each algorithm, and the checks every stiff scene shares.
 
-use vcm::{Algorithm, DEFAULT_ALPHA, Integrator, PtSettings, VcmSettings};
+use vcm::{Algorithm, DEFAULT_ALPHA, Integrator, MergeRadius, PtSettings, VcmSettings};
 use vcm_scene::Scene;
 
 use crate::common::{self, FrameSeries, RegionSeries};
@@ -57,7 +57,7 @@ pub fn integrator(scene: Scene, algorithm: Option<Algorithm>, setup: Setup) -> B
         Some(algorithm) => {
             let settings = VcmSettings {
                 seed: setup.seed,
-                radius_fraction: setup.radius_fraction,
+                radius: MergeRadius::SceneFraction(setup.radius_fraction),
                 alpha: setup.alpha,
                 ..common::vcm_settings(algorithm, SIZE, SIZE)
             };
