@@ -654,9 +654,8 @@ fn render_both(dir: &Path, case: &Case, scene: &Path) -> [Vec<RgbImage>; 2] {
             render_to(vcm.arg(&out), &out)
         })
         .collect();
-    // One Mitsuba process renders every seed: its start (Python, Mitsuba, the scene) cost
-    // more than the renders.
-    // Its output path names each image with `{seed}`.
+    // One Mitsuba process renders every seed (its start, Python, Mitsuba and the scene, cost
+    // more than the renders); its output path names each image with `{seed}`.
     let out = |seed: &str| dir.join(format!("{name}-mitsuba-{seed}.exr"));
     let seeds: Vec<String> = (1..=RENDERS).map(|seed| seed.to_string()).collect();
     let mut mitsuba = Command::new(python());

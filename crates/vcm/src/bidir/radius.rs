@@ -68,7 +68,10 @@ impl FromStr for MergeRadius {
             None => (text.trim(), false),
         };
         let value: f32 = number.trim().parse().map_err(|_| {
-            format!("'{text}' is not a merge radius: a fraction of the scene's radius (0.003) or pixel footprints (2px)")
+            format!(
+                "'{text}' is not a merge radius: a fraction of the scene's radius (0.003) or \
+                 pixel footprints (2px)"
+            )
         })?;
         let radius = if pixels {
             MergeRadius::Pixels(value)

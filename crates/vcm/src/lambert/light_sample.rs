@@ -5,7 +5,6 @@
 use std::f32::consts::FRAC_1_PI;
 
 use vcm_scene::Scene;
-
 use vcm_scene::bsdf::TransportMode;
 
 use super::LambertLanes;
@@ -95,23 +94,23 @@ pub(crate) fn illuminate(
     }
 }
 
-/// One light sample per lane, with the numbers `numbers`, from `vertex`, for paths with throughput `throughput` (the path tracer's `next_event`, the
-/// camera pass's `light_sample`): the BSDF toward the point in radiance transport
-/// (`reverse`: with the reverse pdf), weighted by `weight` of the point and the BSDF's
-/// values. The shadow ray carries β · L_e · f·|cos| · w / p_light, with
-/// p_light = pick pmf · the point's solid-angle pdf.
+/// One light sample per lane, with the numbers `numbers`, from `vertex`, for paths with
+/// throughput `throughput` (the path tracer's `next_event`, the camera pass's
+/// `light_sample`): the BSDF toward the point in radiance transport (`reverse`: with the
+/// reverse pdf), weighted by `weight` of the point, the BSDF's values and p_light = pick pmf
+/// · the point's solid-angle pdf. The shadow ray carries β · L_e · f·|cos| · w / p_light.
 #[inline(always)]
 pub(crate) fn light_samples(
     (vertex, light): (&Vertex, &LightInputs),
     throughput: Vec3s,
     (numbers, reverse): ((F32s, F32s), bool),
-    weight: impl FnOnce(&Illumination, &Evaluation) -> F32s,
+    weight: impl FnOnce(&Illumination, &Evaluation, F32s) -> F32s,
 ) -> ShadowLanes {
     let illumination = illuminate(light, vertex, numbers);
     let direction = illumination.direction;
     let eval = vertex.eval(direction, TransportMode::Radiance, reverse);
     let light_pdf_w = illumination.direct_pdf_w * light.pick_pmf;
-    let weight = weight(&illumination, &eval);
+    let weight = weight(&illumination, &eval, light_pdf_w);
     ShadowLanes {
         queued: vertex.alive & illumination.lit & eval.valid & eval.f_cos.is_nonzero(),
         origin: vertex.spawn(direction),

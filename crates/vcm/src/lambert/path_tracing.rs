@@ -41,8 +41,8 @@ impl LaneShading<PathState> for LambertShading<'_> {
     }
 }
 
-/// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`](crate::lanes::LANES)), as
-/// [`crate::shade::shade`] would.
+/// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most
+/// [`LANES`](crate::lanes::LANES)), as [`crate::shade::shade`] would.
 fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &[(usize, Hit)]) {
     let indices = const { PATH_TRACER.indices(LAMBERT_CAMERA_DRAWS) };
     let numbers = start_vertices(paths, group, PATH_TRACER.pairs(), indices);
@@ -56,10 +56,7 @@ fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &
         (&vertex, &light),
         throughput,
         (pair(1), false),
-        |illumination, eval| {
-            let light_pdf_w = illumination.direct_pdf_w * light.pick_pmf;
-            power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf)
-        },
+        |_, eval, light_pdf_w| power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf),
     );
     let continuations = Continuations::sample(
         &vertex,

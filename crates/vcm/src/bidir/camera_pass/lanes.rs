@@ -95,9 +95,9 @@ fn shade(
         (&vertex, &light),
         throughput,
         (pair(1), true),
-        |illumination, eval| {
+        |illumination, eval, light_pdf_w| {
             let pdfs = LightSamplePdfs {
-                direct_pdf_w: illumination.direct_pdf_w * light.pick_pmf,
+                direct_pdf_w: light_pdf_w,
                 emission_pdf_w: illumination.emission_pdf_w * light.pick_pmf,
                 cos_at_light: illumination.cos_at_light,
                 cos_at_receiver: vertex.cos_geometric(illumination.direction),
