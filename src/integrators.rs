@@ -4,11 +4,69 @@
 
 use std::sync::Arc;
 
+pub mod choice;
+
 pub use vcm::{Algorithm, MergeRadius};
 use vcm::{DEFAULT_ALPHA, Integrator, PathTracer, PtSettings, RenderError, Vcm, VcmSettings};
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Scene, ShadingPlan};
 use vcm_traversal::Traversal;
+
+/// What `--algo` asks for: one algorithm, or `auto`, the one [`choice::choose`] finds the
+/// most efficient for the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AlgorithmOption {
+    /// Chosen per scene from short pilot renders of the candidates.
+    #[default]
+    Auto,
+    /// This algorithm.
+    Fixed(Algorithm),
+}
+
+impl AlgorithmOption {
+    /// `auto`, then every algorithm, as `--help` lists them.
+    const ALL: [AlgorithmOption; 7] = [
+        AlgorithmOption::Auto,
+        AlgorithmOption::Fixed(Algorithm::Pt),
+        AlgorithmOption::Fixed(Algorithm::LightTracing),
+        AlgorithmOption::Fixed(Algorithm::Bpt),
+        AlgorithmOption::Fixed(Algorithm::Ppm),
+        AlgorithmOption::Fixed(Algorithm::Bpm),
+        AlgorithmOption::Fixed(Algorithm::Vcm),
+    ];
+
+    /// The name `--algo` takes: `auto` or the algorithm's.
+    pub fn name(self) -> &'static str {
+        match self {
+            AlgorithmOption::Auto => "auto",
+            AlgorithmOption::Fixed(algorithm) => algorithm.name(),
+        }
+    }
+
+    /// The algorithm it names, `None` for `auto`.
+    pub fn fixed(self) -> Option<Algorithm> {
+        match self {
+            AlgorithmOption::Auto => None,
+            AlgorithmOption::Fixed(algorithm) => Some(algorithm),
+        }
+    }
+}
+
+impl clap::ValueEnum for AlgorithmOption {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        match self {
+            AlgorithmOption::Auto => Some(clap::builder::PossibleValue::new("auto").help(
+                "The most efficient of pt, bpt and vcm for the scene, measured by short pilot \
+                 renders",
+            )),
+            AlgorithmOption::Fixed(algorithm) => algorithm.to_possible_value(),
+        }
+    }
+}
 
 /// How the samples of a pixel relate.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]

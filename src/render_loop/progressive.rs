@@ -70,18 +70,19 @@ pub struct Rendered {
 
 /// Renders `frames` into `film` until `budget` is spent or `stop` is raised (which also cuts
 /// the frame in progress short, dropping it whole), calling `after_frame` after each whole
-/// frame; an error from it ends the render with that error.
+/// frame; an error from it ends the render with that error. Time is counted from `start`
+/// (now, or before the render's setup where that counts against the budget: choosing the
+/// algorithm).
 pub fn render(
     integrator: &mut dyn Integrator,
     frames: &mut Frames,
     film: &mut Film,
-    budget: Budget,
+    (budget, start): (Budget, Instant),
     stop: &StopFlag,
     mut after_frame: impl FnMut(FrameDone<'_>) -> anyhow::Result<()>,
 ) -> anyhow::Result<Rendered> {
     integrator.set_stop(stop.clone());
     let mut totals = FrameStats::default();
-    let start = Instant::now();
     while !budget.done(frames.samples(), start.elapsed()) && !stop.is_raised() {
         let remaining = budget.remaining(frames.samples(), start.elapsed());
         let stats = frames.render_next(integrator, film, remaining)?;

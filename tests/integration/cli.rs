@@ -419,8 +419,8 @@ fn explain_prints_what_runs_and_no_prune_runs_everything() {
         full_plan.contains("normal maps and tangents: runs ("),
         "{full_plan}"
     );
-    let (_, pruned) = render("pt", &[]);
-    let (_, full) = render("pt-full", &["--no-prune"]);
+    let (_, pruned) = render("pt", &["--algo", "pt"]);
+    let (_, full) = render("pt-full", &["--algo", "pt", "--no-prune"]);
     assert!(pruned.iter().any(|p| p.max_element() > 0.0));
     assert_eq!(pruned, full);
 }

@@ -1,6 +1,6 @@
 //! Running the `vcm` binary from the tests.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Runs `vcm` with `args` in the package's folder and returns what it did.
@@ -27,4 +27,18 @@ pub fn stderr(output: &Output) -> String {
 /// `path` as an argument.
 pub fn arg(path: &Path) -> &str {
     path.to_str().expect("a UTF-8 temporary path")
+}
+
+/// Renders each of `ranges` (`"A..B"`) of the render `vcm render` with `common` makes, as
+/// shards with their states in `dir`; the states' paths, in order.
+pub fn render_shards(dir: &Path, common: &[&str], ranges: &[&str]) -> Vec<PathBuf> {
+    let mut states = Vec::new();
+    for range in ranges {
+        let state = dir.join(format!("{range}.state"));
+        let exr = dir.join(format!("{range}.exr"));
+        let shard = ["--samples", range, "--state", arg(&state), "-o", arg(&exr)];
+        vcm_ok(&[&["render"], common, &shard[..]].concat());
+        states.push(state);
+    }
+    states
 }

@@ -4,6 +4,7 @@
 //! One test binary for the whole package rather than one per file: each binary links the whole
 //! stack, so every extra file in `tests/` would add a link to `cargo test` (see issue 57).
 
+mod algorithm_choice;
 mod cli;
 mod command;
 mod experiment;

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use vcm_rs::state::RenderState;
 
-use crate::command::{arg, stderr, vcm, vcm_ok};
+use crate::command::{arg, render_shards, stderr, vcm, vcm_ok};
 
 fn bytes(path: &Path) -> Vec<u8> {
     std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -108,14 +108,7 @@ fn shards_merged_equal_one_process() {
     let common = [WATER, "--algo", "vcm", "--width", "40"];
     let whole = dir.path().join("whole.exr");
     vcm_ok(&[&["render"], &common[..], &["--spp", "8", "-o", arg(&whole)]].concat());
-    let mut states = Vec::new();
-    for range in ["4..8", "0..1", "1..4"] {
-        let state = dir.path().join(format!("{range}.state"));
-        let exr = dir.path().join(format!("{range}.exr"));
-        let shard = ["--samples", range, "--state", arg(&state), "-o", arg(&exr)];
-        vcm_ok(&[&["render"], &common[..], &shard[..]].concat());
-        states.push(state);
-    }
+    let states = render_shards(dir.path(), &common, &["4..8", "0..1", "1..4"]);
     let merged = dir.path().join("merged.exr");
     let all = dir.path().join("all.state");
     let mut args = vec!["merge"];

@@ -3,13 +3,15 @@
 
 use std::ops::Range;
 use std::sync::Mutex;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use numpy::PyArray3;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use vcm_rs::integrators::{Algorithm, choice};
 use vcm_rs::render_loop::{self, Budget, Frames};
+use vcm_rs::state::RenderSettings;
 use vcm_rs::state::RenderState as State;
 use vcm_rs::vcm::{Film, StopFlag};
 
@@ -24,7 +26,9 @@ use crate::vcm_error;
 /// linear radiance, rows from the top.
 ///
 /// Keyword arguments (all optional):
-///     algo: "pt", "lt", "bpt", "ppm", "bpm" or "vcm" (default "vcm").
+///     algo: "auto" (default: the most efficient of pt, bpt and vcm for the scene, from
+///         short pilot renders, as `vcm render` chooses), "pt", "lt", "bpt", "ppm", "bpm" or
+///         "vcm".
 ///     spp: samples per pixel (iterations for the VCM family); default 16.
 ///     time: render for this many seconds instead (not with spp).
 ///     width: image width in pixels (default 512); height: default from the camera's aspect
@@ -62,7 +66,7 @@ pub fn render<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyArray3<f32>>> {
     let request = Request::from_kwargs(scene.get(), options)?;
-    let (film, _) = run(py, scene.get(), &request, 0, request.budget())?;
+    let (film, _, _) = run(py, scene.get(), &request, 0, request.budget())?;
     images::to_array(py, &film.image())
 }
 
@@ -96,9 +100,13 @@ pub fn render_state<'py>(
         }
         None => (0, request.budget()),
     };
-    let (film, spp) = run(py, scene, &request, first, budget)?;
+    let (film, spp, algorithm) = run(py, scene, &request, first, budget)?;
     let path = scene.data.path.clone();
-    let mut state = State::new(request.settings.clone(), scene.hash(), path);
+    let settings = RenderSettings {
+        algorithm,
+        ..request.settings.clone()
+    };
+    let mut state = State::new(settings, scene.hash(), path);
     state.film = film;
     state.samples.insert(first..first + spp);
     if let (None, Budget::Samples(spp)) = (samples, budget) {
@@ -127,24 +135,34 @@ fn sample_range(range: &Bound<'_, PyAny>) -> PyResult<Range<u32>> {
 }
 
 /// Renders `request` on `scene` from global sample `first` until `budget` is spent, on a
-/// thread of its own (see [`run_released`]); the film and the samples per pixel rendered.
+/// thread of its own (see [`run_released`]); the film, the samples per pixel rendered and
+/// the algorithm (the one chosen, for `algo="auto"`).
 fn run(
     py: Python<'_>,
     scene: &Scene,
     request: &Request,
     first: u32,
     budget: Budget,
-) -> PyResult<(Film, u32)> {
+) -> PyResult<(Film, u32, Algorithm)> {
     let settings = &request.settings;
     let size = (settings.width, settings.height);
     let samples_left = budget.remaining(0, Duration::ZERO).samples;
     let traversal = py
         .detach(|| scene.traversal(request.backend))
         .map_err(vcm_error)?;
+    let started = Instant::now();
+    let algorithm = match request.algorithm.fixed() {
+        Some(algorithm) => algorithm,
+        None => {
+            py.detach(|| choice::choose(&scene.data, &traversal, size, &settings.options))
+                .map_err(vcm_error)?
+                .algorithm
+        }
+    };
     let mut frames = Frames::new(request.schedule, request.backend).starting_at(first);
     let mut integrator = frames
         .integrator(
-            settings.algorithm,
+            algorithm,
             &scene.data,
             traversal,
             size,
@@ -178,7 +196,7 @@ fn run(
             integrator.as_mut(),
             &mut frames,
             &mut film,
-            budget,
+            (budget, started),
             &stop,
             |frame| {
                 let now = (frame.spp, frame.elapsed.as_secs_f64());
@@ -186,7 +204,7 @@ fn run(
                 Ok(())
             },
         );
-        rendered.map(|r| (film, r.spp))
+        rendered.map(|r| (film, r.spp, algorithm))
     })?;
     rendered.map_err(vcm_error)
 }

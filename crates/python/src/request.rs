@@ -6,7 +6,9 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use vcm_rs::Backend;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions, MergeRadius, SamplerKind, image_size};
+use vcm_rs::integrators::{
+    Algorithm, AlgorithmOption, IntegratorOptions, MergeRadius, SamplerKind, image_size,
+};
 use vcm_rs::render_loop::{Budget, ScheduleOptions};
 use vcm_rs::state::{RenderSettings, SETTING_OPTIONS};
 
@@ -32,8 +34,11 @@ const DEFAULT_WIDTH: u32 = 512;
 
 /// A render as the keyword arguments ask for it.
 pub struct Request {
-    /// What the estimator computes (the image a seed gives depends on these only).
+    /// What the estimator computes (the image a seed gives depends on these only); with
+    /// `algo="auto"` its algorithm is path tracing until [`Request::algorithm`] chooses.
     pub settings: RenderSettings,
+    /// `algo`: one algorithm, or `auto`.
+    pub algorithm: AlgorithmOption,
     /// How the work is scheduled.
     pub schedule: ScheduleOptions,
     /// Where rays are traced.
@@ -51,7 +56,7 @@ impl Request {
     /// wrong type a `TypeError` and values out of range a `ValueError`, each naming the
     /// argument.
     pub fn from_kwargs(scene: &Scene, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Request> {
-        let mut algorithm = Algorithm::Vcm;
+        let mut algorithm = AlgorithmOption::Auto;
         let mut width = DEFAULT_WIDTH;
         let mut height = None;
         let mut options = IntegratorOptions::default();
@@ -102,8 +107,9 @@ impl Request {
         }
         let (width, height) = image_size(&scene.data, width, height);
         Ok(Request {
+            algorithm,
             settings: RenderSettings {
-                algorithm,
+                algorithm: algorithm.fixed().unwrap_or(Algorithm::Pt),
                 width,
                 height,
                 camera: scene.camera.clone(),

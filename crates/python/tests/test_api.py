@@ -61,6 +61,24 @@ def test_images_equal_the_command_lines_exr(box, vcm_cli, tmp_path, algo):
     assert np.array_equal(image, vcm_rs.read_exr(exr))
 
 
+def test_auto_chooses_as_the_command_line_and_the_state_records_the_choice(
+    water, vcm_cli, tmp_path
+):
+    exr = tmp_path / "cli.exr"
+    cli = subprocess.run(
+        [vcm_cli, "render", water.path, "--spp", "2", "--width", "32", "--seed", "2", "-o", exr],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    chosen = next(line for line in cli.stderr.splitlines() if line.startswith("algorithm: "))
+    chosen = chosen.split()[1]
+    assert np.array_equal(vcm_rs.render(water, spp=2, width=32, seed=2), vcm_rs.read_exr(exr))
+    state = vcm_rs.render_state(water, samples=range(0, 2), width=32, seed=2)
+    assert state.settings()["algorithm"] == chosen
+    assert np.array_equal(state.image(), vcm_rs.read_exr(exr))
+
+
 def test_a_radius_in_pixels_is_the_command_lines(water, vcm_cli, tmp_path):
     exr = tmp_path / "cli.exr"
     subprocess.run(
@@ -123,7 +141,7 @@ def test_merging_refuses_shared_samples_and_other_settings(water):
         (dict(time=-1.0), ValueError, "time"),
         (dict(time=float("nan")), ValueError, "time"),
         (dict(spp=4, time=1.0), ValueError, "not both"),
-        (dict(algo="mlt"), ValueError, "one of pt, lt, bpt, ppm, bpm, vcm"),
+        (dict(algo="mlt"), ValueError, "one of auto, pt, lt, bpt, ppm, bpm, vcm"),
         (dict(sampler="halton"), ValueError, "sampler"),
         (dict(backend="tpu"), ValueError, "backend"),
         (dict(progress=3), TypeError, "progress"),

@@ -16,7 +16,7 @@ use serde::Deserialize;
 use vcm::Film;
 use vcm::image_io::{RgbImage, write_error_png};
 use vcm::metrics::relative_error_per_pixel;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions, image_size};
+use vcm_rs::integrators::{AlgorithmOption, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
 use vcm_rs::scene::Scene;
@@ -104,8 +104,8 @@ fn default_width() -> u32 {
 #[derive(Parser)]
 #[command(no_binary_name = true)]
 struct RunOptions {
-    #[arg(long, value_enum, default_value_t = Algorithm::Pt)]
-    algo: Algorithm,
+    #[arg(long, value_enum, default_value_t = AlgorithmOption::Auto)]
+    algo: AlgorithmOption,
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     backend: Backend,
     #[command(flatten)]
@@ -387,10 +387,17 @@ fn render(
     let traversal = traversals
         .get(options.backend, tell_traversal)
         .context("building the ray traversal backend")?;
+    let started = std::time::Instant::now();
+    let algorithm = match options.algo.fixed() {
+        Some(algorithm) => algorithm,
+        None => {
+            crate::render::choose_algorithm(scene, &traversal, size, &options.integrator, false)?
+        }
+    };
     let frames = Frames::new(options.schedule, options.backend);
     let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
     let mut integrator = frames.integrator(
-        options.algo,
+        algorithm,
         scene,
         traversal,
         size,
@@ -408,6 +415,7 @@ fn render(
             reference,
             periodic: None,
             label: Some(label),
+            started: Some(started),
         },
     )?;
     Ok((film, outcome))

@@ -128,6 +128,9 @@ pub struct Watch<'a> {
     pub periodic: Option<Periodic<'a>>,
     /// Shown before the progress bar (where in an experiment the render is).
     pub label: Option<String>,
+    /// When the render began, if before this call: the time the algorithm's choice took
+    /// counts against a time budget and shows in the error's timeline.
+    pub started: Option<Instant>,
 }
 
 /// Renders `frames` into `film` until `budget` is spent or `stop` is raised (which also cuts
@@ -145,6 +148,7 @@ pub fn render(
         reference,
         mut periodic,
         label,
+        started,
     } = watch;
     let progress = progress_bar(budget, label.as_deref());
     let mut checkpoints = Vec::new();
@@ -154,7 +158,8 @@ pub fn render(
     let cpu_start = cpu_seconds();
     let mut interval_start = (0.0, cpu_start);
     let mut last_periodic = Instant::now();
-    let rendered = render_loop::render(integrator, &mut frames, film, budget, stop, |frame| {
+    let start = (budget, started.unwrap_or_else(Instant::now));
+    let rendered = render_loop::render(integrator, &mut frames, film, start, stop, |frame| {
         if let Some(periodic) = &mut periodic
             && last_periodic.elapsed() >= periodic.every
         {

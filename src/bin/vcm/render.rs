@@ -4,7 +4,7 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use clap::ArgMatches;
@@ -21,7 +21,7 @@ use vcm_rs::traversal::Traversal;
 use vcm_rs::{Backend, BuiltTraversal};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic, Watch};
-use vcm_rs::integrators::{Algorithm, IntegratorOptions, image_size};
+use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions, choice, image_size};
 use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
 
@@ -134,9 +134,10 @@ pub struct RenderArgs {
     /// The scene file (.gltf, .glb or .obj).
     #[arg(default_value = "scenes/cornell-box.gltf")]
     scene: PathBuf,
-    /// The light transport algorithm.
-    #[arg(long, value_enum, default_value_t = Algorithm::Pt)]
-    algo: Algorithm,
+    /// The light transport algorithm (`auto`: the most efficient of pt, bpt and vcm for the
+    /// scene, from short pilot renders; see docs/algorithms.md).
+    #[arg(long, value_enum, default_value_t = AlgorithmOption::Auto)]
+    algo: AlgorithmOption,
     /// Samples per pixel to render (default 16 unless --time is given; with --resume, the
     /// total the resumed render reaches, by default the count it was first asked for).
     #[arg(long, conflicts_with = "time")]
@@ -201,6 +202,8 @@ struct Plan {
     /// The first global sample to render.
     first_sample: u32,
     budget: Budget,
+    /// `settings.algorithm` is yet to be chosen (`--algo auto` on a new render).
+    choose_algorithm: bool,
 }
 
 impl RenderArgs {
@@ -232,10 +235,11 @@ impl RenderArgs {
         inputs
     }
 
-    /// The estimator settings the arguments give, with the image height `height`.
+    /// The estimator settings the arguments give, with the image height `height` (and, for
+    /// `--algo auto`, path tracing until the algorithm is chosen).
     fn settings(&self, height: u32) -> RenderSettings {
         RenderSettings {
-            algorithm: self.algo,
+            algorithm: self.algo.fixed().unwrap_or(Algorithm::Pt),
             width: self.setup.width,
             height,
             camera: self.setup.camera.clone(),
@@ -264,13 +268,16 @@ impl RenderArgs {
                 state: None,
                 first_sample,
                 budget,
+                choose_algorithm: self.algo == AlgorithmOption::Auto,
             });
         };
         let state = RenderState::load(resume)?;
         let requested = self.settings(self.setup.height.unwrap_or(0)).to_metadata();
         let recorded = state.settings.to_metadata();
+        // `--algo auto` keeps the algorithm chosen when the render began.
+        let auto = |key| key == "algorithm" && self.algo == AlgorithmOption::Auto;
         for (key, argument) in SETTINGS {
-            if given(argument) && requested[key] != recorded[key] {
+            if given(argument) && !auto(key) && requested[key] != recorded[key] {
                 bail!(
                     "{}: the render was made with {key} {}, and --resume cannot change it \
                      (the command asks for {}); leave the option out to keep it",
@@ -315,6 +322,7 @@ impl RenderArgs {
             first_sample: state.samples.end(),
             budget,
             state: Some(state),
+            choose_algorithm: false,
         })
     }
 }
@@ -331,12 +339,18 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
         settings.height = image_size(&scene, settings.width, None).1;
     }
     let (width, height) = (settings.width, settings.height);
-    let mut state = prepare_state(&mut plan, &scene, args)?;
     let reference = match &args.reference {
         Some(path) => Some(read_reference(path, (width, height))?),
         None => None,
     };
     let traversal = build_traversal(args.setup.backend, &scene)?;
+    let started = Instant::now();
+    if plan.choose_algorithm {
+        let options = &plan.settings.options;
+        let choice = choose_algorithm(&scene, &traversal, (width, height), options, args.explain)?;
+        plan.settings.algorithm = choice;
+    }
+    let mut state = prepare_state(&mut plan, &scene, args)?;
     let samples_left = plan.budget.remaining(0, Duration::ZERO).samples;
     let mut integrator = args.setup.integrator(
         plan.settings.algorithm,
@@ -383,6 +397,7 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
             reference: reference.as_deref(),
             periodic,
             label: None,
+            started: Some(started),
         },
     )?;
     if stop.is_raised() {
@@ -474,6 +489,56 @@ fn prepare_state(
     };
     state.output = Some(plan.output.clone());
     Ok(Some(state))
+}
+
+/// The algorithm `--algo auto` renders `scene` with at `size` with `options`
+/// ([`choice::choose`]), told in one line, or with `explain` in a table of the candidates.
+pub fn choose_algorithm(
+    scene: &Arc<Scene>,
+    traversal: &Arc<dyn Traversal>,
+    size: (u32, u32),
+    options: &IntegratorOptions,
+    explain: bool,
+) -> anyhow::Result<Algorithm> {
+    let choice =
+        choice::choose(scene, traversal, size, options).context("choosing the algorithm")?;
+    let (width, height) = choice.pilot_size;
+    let pilots = format!(
+        "pilots of {} samples per pixel at {width}×{height}, {:.2} s",
+        choice::PILOT_FRAMES,
+        choice.time().as_secs_f64()
+    );
+    if !explain {
+        let each = choice
+            .candidates
+            .iter()
+            .map(|c| format!("{} {:.3}", c.algorithm.name(), c.inefficiency()));
+        tell!(
+            "algorithm: {} ({pilots}; variance × cost: {})",
+            choice.algorithm.name(),
+            each.collect::<Vec<_>>().join(", ")
+        );
+        return Ok(choice.algorithm);
+    }
+    say!(
+        "algorithm: {}, the least relative variance (+ 2 standard errors) × cost of its \
+         {pilots}:",
+        choice.algorithm.name()
+    );
+    for candidate in &choice.candidates {
+        let v = candidate.relative_variance;
+        let chosen = candidate.algorithm == choice.algorithm;
+        say!(
+            "  {:<4} variance {:.4} ± {:.4} × cost {:.2} rays = {:.4}{}",
+            candidate.algorithm.name(),
+            v.value,
+            v.standard_error,
+            candidate.cost,
+            candidate.inefficiency(),
+            if chosen { "  ← chosen" } else { "" }
+        );
+    }
+    Ok(choice.algorithm)
 }
 
 /// Prints the scene's features and every part of the render with whether it runs and why.

@@ -504,9 +504,18 @@ impl<'a> Generator<'a> {
                 &["--time", "1", "--spp-per-frame", "100000", "--algo", "vcm"],
                 Expect::Error("lower --spp-per-frame"),
             ),
-            // Fits the 4 GiB limit in tiles, not as one batch of 12 M paths.
+            // The path tracer fits the 4 GiB limit in tiles, not as one batch of 12 M paths.
             (
-                &["--width", "3500", "--height", "3500", "--scheduler", "none"],
+                &[
+                    "--algo",
+                    "pt",
+                    "--width",
+                    "3500",
+                    "--height",
+                    "3500",
+                    "--scheduler",
+                    "none",
+                ],
                 Expect::Error("lower the paths in flight"),
             ),
             (

@@ -53,7 +53,7 @@ def load_scene(
 class RenderOptions(TypedDict, total=False):
     """The keyword arguments of `render` and `render_state` (see `help(vcm_rs.render)`)."""
 
-    algo: Literal["pt", "lt", "bpt", "ppm", "bpm", "vcm"]
+    algo: Literal["auto", "pt", "lt", "bpt", "ppm", "bpm", "vcm"]
     spp: int
     time: float
     width: int
