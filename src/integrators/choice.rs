@@ -17,7 +17,9 @@
 //!
 //! The choice is a pure function of the scene, the options and the seed — counts, not clock
 //! times, measure the cost — so shards of one render made on different machines choose the
-//! same algorithm.
+//! same algorithm. An image of fewer than [`MIN_PILOTED_PIXELS`] is not piloted: at 16
+//! samples per pixel its render would be smaller than its pilots, and path tracing, the
+//! cheapest per sample, renders it.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -35,6 +37,9 @@ pub const PILOT_FRAMES: u32 = 8;
 /// Most pixels of a pilot render (128²): the image scaled down to them, or a smaller image
 /// at its own size.
 pub const PILOT_PIXELS: u32 = 128 * 128;
+
+/// Fewest pixels of an image that is piloted (64²).
+pub const MIN_PILOTED_PIXELS: u32 = 64 * 64;
 
 /// What each unit of work a frame counts costs, relative to a closest-hit ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -100,9 +105,11 @@ impl Estimate {
 /// The algorithm chosen for a scene and the pilots it was chosen from.
 #[derive(Clone, Debug)]
 pub struct Choice {
-    /// The candidate with the least [`Candidate::inefficiency`].
+    /// The candidate with the least [`Candidate::inefficiency`] (path tracing where nothing
+    /// was piloted).
     pub algorithm: Algorithm,
-    /// Every candidate piloted, in the order they ran.
+    /// Every candidate piloted, in the order they ran (none for an image of fewer than
+    /// [`MIN_PILOTED_PIXELS`]).
     pub candidates: Vec<Candidate>,
     /// (width, height) of the pilot renders.
     pub pilot_size: (u32, u32),
@@ -116,7 +123,8 @@ impl Choice {
 }
 
 /// Chooses the algorithm to render `scene` with at `size` with `options` by piloting the
-/// candidates (see the [module](self)).
+/// candidates (see the [module](self)). An image of fewer than [`MIN_PILOTED_PIXELS`] is
+/// not piloted: path tracing renders it (`candidates` is then empty).
 pub fn choose(
     scene: &Arc<Scene>,
     traversal: &Arc<dyn Traversal>,
@@ -124,6 +132,13 @@ pub fn choose(
     options: &IntegratorOptions,
 ) -> Result<Choice, RenderError> {
     let pilot_size = pilot_size(size);
+    if u64::from(size.0) * u64::from(size.1) < u64::from(MIN_PILOTED_PIXELS) {
+        return Ok(Choice {
+            algorithm: Algorithm::Pt,
+            candidates: Vec::new(),
+            pilot_size,
+        });
+    }
     let options = pilot_options(options, size.0, pilot_size.0);
     let mut algorithms = vec![Algorithm::Pt, Algorithm::Bpt];
     if options.no_prune || scene.features.materials.specular_or_near() {

@@ -70,16 +70,40 @@ fn caustics_through_water_are_not_left_to_path_tracing() {
     }
 }
 
+/// An image of fewer than 64² pixels is not piloted: path tracing renders it.
+#[test]
+fn small_images_are_path_traced_unpiloted() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("small.exr");
+    let args = [
+        "--width",
+        "63",
+        "--height",
+        "64",
+        "--spp",
+        "1",
+        "-o",
+        arg(&exr),
+    ];
+    let output = vcm_ok(&[&["render", "scenes/cornell-water.gltf"], &args[..]].concat());
+    let told = stderr(&output);
+    assert!(
+        told.contains("algorithm: pt (an image of fewer than 4096 pixels is not piloted"),
+        "{told}"
+    );
+}
+
 /// `vcm render` without `--algo` pilots, says what it chose, and renders exactly what that
-/// algorithm renders; with `--explain` it lists every candidate. Shards choose alike, so
-/// their states merge into the whole render.
+/// algorithm renders; with `--explain` it lists every candidate. Shards choose alike (a
+/// shard is always piloted), so their states merge into the whole render.
 #[test]
 fn the_command_line_chooses_says_why_and_shards_agree() {
     let dir = tempfile::tempdir().unwrap();
     let water = "scenes/cornell-water.gltf";
-    let common = [water, "--width", "32", "--seed", "3"];
+    let common = [water, "--width", "64", "--seed", "3"];
+    let spp = ["--spp", "4"];
     let auto = dir.path().join("auto.exr");
-    let output = vcm_ok(&[&["render"], &common[..], &["--spp", "4", "-o", arg(&auto)]].concat());
+    let output = vcm_ok(&[&["render"], &common[..], &spp, &["-o", arg(&auto)]].concat());
     let told = stderr(&output);
     let line = told
         .lines()
@@ -88,15 +112,15 @@ fn the_command_line_chooses_says_why_and_shards_agree() {
     let name = line["algorithm: ".len()..].split(' ').next().unwrap();
     assert!(line.contains("variance × cost: pt "), "{line}");
     let fixed = dir.path().join("fixed.exr");
-    let args = ["--algo", name, "--spp", "4", "-o", arg(&fixed)];
-    vcm_ok(&[&["render"], &common[..], &args[..]].concat());
+    let args = ["--algo", name, "-o", arg(&fixed)];
+    vcm_ok(&[&["render"], &common[..], &spp, &args[..]].concat());
     assert_eq!(
         std::fs::read(&auto).unwrap(),
         std::fs::read(&fixed).unwrap()
     );
 
-    let args = ["--explain", "--spp", "1", "-o", arg(&auto)];
-    let explained = vcm_ok(&[&["render"], &common[..], &args[..]].concat());
+    let args = ["--explain", "-o", arg(&auto)];
+    let explained = vcm_ok(&[&["render"], &common[..], &spp, &args[..]].concat());
     let report = String::from_utf8_lossy(&explained.stdout);
     assert!(
         report.contains(&format!("algorithm: {name}, the least")),
@@ -110,7 +134,7 @@ fn the_command_line_chooses_says_why_and_shards_agree() {
     }
     assert_eq!(report.matches("← chosen").count(), 1, "{report}");
 
-    let states = render_shards(dir.path(), &common, &["0..2", "2..4"]);
+    let states = render_shards(dir.path(), &common, &["0..1", "1..4"]);
     let merged = dir.path().join("merged.exr");
     vcm_ok(&[
         "merge",

@@ -66,15 +66,15 @@ def test_auto_chooses_as_the_command_line_and_the_state_records_the_choice(
 ):
     exr = tmp_path / "cli.exr"
     cli = subprocess.run(
-        [vcm_cli, "render", water.path, "--spp", "2", "--width", "32", "--seed", "2", "-o", exr],
+        [vcm_cli, "render", water.path, "--spp", "2", "--width", "64", "--seed", "2", "-o", exr],
         check=True,
         capture_output=True,
         text=True,
     )
     chosen = next(line for line in cli.stderr.splitlines() if line.startswith("algorithm: "))
     chosen = chosen.split()[1]
-    assert np.array_equal(vcm_rs.render(water, spp=2, width=32, seed=2), vcm_rs.read_exr(exr))
-    state = vcm_rs.render_state(water, samples=range(0, 2), width=32, seed=2)
+    assert np.array_equal(vcm_rs.render(water, spp=2, width=64, seed=2), vcm_rs.read_exr(exr))
+    state = vcm_rs.render_state(water, samples=range(0, 2), width=64, seed=2)
     assert state.settings()["algorithm"] == chosen
     assert np.array_equal(state.image(), vcm_rs.read_exr(exr))
 

@@ -503,6 +503,15 @@ pub fn choose_algorithm(
     let choice =
         choice::choose(scene, traversal, size, options).context("choosing the algorithm")?;
     let (width, height) = choice.pilot_size;
+    if choice.candidates.is_empty() {
+        tell!(
+            "algorithm: {} (an image of fewer than {} pixels is not piloted: its pilots would \
+             take longer than its render)",
+            choice.algorithm.name(),
+            choice::MIN_PILOTED_PIXELS
+        );
+        return Ok(choice.algorithm);
+    }
     let pilots = format!(
         "pilots of {} samples per pixel at {width}×{height}, {:.2} s",
         choice::PILOT_FRAMES,
