@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 
 use glam::{DVec3, Vec3};
 use vcm::metrics::RELMSE_EPSILON;
-use vcm::{Film, FrameStats, RenderError, Schedule};
+use vcm::{Film, FrameStats, RenderError, Schedule, StopFlag};
 use vcm_scene::Scene;
 use vcm_traversal::Traversal;
 
@@ -124,31 +124,40 @@ impl Choice {
 
 /// Chooses the algorithm to render `scene` with at `size` with `options` by piloting the
 /// candidates (see the [module](self)). An image of fewer than [`MIN_PILOTED_PIXELS`] is
-/// not piloted: path tracing renders it (`candidates` is then empty).
+/// not piloted: path tracing renders it (`candidates` is then empty). Once `stop` is raised
+/// the pilot in progress is dropped, and those finished before it choose.
 pub fn choose(
     scene: &Arc<Scene>,
     traversal: &Arc<dyn Traversal>,
     size: (u32, u32),
     options: &IntegratorOptions,
+    stop: &StopFlag,
 ) -> Result<Choice, RenderError> {
     let pilot_size = pilot_size(size);
+    let unpiloted = Choice {
+        algorithm: Algorithm::Pt,
+        candidates: Vec::new(),
+        pilot_size,
+    };
     if u64::from(size.0) * u64::from(size.1) < u64::from(MIN_PILOTED_PIXELS) {
-        return Ok(Choice {
-            algorithm: Algorithm::Pt,
-            candidates: Vec::new(),
-            pilot_size,
-        });
+        return Ok(unpiloted);
     }
     let options = pilot_options(options, size.0, pilot_size.0);
     let mut algorithms = vec![Algorithm::Pt, Algorithm::Bpt];
     if options.no_prune || scene.features.materials.specular_or_near() {
         algorithms.push(Algorithm::Vcm);
     }
-    let pilots: Vec<_> = algorithms
-        .iter()
-        .map(|&algorithm| pilot(algorithm, scene, traversal, pilot_size, &options))
-        .collect::<Result<_, _>>()?;
-    let robust = pilots.last().expect("path tracing is always a candidate");
+    let mut pilots = Vec::new();
+    for &algorithm in &algorithms {
+        match pilot(algorithm, scene, traversal, (pilot_size, &options), stop)? {
+            Some(pilot) => pilots.push(pilot),
+            None => break,
+        }
+    }
+    algorithms.truncate(pilots.len());
+    let Some(robust) = pilots.last() else {
+        return Ok(unpiloted);
+    };
     let mean = smoothed(&robust.mean, pilot_size);
     let candidates: Vec<_> = algorithms
         .iter()
@@ -212,14 +221,15 @@ struct Pilot {
     time: Duration,
 }
 
-/// Renders `PILOT_FRAMES` frames of `algorithm`, each into a film of its own.
+/// Renders `PILOT_FRAMES` frames of `algorithm`, each into a film of its own; `None` if
+/// `stop` cut one short.
 fn pilot(
     algorithm: Algorithm,
     scene: &Arc<Scene>,
     traversal: &Arc<dyn Traversal>,
-    (width, height): (u32, u32),
-    options: &IntegratorOptions,
-) -> Result<Pilot, RenderError> {
+    ((width, height), options): ((u32, u32), &IntegratorOptions),
+    stop: &StopFlag,
+) -> Result<Option<Pilot>, RenderError> {
     let start = Instant::now();
     let mut integrator = build(
         algorithm,
@@ -229,14 +239,18 @@ fn pilot(
         options,
     )?;
     integrator.set_schedule(Schedule::default())?;
+    integrator.set_stop(stop.clone());
     let mut stats = FrameStats::default();
-    let frames: Vec<Vec<Vec3>> = (0..PILOT_FRAMES)
-        .map(|sample| {
-            let mut film = Film::new(width, height);
-            stats.accumulate(&integrator.render_frame(&mut film, sample));
-            film.mean()
-        })
-        .collect();
+    let mut frames: Vec<Vec<Vec3>> = Vec::new();
+    for sample in 0..PILOT_FRAMES {
+        let mut film = Film::new(width, height);
+        let frame = integrator.render_frame(&mut film, sample);
+        if frame.interrupted {
+            return Ok(None);
+        }
+        stats.accumulate(&frame);
+        frames.push(film.mean());
+    }
     let n = f64::from(PILOT_FRAMES);
     let (mean, variance) = (0..frames[0].len())
         .map(|pixel| {
@@ -246,12 +260,12 @@ fn pilot(
             (mean, squares / (n - 1.0))
         })
         .unzip();
-    Ok(Pilot {
+    Ok(Some(Pilot {
         mean,
         variance,
         stats,
         time: start.elapsed(),
-    })
+    }))
 }
 
 /// `image` (`width` × `height`) averaged over each pixel's 3 × 3 neighbourhood (within the

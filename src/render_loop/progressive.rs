@@ -15,7 +15,8 @@ use super::pacer::Remaining;
 pub enum Budget {
     /// This many samples per pixel.
     Samples(u32),
-    /// This many seconds of wall-clock time.
+    /// This many seconds of wall-clock time, and at least one frame (what went before the
+    /// render, such as choosing its algorithm, may have spent them).
     Seconds(f64),
 }
 
@@ -24,7 +25,7 @@ impl Budget {
     pub fn done(&self, spp: u32, elapsed: Duration) -> bool {
         match *self {
             Budget::Samples(n) => spp >= n,
-            Budget::Seconds(s) => elapsed.as_secs_f64() >= s,
+            Budget::Seconds(s) => spp > 0 && elapsed.as_secs_f64() >= s,
         }
     }
 
@@ -118,7 +119,9 @@ mod tests {
         assert_eq!(budget.remaining(9, Duration::ZERO).samples, Some(0));
         let budget = Budget::Seconds(2.0);
         assert!(!budget.done(1000, Duration::from_millis(1999)));
-        assert!(budget.done(0, Duration::from_secs(2)));
+        assert!(budget.done(1, Duration::from_secs(2)));
+        // Not before a frame is rendered, however long the set-up took.
+        assert!(!budget.done(0, Duration::from_secs(20)));
         let left = budget.remaining(0, Duration::from_millis(500));
         assert_eq!(left.time, Some(Duration::from_millis(1500)));
         assert_eq!(left.samples, None);

@@ -9,6 +9,7 @@ use vcm_rs::integrators::choice::{self, Choice};
 use vcm_rs::integrators::{Algorithm, IntegratorOptions, image_size};
 use vcm_rs::scene::Scene;
 use vcm_rs::traversal::Traversal;
+use vcm_rs::vcm::StopFlag;
 
 use crate::command::{arg, render_shards, stderr, vcm_ok};
 
@@ -23,7 +24,7 @@ fn choose(name: &str, seed: u64) -> Choice {
         ..IntegratorOptions::default()
     };
     let size = image_size(&scene, 512, None);
-    choice::choose(&scene, &traversal, size, &options).unwrap()
+    choice::choose(&scene, &traversal, size, &options, &StopFlag::new()).unwrap()
 }
 
 fn algorithms(choice: &Choice) -> Vec<Algorithm> {
@@ -91,6 +92,20 @@ fn small_images_are_path_traced_unpiloted() {
         told.contains("algorithm: pt (an image of fewer than 4096 pixels is not piloted"),
         "{told}"
     );
+}
+
+/// A stop raised before the pilots leaves nothing to choose from: path tracing.
+#[test]
+fn a_stop_before_the_pilots_leaves_path_tracing() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-water.gltf");
+    let scene = Arc::new(Scene::load(&path).unwrap());
+    let traversal: Arc<dyn Traversal> = Arc::new(vcm_rs::cpu_traversal(&scene).unwrap());
+    let stop = StopFlag::new();
+    stop.raise();
+    let options = IntegratorOptions::default();
+    let choice = choice::choose(&scene, &traversal, (64, 64), &options, &stop).unwrap();
+    assert_eq!(choice.algorithm, Algorithm::Pt);
+    assert!(choice.candidates.is_empty());
 }
 
 /// `vcm render` without `--algo` pilots, says what it chose, and renders exactly what that

@@ -151,10 +151,14 @@ fn run(
         .detach(|| scene.traversal(request.backend))
         .map_err(vcm_error)?;
     let started = Instant::now();
+    let stop = StopFlag::new();
     let algorithm = match request.algorithm.fixed() {
         Some(algorithm) => algorithm,
+        // Pilots, stopped by Ctrl-C as a render is.
         None => {
-            py.detach(|| choice::choose(&scene.data, &traversal, size, &settings.options))
+            let options = &settings.options;
+            let choose = || choice::choose(&scene.data, &traversal, size, options, &stop);
+            run_released(py, &stop, |_| Ok(()), choose)?
                 .map_err(vcm_error)?
                 .algorithm
         }
@@ -170,7 +174,6 @@ fn run(
             samples_left,
         )
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let stop = StopFlag::new();
     // (samples per pixel, seconds) after the latest frame, and what was last reported.
     let latest = Mutex::new((0, 0.0));
     let mut reported = (0, 0.0);

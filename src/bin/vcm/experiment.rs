@@ -390,9 +390,13 @@ fn render(
     let started = std::time::Instant::now();
     let algorithm = match options.algo.fixed() {
         Some(algorithm) => algorithm,
-        None => {
-            crate::render::choose_algorithm(scene, &traversal, size, &options.integrator, false)?
-        }
+        None => crate::render::choose_algorithm(
+            scene,
+            &traversal,
+            size,
+            &options.integrator,
+            (stop, false),
+        )?,
     };
     let frames = Frames::new(options.schedule, options.backend);
     let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;

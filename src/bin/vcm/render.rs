@@ -143,7 +143,7 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "time")]
     spp: Option<u32>,
     /// Render for this many seconds instead of a fixed sample count (with --resume: this
-    /// many more seconds).
+    /// many more seconds), counting the pilots of --algo auto, and at least one frame.
     #[arg(long, allow_negative_numbers = true)]
     time: Option<f64>,
     /// Render exactly the global samples A to B − 1 (iterations, for the VCM family): one
@@ -345,9 +345,11 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     };
     let traversal = build_traversal(args.setup.backend, &scene)?;
     let started = Instant::now();
+    let stop = stop_flag()?;
     if plan.choose_algorithm {
         let options = &plan.settings.options;
-        let choice = choose_algorithm(&scene, &traversal, (width, height), options, args.explain)?;
+        let how = (&stop, args.explain);
+        let choice = choose_algorithm(&scene, &traversal, (width, height), options, how)?;
         plan.settings.algorithm = choice;
     }
     let mut state = prepare_state(&mut plan, &scene, args)?;
@@ -364,7 +366,6 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
         let shading = plan.settings.options.shading_plan(&scene);
         print_explanation(&scene, shading, args.setup.backend, integrator.as_ref());
     }
-    let stop = stop_flag()?;
     let mut film = match &mut state {
         Some(state) => std::mem::replace(&mut state.film, Film::new(1, 1)),
         None => Film::new(width, height),
@@ -498,10 +499,10 @@ pub fn choose_algorithm(
     traversal: &Arc<dyn Traversal>,
     size: (u32, u32),
     options: &IntegratorOptions,
-    explain: bool,
+    (stop, explain): (&StopFlag, bool),
 ) -> anyhow::Result<Algorithm> {
     let choice =
-        choice::choose(scene, traversal, size, options).context("choosing the algorithm")?;
+        choice::choose(scene, traversal, size, options, stop).context("choosing the algorithm")?;
     let (width, height) = choice.pilot_size;
     if choice.candidates.is_empty() {
         tell!(
