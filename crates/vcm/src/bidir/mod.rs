@@ -152,10 +152,9 @@ pub struct Vcm {
     /// The camera's projection onto the image.
     projection: Projection,
     plan: BidirPlan,
-    /// r₀, the first iteration's merge radius (world units).
-    base_radius: f32,
-    /// How r₀ was found.
-    radius_reason: String,
+    /// r₀, the first iteration's merge radius (world units), and how it was found; `None`
+    /// where the frames do not merge (no camera rays are traced to measure it).
+    first_radius: Option<(f32, String)>,
     schedule: Schedule,
     /// The schedule of the last frame rendered: its buffers, and the film it rendered into,
     /// have been allocated (`None` before the first frame).
@@ -208,10 +207,10 @@ impl Vcm {
         let plan = BidirPlan::new(settings.algorithm, &scene.features, settings.prune);
         let projection = scene.camera.projection(width, height);
         let size = Vec2::new(width as f32, height as f32);
-        let (base_radius, radius_reason) =
-            settings
-                .radius
-                .initial(&scene, traversal.as_ref(), (&projection, size));
+        let first_radius = plan.merges.then(|| {
+            let view = (&projection, size);
+            settings.radius.initial(&scene, traversal.as_ref(), view)
+        });
         let mut vcm = Vcm {
             projection,
             lambert_lanes: LambertLanes::for_scene(&scene, settings.lambert_lanes),
@@ -219,8 +218,7 @@ impl Vcm {
             traversal,
             settings,
             plan,
-            base_radius,
-            radius_reason,
+            first_radius,
             schedule: Schedule::default(),
             last_frame: None,
             cache_capacity: 0,
@@ -243,10 +241,12 @@ impl Vcm {
     }
 
     /// The merge radius of iteration `iteration` (from 0; frame f of S samples per pixel
-    /// renders iterations f · S to f · S + S − 1): r₀ · (iteration + 1)^((α − 1) / 2).
+    /// renders iterations f · S to f · S + S − 1): r₀ · (iteration + 1)^((α − 1) / 2); 0
+    /// where the frames do not merge.
     pub fn radius(&self, iteration: u64) -> f32 {
         let exponent = 0.5 * (self.settings.alpha - 1.0);
-        self.base_radius * ((iteration as f32) + 1.0).powf(exponent)
+        let r0 = self.first_radius.as_ref().map_or(0.0, |(r0, _)| *r0);
+        r0 * ((iteration as f32) + 1.0).powf(exponent)
     }
 
     /// The light vertex caches of the last frame, one per sample per pixel (each empty, with
@@ -432,11 +432,8 @@ impl Integrator for Vcm {
             Ok(_) => Decision::runs(LANES_PART, LANES_RUN),
             Err(why) => Decision::left_out(LANES_PART, *why),
         });
-        if self.plan.merges {
-            let reason = format!(
-                "r₀ = {} world units: {}",
-                self.base_radius, self.radius_reason
-            );
+        if let Some((r0, how)) = &self.first_radius {
+            let reason = format!("r₀ = {r0} world units: {how}");
             decisions.push(Decision::runs("merge radius", reason));
         }
         decisions
