@@ -172,7 +172,7 @@ pub fn choose(
     let best = candidates
         .iter()
         .min_by(|a, b| a.inefficiency().total_cmp(&b.inefficiency()))
-        .expect("path tracing is always a candidate");
+        .expect("at least one pilot finished");
     Ok(Choice {
         algorithm: best.algorithm,
         pilot_size,
@@ -200,10 +200,10 @@ fn pilot_size((width, height): (u32, u32)) -> (u32, u32) {
 /// traces one light path per pixel) as in the render.
 fn pilot_options(options: &IntegratorOptions, width: u32, pilot_width: u32) -> IntegratorOptions {
     let radius = match options.radius {
-        MergeRadius::Pixels(pixels) => MergeRadius::Pixels(pixels),
         MergeRadius::SceneFraction(fraction) => {
             MergeRadius::SceneFraction(fraction * width as f32 / pilot_width as f32)
         }
+        pixels @ MergeRadius::Pixels(_) => pixels,
     };
     IntegratorOptions {
         radius,

@@ -388,16 +388,13 @@ fn render(
         .get(options.backend, tell_traversal)
         .context("building the ray traversal backend")?;
     let started = std::time::Instant::now();
-    let algorithm = match options.algo.fixed() {
-        Some(algorithm) => algorithm,
-        None => crate::render::choose_algorithm(
-            scene,
-            &traversal,
-            size,
-            &options.integrator,
-            (stop, false),
-        )?,
-    };
+    let algorithm = crate::render::settle_algorithm(
+        options.algo,
+        (scene, &traversal),
+        size,
+        &options.integrator,
+        (stop, false),
+    )?;
     let frames = Frames::new(options.schedule, options.backend);
     let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
     let mut integrator = frames.integrator(

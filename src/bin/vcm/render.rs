@@ -202,8 +202,6 @@ struct Plan {
     /// The first global sample to render.
     first_sample: u32,
     budget: Budget,
-    /// `settings.algorithm` is yet to be chosen (`--algo auto` on a new render).
-    choose_algorithm: bool,
 }
 
 impl RenderArgs {
@@ -268,7 +266,6 @@ impl RenderArgs {
                 state: None,
                 first_sample,
                 budget,
-                choose_algorithm: self.algo == AlgorithmOption::Auto,
             });
         };
         let state = RenderState::load(resume)?;
@@ -322,7 +319,6 @@ impl RenderArgs {
             first_sample: state.samples.end(),
             budget,
             state: Some(state),
-            choose_algorithm: false,
         })
     }
 }
@@ -346,12 +342,20 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     let traversal = build_traversal(args.setup.backend, &scene)?;
     let started = Instant::now();
     let stop = stop_flag()?;
-    if plan.choose_algorithm {
-        let options = &plan.settings.options;
-        let how = (&stop, args.explain);
-        let choice = choose_algorithm(&scene, &traversal, (width, height), options, how)?;
-        plan.settings.algorithm = choice;
-    }
+    // A resumed render keeps the algorithm its state records.
+    let algorithm = match &plan.state {
+        Some(_) => AlgorithmOption::Fixed(plan.settings.algorithm),
+        None => args.algo,
+    };
+    let options = &plan.settings.options;
+    let how = (&stop, args.explain);
+    plan.settings.algorithm = settle_algorithm(
+        algorithm,
+        (&scene, &traversal),
+        (width, height),
+        options,
+        how,
+    )?;
     let mut state = prepare_state(&mut plan, &scene, args)?;
     let samples_left = plan.budget.remaining(0, Duration::ZERO).samples;
     let mut integrator = args.setup.integrator(
@@ -492,15 +496,19 @@ fn prepare_state(
     Ok(Some(state))
 }
 
-/// The algorithm `--algo auto` renders `scene` with at `size` with `options`
-/// ([`choice::choose`]), told in one line, or with `explain` in a table of the candidates.
-pub fn choose_algorithm(
-    scene: &Arc<Scene>,
-    traversal: &Arc<dyn Traversal>,
+/// The algorithm `algorithm` names, or for `auto` the one that renders `scene` at `size`
+/// with `options` ([`choice::choose`]), told in one line, or with `explain` in a table of
+/// the candidates.
+pub fn settle_algorithm(
+    algorithm: AlgorithmOption,
+    (scene, traversal): (&Arc<Scene>, &Arc<dyn Traversal>),
     size: (u32, u32),
     options: &IntegratorOptions,
     (stop, explain): (&StopFlag, bool),
 ) -> anyhow::Result<Algorithm> {
+    if let Some(algorithm) = algorithm.fixed() {
+        return Ok(algorithm);
+    }
     let choice =
         choice::choose(scene, traversal, size, options, stop).context("choosing the algorithm")?;
     let (width, height) = choice.pilot_size;
