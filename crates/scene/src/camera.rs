@@ -133,6 +133,11 @@ pub struct Projection {
 }
 
 impl Projection {
+    /// Half extents of the image plane at unit distance: (tan(xfov/2), tan(yfov/2)).
+    pub fn half_extent(&self) -> Vec2 {
+        self.half_extent
+    }
+
     /// The unit direction through the raster position `raster` (pixels; (0,0) is the top-left
     /// corner of the image, (width, height) the bottom-right).
     #[inline]

@@ -1,6 +1,6 @@
 // Rays, hits and the watertight ray/triangle test (Woop, Benthin and Wald 2013), shared by the
-// traversal kernels. The same arithmetic as the CPU backend's, so both report the same
-// triangle and nearly the same t.
+// traversal kernels and by kernels that trace rays of their own (the GPU path tracer). The
+// same arithmetic as the CPU backend's, so both report the same triangle and nearly the same t.
 
 struct Ray {
     origin: vec3<f32>,
@@ -16,13 +16,6 @@ struct Hit {
     v: f32,
 }
 
-struct Params {
-    // Rays in this batch.
-    ray_count: u32,
-    // Threads per row of the 2D dispatch (workgroups in x times the workgroup size).
-    row_threads: u32,
-}
-
 const NO_HIT: u32 = 0xffffffffu;
 // Entry distance reported for boxes a ray misses (the largest finite f32).
 const MISSED: f32 = 3.40282347e38;
@@ -31,12 +24,6 @@ const MIN_DIR_COMPONENT: f32 = 1e-18;
 // Relative widening of a box's exit distance: 2γ(3) covers the slab test's rounding, so
 // geometry lying exactly on a box face is never culled by a one-ulp miss.
 const SLAB_SLACK: f32 = 4e-7;
-const WORKGROUP_SIZE: u32 = 64u;
-
-@group(0) @binding(0) var<storage, read> rays: array<Ray>;
-@group(0) @binding(1) var<storage, read_write> hits: array<Hit>;
-@group(0) @binding(2) var<uniform> params: Params;
-@group(0) @binding(3) var<storage, read_write> occluded: array<u32>;
 
 @group(1) @binding(1) var<storage, read> vertices: array<vec4<f32>>;
 @group(1) @binding(2) var<storage, read> ids: array<u32>;
@@ -109,12 +96,6 @@ fn intersect_triangle(index: u32, ray: PreparedRay) -> vec3<f32> {
     return vec3(t, edges.y / det, edges.z / det);
 }
 
-// The ray index of this invocation in the 2D dispatch, or ray_count if it has none.
-fn ray_index(id: vec3<u32>) -> u32 {
-    let index = id.x + id.y * params.row_threads;
-    return select(params.ray_count, index, index < params.ray_count);
-}
-
 // Tests leaf-order triangle `leaf` against the closest hit so far; `best.prim` is a leaf
 // position until the end of the traversal. At equal t the smaller caller id wins, as on the
 // CPU backend, so the answer does not depend on the traversal order.
@@ -126,22 +107,4 @@ fn closer_hit(leaf: u32, ray: PreparedRay, best: Hit) -> Hit {
         return Hit(h.x, leaf, h.y, h.z);
     }
     return best;
-}
-
-// The entry points: `trace(ray, any_hit)` comes from the layout's traversal file.
-
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn closest_hit(@builtin(global_invocation_id) id: vec3<u32>) {
-    let index = ray_index(id);
-    if index < params.ray_count {
-        hits[index] = trace(rays[index], false);
-    }
-}
-
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn any_hit(@builtin(global_invocation_id) id: vec3<u32>) {
-    let index = ray_index(id);
-    if index < params.ray_count {
-        occluded[index] = u32(trace(rays[index], true).prim != NO_HIT);
-    }
 }

@@ -12,13 +12,12 @@ use vcm_traversal::build::build_bvh2;
 use vcm_traversal::{
     BuildPreset, HitBatch, NO_HIT, PendingTraversal, RayBatch, Traversal, TraversalJob,
 };
-use wgpu::util::DeviceExt;
 
 use crate::alpha::AlphaMasks;
 use crate::device::GpuDevice;
 use crate::error::GpuError;
 use crate::layout::{NodeLayout, SceneLayout};
-use crate::shader::{ANY_HIT_ENTRY, CLOSEST_HIT_ENTRY, traversal_module};
+use crate::shader::{ANY_HIT_ENTRY, CLOSEST_HIT_ENTRY, traversal_functions, traversal_module};
 use crate::slot::{HIT_BYTES, Params, Query, RAY_BYTES, Slot, dispatch_shape};
 
 /// How to build a [`GpuBvh`].
@@ -42,6 +41,8 @@ pub struct GpuBvh {
     build_time: Duration,
     scene_bytes: usize,
     stack_size: u32,
+    layout: NodeLayout,
+    alpha_masks: bool,
 }
 
 struct Inner {
@@ -51,6 +52,8 @@ struct Inner {
     /// pipeline; `None` for a scene without triangles, where every ray misses without a
     /// dispatch.
     scene_groups: Option<Vec<[wgpu::BindGroup; 2]>>,
+    /// The buffers of bind group 1: nodes, triangles in leaf order, triangle ids.
+    hierarchy: Option<[wgpu::Buffer; 3]>,
     slots: Mutex<Vec<Slot>>,
     max_rays_per_slot: u64,
 }
@@ -123,41 +126,40 @@ impl GpuBvh {
         };
         let pipelines = [pipeline(CLOSEST_HIT_ENTRY), pipeline(ANY_HIT_ENTRY)];
         let mut scene_bytes = layout.memory_bytes();
-        let scene_groups = if layout.nodes.is_empty() {
-            None
+        let (scene_groups, hierarchy) = if layout.nodes.is_empty() {
+            (None, None)
         } else {
-            let mut buffers = vec![
-                upload(&gpu, "nodes", bytemuck::cast_slice(&layout.nodes))?,
-                upload(&gpu, "triangles", bytemuck::cast_slice(&layout.vertices))?,
-                upload(&gpu, "triangle ids", bytemuck::cast_slice(&layout.ids))?,
+            let hierarchy = [
+                gpu.storage_buffer("nodes", bytemuck::cast_slice(&layout.nodes))?,
+                gpu.storage_buffer("triangles", bytemuck::cast_slice(&layout.vertices))?,
+                gpu.storage_buffer("triangle ids", bytemuck::cast_slice(&layout.ids))?,
             ];
-            let mut groups = vec![bind_buffers(&gpu, &pipelines, 1, &buffers)];
+            let mut groups = vec![bind_buffers(&gpu, &pipelines, 1, &hierarchy)];
             if masked {
                 let packed = masks.pack(&layout.ids);
-                buffers = vec![
-                    upload(&gpu, "leaf masks", bytemuck::cast_slice(&packed.leaf_masks))?,
-                    upload(&gpu, "masks", bytemuck::cast_slice(&packed.masks))?,
-                    upload(
-                        &gpu,
-                        "mask textures",
-                        bytemuck::cast_slice(&packed.textures),
-                    )?,
-                    upload(&gpu, "mask texels", bytemuck::cast_slice(&packed.texels))?,
+                let buffers = [
+                    gpu.storage_buffer("leaf masks", bytemuck::cast_slice(&packed.leaf_masks))?,
+                    gpu.storage_buffer("masks", bytemuck::cast_slice(&packed.masks))?,
+                    gpu.storage_buffer("mask textures", bytemuck::cast_slice(&packed.textures))?,
+                    gpu.storage_buffer("mask texels", bytemuck::cast_slice(&packed.texels))?,
                 ];
                 scene_bytes += buffers.iter().map(|b| b.size() as usize).sum::<usize>();
                 groups.push(bind_buffers(&gpu, &pipelines, 2, &buffers));
             }
-            Some(groups)
+            (Some(groups), Some(hierarchy))
         };
         let max_rays_per_slot = gpu.max_binding_bytes() / RAY_BYTES.max(HIT_BYTES);
         Ok(Self {
             build_time: start.elapsed(),
             scene_bytes,
             stack_size: layout.stack_size,
+            layout: layout.layout,
+            alpha_masks: masked,
             inner: Arc::new(Inner {
                 gpu,
                 pipelines,
                 scene_groups,
+                hierarchy,
                 slots: Mutex::new(Vec::new()),
                 max_rays_per_slot,
             }),
@@ -202,28 +204,25 @@ impl GpuBvh {
     pub fn stack_size(&self) -> u32 {
         self.stack_size
     }
-}
 
-/// Uploads `bytes` as a read-only storage buffer (at least 4 bytes: empty bindings are
-/// invalid), checking the device's binding limit.
-fn upload(gpu: &GpuDevice, label: &'static str, bytes: &[u8]) -> Result<wgpu::Buffer, GpuError> {
-    let limit = gpu.max_binding_bytes();
-    if bytes.len() as u64 > limit {
-        return Err(GpuError::SceneTooLarge {
-            buffer: label,
-            bytes: bytes.len() as u64,
-            limit,
-            adapter: gpu.info.name.clone(),
-        });
+    /// Whether some triangles are alpha-masked (their masks are bind group 2 of the
+    /// traversal functions).
+    pub fn has_alpha_masks(&self) -> bool {
+        self.alpha_masks
     }
-    let contents = if bytes.is_empty() { &[0; 4][..] } else { bytes };
-    Ok(gpu
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents,
-            usage: wgpu::BufferUsages::STORAGE,
-        }))
+
+    /// The hierarchy's buffers as [`traversal_functions`](Self::traversal_functions) read
+    /// them, bindings 0, 1, 2 of bind group 1: nodes, triangles in leaf order, triangle ids;
+    /// for kernels that trace rays of their own. `None` for a scene without triangles.
+    pub fn hierarchy_buffers(&self) -> Option<&[wgpu::Buffer; 3]> {
+        self.inner.hierarchy.as_ref()
+    }
+
+    /// The WGSL of `trace(ray, any_hit) -> Hit` over this hierarchy (no entry points, see
+    /// [`crate::shader::traversal_functions`]).
+    pub fn traversal_functions(&self) -> String {
+        traversal_functions(self.layout, self.stack_size, self.alpha_masks)
+    }
 }
 
 /// Binds `buffers` to bindings 0, 1, … of bind group `group`, for each pipeline.

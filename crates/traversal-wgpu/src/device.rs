@@ -1,6 +1,8 @@
 //! Headless device selection: the best hardware adapter when there is one, else a software
 //! one (Mesa lavapipe), with the adapter's own limits rather than WebGPU's defaults.
 
+use wgpu::util::DeviceExt;
+
 use crate::error::GpuError;
 
 /// A wgpu device and queue with the adapter they came from.
@@ -81,6 +83,32 @@ impl GpuDevice {
         self.device
             .features()
             .contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// Uploads `bytes` as a read-only storage buffer (at least 4 bytes: empty bindings are
+    /// invalid), checking the device's binding limit.
+    pub fn storage_buffer(
+        &self,
+        label: &'static str,
+        bytes: &[u8],
+    ) -> Result<wgpu::Buffer, GpuError> {
+        let limit = self.max_binding_bytes();
+        if bytes.len() as u64 > limit {
+            return Err(GpuError::SceneTooLarge {
+                buffer: label,
+                bytes: bytes.len() as u64,
+                limit,
+                adapter: self.info.name.clone(),
+            });
+        }
+        let contents = if bytes.is_empty() { &[0; 4][..] } else { bytes };
+        Ok(self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            }))
     }
 
     /// The largest storage buffer binding the device accepts, in bytes.

@@ -20,3 +20,4 @@ pub use backend::{GpuBvh, GpuBvhOptions};
 pub use device::GpuDevice;
 pub use error::{GpuError, NO_ADAPTER_HELP};
 pub use layout::NodeLayout;
+pub use slot::dispatch_shape;

@@ -1,14 +1,17 @@
 //! Composing the traversal kernels from the WGSL sources in this crate's `shaders/`.
 //!
 //! WGSL has no includes: a module is the host-defined constants followed by `ray.wgsl`
-//! (rays, hits, the triangle test), the alpha test and the traversal file. The stack size is
+//! (rays, hits, the triangle test), the alpha test, the traversal file and `kernels.wgsl`
+//! (the entry points over batches of rays). Kernels that trace rays of their own (the GPU
+//! path tracer) take everything but the entry points ([`traversal_functions`]) and call
+//! `trace(ray, any_hit)`. The stack size is
 //! a host constant because private arrays cannot be sized by pipeline overrides. Scenes
 //! without alpha masks get `alpha_none.wgsl`, so their kernels carry no mask code and bind no
 //! mask buffers; scenes with masks get `alpha_masks.wgsl` (bind group 2).
 
 use crate::layout::NodeLayout;
 
-/// The shared ray and triangle code.
+/// The shared ray and triangle code (bind group 1: the hierarchy).
 pub const RAY_WGSL: &str = include_str!("../shaders/ray.wgsl");
 /// The alpha test of scenes without masks: always opaque.
 pub const ALPHA_NONE_WGSL: &str = include_str!("../shaders/alpha_none.wgsl");
@@ -19,16 +22,26 @@ pub const TRAVERSE_BVH2_WGSL: &str = include_str!("../shaders/traverse_bvh2.wgsl
 /// Traversal of the wide layout.
 pub const TRAVERSE_CWBVH_WGSL: &str = include_str!("../shaders/traverse_cwbvh.wgsl");
 
+/// The entry points over batches of rays (bind group 0: rays, hits, flags).
+pub const KERNELS_WGSL: &str = include_str!("../shaders/kernels.wgsl");
+
 /// Entry point that writes one [`Hit`](vcm_traversal::HitBatch) per ray.
 pub const CLOSEST_HIT_ENTRY: &str = "closest_hit";
 /// Entry point that writes one occlusion flag per ray.
 pub const ANY_HIT_ENTRY: &str = "any_hit";
-/// Invocations per workgroup (`WORKGROUP_SIZE` in `ray.wgsl`).
+/// Invocations per workgroup (`WORKGROUP_SIZE` in `kernels.wgsl`).
 pub const WORKGROUP_SIZE: u32 = 64;
 
 /// The complete WGSL module for `layout`, whose traversal needs `stack_size` entries, with
 /// or without the alpha-mask test.
 pub fn traversal_module(layout: NodeLayout, stack_size: u32, alpha_masks: bool) -> String {
+    let functions = traversal_functions(layout, stack_size, alpha_masks);
+    format!("{functions}\n{KERNELS_WGSL}")
+}
+
+/// The traversal without entry points: `trace(ray, any_hit) -> Hit` over the hierarchy in
+/// bind group 1 (and the alpha masks in group 2), for kernels that trace rays of their own.
+pub fn traversal_functions(layout: NodeLayout, stack_size: u32, alpha_masks: bool) -> String {
     let alpha = if alpha_masks {
         ALPHA_MASKS_WGSL
     } else {
@@ -94,6 +107,6 @@ mod tests {
 
     #[test]
     fn workgroup_size_matches_the_shader() {
-        assert!(RAY_WGSL.contains(&format!("const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;")));
+        assert!(KERNELS_WGSL.contains(&format!("const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;")));
     }
 }

@@ -107,9 +107,9 @@ impl Slot {
     }
 }
 
-/// Workgroups in x and y for `rays` invocations, with no dimension above `max_per_dimension`,
-/// and the invocations per row.
-pub(crate) fn dispatch_shape(rays: u64, max_per_dimension: u32) -> (u32, u32, u32) {
+/// Workgroups in x and y for `rays` invocations of [`WORKGROUP_SIZE`] per workgroup, with no
+/// dimension above `max_per_dimension`, and the invocations per row.
+pub fn dispatch_shape(rays: u64, max_per_dimension: u32) -> (u32, u32, u32) {
     let groups = rays.div_ceil(u64::from(WORKGROUP_SIZE)).max(1);
     let x = groups.min(u64::from(max_per_dimension)) as u32;
     let y = groups.div_ceil(u64::from(x)) as u32;

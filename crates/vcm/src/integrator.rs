@@ -180,7 +180,7 @@ impl FrameStats {
 }
 
 /// Checks that a `width` × `height` image has pixels and that a 32-bit index reaches them all.
-pub(crate) fn check_image_size(width: u32, height: u32) -> Result<(), RenderError> {
+pub fn check_image_size(width: u32, height: u32) -> Result<(), RenderError> {
     if width == 0 || height == 0 {
         return Err(RenderError::EmptyImage { width, height });
     }

@@ -77,6 +77,6 @@ pub use bidir::{
 };
 pub use error::RenderError;
 pub use film::{Film, FilmBand, PixelSum, rounded_sum};
-pub use integrator::{FrameStats, Integrator, Schedule};
+pub use integrator::{FrameStats, Integrator, Schedule, check_image_size};
 pub use path_tracer::{PathTracer, PtSettings};
 pub use vcm_scheduler::{Scheduler, SchedulerStats, StopFlag};

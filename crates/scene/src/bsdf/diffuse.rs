@@ -9,7 +9,7 @@
 
 use super::albedo::SpecularAlbedo;
 use super::lobe::{Lobe, LobeSample, mean};
-use super::{LobeKind, TransportMode};
+use super::{FlatDiffuse, LobeKind, TransportMode};
 use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
@@ -39,6 +39,15 @@ impl CompensatedDiffuse {
             albedo,
             layer: layer.reflects().then_some(layer),
             scale,
+        }
+    }
+
+    /// The lobe as plain numbers.
+    pub fn flat(&self) -> FlatDiffuse {
+        FlatDiffuse {
+            albedo: self.albedo,
+            scale: self.scale,
+            layered: self.layer.is_some(),
         }
     }
 

@@ -12,7 +12,7 @@ use super::lobe::{Lobe, LobeSample};
 use super::microfacet::Ggx;
 use super::specular::SchlickReflection;
 use super::thin_dielectric::ThinDielectric;
-use super::{BsdfParams, LobeKind, TransportMode, ggx_alpha};
+use super::{BsdfParams, FlatInterface, FlatLobes, LobeKind, TransportMode, ggx_alpha};
 use glam::{Vec2, Vec3};
 
 /// Number of lobe slots.
@@ -145,6 +145,26 @@ impl Mixture {
     /// IOR of the material (non-finite or < 1 replaced by 1.5).
     pub fn ior(&self) -> f32 {
         self.ior
+    }
+
+    /// The lobes as plain numbers ([`FlatLobes`]).
+    pub fn flat(&self) -> FlatLobes {
+        FlatLobes {
+            ior: self.ior,
+            specular: self.specular.as_ref().map(SchlickReflection::flat),
+            diffuse: self.diffuse.as_ref().map(CompensatedDiffuse::flat),
+            dielectric: self.dielectric.as_ref().map(|d| FlatInterface {
+                weight: d.weight,
+                tint: d.tint,
+                alpha: d.ggx.map(|g| g.alpha),
+            }),
+            thin: self.thin.as_ref().map(|t| FlatInterface {
+                weight: t.weight,
+                tint: t.tint,
+                alpha: t.ggx.map(|g| g.alpha),
+            }),
+            constant_selection: self.constant_selection,
+        }
     }
 
     /// f of a mixture that is one plain Lambert lobe (no layer above it, no other lobe):

@@ -58,6 +58,7 @@
 mod albedo;
 mod dielectric;
 mod diffuse;
+mod flat;
 mod fresnel;
 mod lobe;
 mod microfacet;
@@ -69,6 +70,7 @@ mod thin_dielectric;
 #[cfg(test)]
 mod tests;
 
+pub use flat::{FlatDiffuse, FlatInterface, FlatLobes, FlatSchlick};
 pub use surface::{Bsdf, FixedOutgoing, GRAZING_COS, Lobes};
 
 use glam::Vec3;

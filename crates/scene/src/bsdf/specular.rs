@@ -10,7 +10,7 @@ use super::albedo::SpecularAlbedo;
 use super::fresnel::{reflect, schlick};
 use super::lobe::{Lobe, LobeSample, mean, microfacet_kind};
 use super::microfacet::Ggx;
-use super::{LobeKind, TransportMode};
+use super::{FlatSchlick, LobeKind, TransportMode};
 use glam::{Vec2, Vec3};
 
 /// Schlick-Fresnel GGX (or mirror) reflection; F0 and F90 include the mixture weights.
@@ -39,6 +39,17 @@ impl SchlickReflection {
 
 /// Minimum selection weight, relative to the largest Fresnel coefficient, so that a lobe
 /// whose albedo estimate is tiny (F0 = 0 at normal incidence) is still sampled.
+impl SchlickReflection {
+    /// The lobe as plain numbers.
+    pub fn flat(&self) -> FlatSchlick {
+        FlatSchlick {
+            f0: self.f0,
+            f90: self.f90,
+            alpha: self.ggx.map(|g| g.alpha),
+        }
+    }
+}
+
 const MIN_SELECTION: f32 = 1e-3;
 
 impl Lobe for SchlickReflection {

@@ -2,7 +2,7 @@
 //! [`Mixture`].
 
 use super::mixture::{Mixture, Selection};
-use super::{BsdfEval, BsdfParams, BsdfSample, LobeKind, Pdfs, TransportMode};
+use super::{BsdfEval, BsdfParams, BsdfSample, FlatLobes, LobeKind, Pdfs, TransportMode};
 use crate::frame::Frame;
 use glam::{Vec2, Vec3};
 
@@ -40,6 +40,11 @@ impl Lobes {
     /// the same side, and samples the cosine-weighted hemisphere.
     pub fn lambert(&self) -> Option<Vec3> {
         self.0.lambert()
+    }
+
+    /// The lobes as plain numbers, for shading code outside this crate.
+    pub fn flat(&self) -> FlatLobes {
+        self.0.flat()
     }
 }
 

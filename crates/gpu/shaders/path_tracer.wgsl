@@ -1,0 +1,362 @@
+// The path tracer as one kernel: an invocation follows one path from the camera to its end,
+// tracing its rays with `trace` (the traversal functions of vcm-traversal-wgpu), shading each
+// vertex as the CPU's `shade` does (vcm's shade.rs, walk.rs, roulette.rs, shadow.rs), and
+// writes the path's radiance. Paths are numbered pixel · samples + sample, the CPU's key, so
+// that the host adds them to the film in the CPU's order.
+//
+// Bind groups: 0 this dispatch (parameters, radiance out, ray counts), 1 the hierarchy
+// (traversal functions), 2 the scene's shading data. The host defines GAMMA_7 and GAMMA_16
+// (`gamma(n)` of vcm's ray_offset.rs, as the CPU rounds them).
+
+struct Params {
+    camera_position: vec3<f32>,
+    width: u32,
+    camera_forward: vec3<f32>,
+    height: u32,
+    camera_right: vec3<f32>,
+    first_sample: u32,
+    camera_up: vec3<f32>,
+    // Samples per pixel in this frame.
+    samples: u32,
+    // tan(yfov / 2) · aspect, tan(yfov / 2).
+    half_extent: vec2<f32>,
+    // The image size as floats.
+    size: vec2<f32>,
+    // The render's 64-bit seed.
+    seed: vec2<u32>,
+    // The frame's path number of this dispatch's first invocation, and its paths.
+    first_path: u32,
+    path_count: u32,
+    // Invocations per row of the 2D dispatch.
+    row_threads: u32,
+    // Longest path in segments.
+    max_segments: u32,
+    // 1: independent samples; 0: Sobol.
+    independent: u32,
+    // Lights the light sampler picks from (0: no light sampling).
+    light_count: u32,
+}
+
+// A triangle as shading sees it: corners (w: the material, the area light or NO_LIGHT, as
+// bits) and vertex normals (zero where the mesh has none).
+struct ShadeTriangle {
+    p0: vec4<f32>,
+    p1: vec4<f32>,
+    p2: vec4<f32>,
+    n0: vec4<f32>,
+    n1: vec4<f32>,
+    n2: vec4<f32>,
+}
+
+// An emitting triangle with constant radiance (`AreaLight`); c0.w is its area.
+struct AreaLight {
+    c0: vec4<f32>,
+    c1: vec4<f32>,
+    c2: vec4<f32>,
+    normal: vec4<f32>,
+    emission: vec4<f32>,
+}
+
+const NO_LIGHT: u32 = 0xffffffffu;
+const WORKGROUP: u32 = 64u;
+// Pairs of numbers per path vertex (vcm's `PATH_TRACER` layout: light pick, light point,
+// lobe, direction, roulette).
+const PAIRS_PER_VERTEX: u32 = 5u;
+// Russian roulette (vcm's roulette.rs).
+const ROULETTE_AFTER_SEGMENTS: u32 = 3u;
+const CAPPED_AFTER_SEGMENTS: u32 = 1024u;
+const CAPPED_CONTINUATION: f32 = 0.95;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read_write> radiance_out: array<vec4<f32>>;
+// Closest-hit and shadow rays traced by this dispatch.
+@group(0) @binding(2) var<storage, read_write> ray_counts: array<atomic<u32>, 2>;
+
+@group(2) @binding(0) var<storage, read> triangles: array<ShadeTriangle>;
+@group(2) @binding(1) var<storage, read> materials: array<Material>;
+@group(2) @binding(2) var<storage, read> lights: array<AreaLight>;
+// Per light: the smallest number that picks it or a later one, and its pick probability.
+@group(2) @binding(3) var<storage, read> light_pick: array<vec2<f32>>;
+
+fn infinity() -> f32 {
+    return bitcast<f32>(0x7f800000u);
+}
+
+// glam's `cross`.
+fn cross3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return vec3(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
+}
+
+// glam's `try_normalize`, with `fallback` where it gives `None`.
+fn normalized_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let rcp = 1.0 / sqrt(dot3(v, v));
+    if is_finite(rcp) && rcp > 0.0 {
+        return v * rcp;
+    }
+    return fallback;
+}
+
+// The unit direction through raster position `raster` (`Projection::direction`).
+fn camera_direction(raster: vec2<f32>) -> vec3<f32> {
+    let ndc_x = 2.0 * raster.x / params.size.x - 1.0;
+    let ndc_y = 1.0 - 2.0 * raster.y / params.size.y;
+    let a = ndc_x * params.half_extent.x;
+    let b = ndc_y * params.half_extent.y;
+    let d = params.camera_forward + params.camera_right * a + params.camera_up * b;
+    return d * (1.0 / sqrt(d.x * d.x + d.y * d.y + d.z * d.z));
+}
+
+// A hit turned into a surface point (`SurfaceHit`).
+struct Surface {
+    position: vec3<f32>,
+    n_g: vec3<f32>,
+    n_s: vec3<f32>,
+    // Per-axis bound of the position's rounding error.
+    error: vec3<f32>,
+    material: u32,
+    light: u32,
+}
+
+fn barycentric_error(c0: vec3<f32>, c1: vec3<f32>, c2: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    let sum = abs(c0 * b.x) + abs(c1 * b.y) + abs(c2 * b.z);
+    return vec3(max_element(sum) * GAMMA_7);
+}
+
+fn surface_at(index: u32, u: f32, v: f32) -> Surface {
+    let t = triangles[index];
+    let c0 = t.p0.xyz;
+    let c1 = t.p1.xyz;
+    let c2 = t.p2.xyz;
+    let w = 1.0 - u - v;
+    let n_g = normalized_or(cross3(c1 - c0, c2 - c0), vec3(0.0));
+    var n_s = normalized_or(t.n0.xyz * w + t.n1.xyz * u + t.n2.xyz * v, n_g);
+    if dot3(n_s, n_g) < 0.0 {
+        n_s = -n_s;
+    }
+    return Surface(
+        c0 * w + c1 * u + c2 * v,
+        n_g,
+        n_s,
+        barycentric_error(c0, c1, c2, vec3(w, u, v)),
+        bitcast<u32>(t.p0.w),
+        bitcast<u32>(t.p1.w),
+    );
+}
+
+// The next float from x toward the sign of o (`step_toward` of ray_offset.rs).
+fn step_toward(x: f32, o: f32) -> f32 {
+    let step = i32(o > 0.0) - i32(o < 0.0);
+    let bits = bitcast<i32>(x);
+    let magnitude = bits & 0x7fffffff;
+    let ordinal = select(magnitude, -magnitude, bits < 0);
+    let moved = ordinal + step;
+    let moved_bits = select(u32(moved), u32(-moved) | 0x80000000u, moved < 0);
+    return select(x, bitcast<f32>(moved_bits), step != 0 && is_finite(x));
+}
+
+// The origin of a ray leaving point p toward w (`offset_ray_origin`).
+fn offset_ray_origin(p: vec3<f32>, p_error: vec3<f32>, n_g: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
+    let d = dot3(abs(n_g), p_error);
+    let offset = select(d * n_g, -d * n_g, dot3(w, n_g) < 0.0);
+    let moved = p + offset;
+    return vec3(
+        step_toward(moved.x, offset.x),
+        step_toward(moved.y, offset.y),
+        step_toward(moved.z, offset.z),
+    );
+}
+
+// Veach's power heuristic for one sample of each technique.
+fn power_heuristic(f: f32, g: f32) -> f32 {
+    let f2 = f * f;
+    let g2 = g * g;
+    let sum = f2 + g2;
+    let weight = select(0.0, f2 / sum, sum > 0.0);
+    return select(weight, 1.0, abs(f) == infinity());
+}
+
+// The light a number picks (`LightSampler::sample`): the last whose first number is ≤ u.
+fn pick_light(u: f32) -> u32 {
+    var lo = 0u;
+    var hi = params.light_count;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if light_pick[mid].x <= u {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// Emitted radiance toward a path that hit `s` along `dir` after `t`, MIS-weighted against
+// light sampling when the segment was sampled by a BSDF with pdf `bsdf_pdf` (< 0: by the
+// camera or a delta lobe, full weight).
+fn emission(s: Surface, dir: vec3<f32>, t: f32, bsdf_pdf: f32) -> vec3<f32> {
+    if s.light == NO_LIGHT {
+        return vec3(0.0);
+    }
+    let light = lights[s.light];
+    let cos_out = dot3(light.normal.xyz, -dir);
+    if !(cos_out > 0.0) {
+        return vec3(0.0);
+    }
+    let radiance = light.emission.xyz;
+    if bsdf_pdf < 0.0 {
+        return radiance;
+    }
+    let direct_pdf_a = 1.0 / light.c0.w;
+    let cos_at_light = abs(dot3(s.n_g, -dir));
+    let light_pdf_w = light_pick[s.light].y * direct_pdf_a * t * t / cos_at_light;
+    return radiance * power_heuristic(bsdf_pdf, light_pdf_w);
+}
+
+// A light sample's shadow ray and what it adds unless blocked; `valid` false for none.
+struct Shadow {
+    valid: bool,
+    origin: vec3<f32>,
+    direction: vec3<f32>,
+    contribution: vec3<f32>,
+}
+
+// One light sample from `s` (`next_event` of shade.rs).
+fn next_event(
+    rng: ptr<function, Sampler>,
+    s: Surface,
+    b: Bsdf,
+    out: Outgoing,
+    throughput: vec3<f32>,
+) -> Shadow {
+    var shadow = Shadow(false, vec3(0.0), vec3(0.0), vec3(0.0));
+    let u_pick = uniform1(rng);
+    let u_light = uniform2(rng);
+    if params.light_count == 0u {
+        return shadow;
+    }
+    let index = pick_light(u_pick);
+    let pick_pmf = light_pick[index].y;
+    let light = lights[index];
+    // A uniform point on the triangle.
+    let su = sqrt(u_light.x);
+    let b0 = 1.0 - su;
+    let b1 = u_light.y * su;
+    let bary = vec3(b0, b1, 1.0 - b0 - b1);
+    let point = light.c0.xyz * bary.x + light.c1.xyz * bary.y + light.c2.xyz * bary.z;
+    let to_light = point - s.position;
+    let distance_sq = dot3(to_light, to_light);
+    let distance = sqrt(distance_sq);
+    let direction = to_light / distance;
+    let cos_at_light = dot3(light.normal.xyz, -direction);
+    if !(cos_at_light > 0.0 && distance > 0.0) {
+        return shadow;
+    }
+    let inv_area = 1.0 / light.c0.w;
+    let direct_pdf_w = inv_area * distance_sq / cos_at_light;
+    let eval = bsdf_eval(b, out, direction);
+    if all(eval.f_cos == vec3(0.0)) {
+        return shadow;
+    }
+    let light_pdf_w = direct_pdf_w * pick_pmf;
+    let weight = power_heuristic(light_pdf_w, eval.pdf_fwd);
+    shadow.contribution = throughput * light.emission.xyz * eval.f_cos * (weight / light_pdf_w);
+    shadow.origin = offset_ray_origin(s.position, s.error, s.n_g, direction);
+    let corners_error = barycentric_error(light.c0.xyz, light.c1.xyz, light.c2.xyz, vec3(1.0));
+    let target_point = offset_ray_origin(
+        s.position + direction * distance,
+        corners_error,
+        light.normal.xyz,
+        -direction,
+    );
+    shadow.direction = target_point - shadow.origin;
+    shadow.valid = true;
+    return shadow;
+}
+
+@compute @workgroup_size(WORKGROUP)
+fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
+    let local = id.x + id.y * params.row_threads;
+    if local >= params.path_count {
+        return;
+    }
+    let path = params.first_path + local;
+    let pixel = path / params.samples;
+    let sample = path % params.samples;
+    var rng = path_sampler(params.seed, pixel, params.first_sample + sample, params.independent != 0u);
+    let jitter = uniform2(&rng);
+    let raster = vec2(f32(pixel % params.width) + jitter.x, f32(pixel / params.width) + jitter.y);
+    var origin = params.camera_position;
+    var direction = camera_direction(raster);
+    var throughput = vec3(1.0);
+    var radiance = vec3(0.0);
+    var segments = 1u;
+    // The pdf the current segment was sampled with by a non-delta BSDF lobe; −1 for the
+    // camera and delta lobes (`SegmentOrigin`).
+    var bsdf_pdf = -1.0;
+    // Russian roulette's factor that undoes refraction's radiance scaling.
+    var roulette_scale = 1.0;
+    var closest_rays = 0u;
+    var shadow_rays = 0u;
+    loop {
+        // An unbounded ray: MISSED, the largest float, is beyond every hit, and no missed
+        // triangle's MISSED is below it (the traversal backend clamps infinity alike).
+        let hit = trace(Ray(origin, 0.0, direction, MISSED), false);
+        closest_rays += 1u;
+        if segments > params.max_segments || hit.prim == NO_HIT {
+            break;
+        }
+        start_step(&rng, segments, PAIRS_PER_VERTEX);
+        let s = surface_at(hit.prim, hit.u, hit.v);
+        radiance += throughput * emission(s, direction, hit.t, bsdf_pdf);
+        if segments >= params.max_segments {
+            break;
+        }
+        let b = bsdf_new(s.material, s.n_g, s.n_s);
+        let out = outgoing(b, -direction);
+        if !out.valid {
+            break;
+        }
+        var shadow = Shadow(false, vec3(0.0), vec3(0.0), vec3(0.0));
+        if has_non_delta(materials[s.material]) {
+            shadow = next_event(&rng, s, b, out, throughput);
+        }
+        // The continuation (`Walk::scatter`).
+        let u_lobe = uniform1(&rng);
+        let u_dir = uniform2(&rng);
+        let sample = bsdf_sample(b, out, u_lobe, u_dir);
+        var alive = sample.valid;
+        if alive {
+            bsdf_pdf = select(sample.pdf_fwd, -1.0, sample.kind == KIND_SPECULAR);
+            roulette_scale *= sample.eta * sample.eta;
+            throughput = throughput * (sample.f_cos / sample.pdf_fwd);
+            // Russian roulette (`Roulette::survives`).
+            if segments >= ROULETTE_AFTER_SEGMENTS {
+                let cap = select(CAPPED_CONTINUATION, 1.0, segments < CAPPED_AFTER_SEGMENTS);
+                let continuation = min(max_element(throughput) * roulette_scale, cap);
+                if continuation < 1.0 {
+                    if uniform1(&rng) >= continuation {
+                        alive = false;
+                    } else {
+                        throughput = throughput / continuation;
+                    }
+                }
+            }
+        }
+        if shadow.valid {
+            shadow_rays += 1u;
+            let blocker = trace(Ray(shadow.origin, 0.0, shadow.direction, 1.0 - GAMMA_16), true);
+            if blocker.prim == NO_HIT {
+                radiance += shadow.contribution;
+            }
+        }
+        if !alive {
+            break;
+        }
+        origin = offset_ray_origin(s.position, s.error, s.n_g, sample.wi);
+        direction = sample.wi;
+        segments += 1u;
+    }
+    radiance_out[local] = vec4(radiance, 0.0);
+    atomicAdd(&ray_counts[0], closest_rays);
+    atomicAdd(&ray_counts[1], shadow_rays);
+}

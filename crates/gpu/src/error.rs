@@ -1,0 +1,20 @@
+//! Why a GPU render cannot start.
+
+use vcm::RenderError;
+use vcm_traversal_wgpu::GpuError;
+
+/// Why a [`GpuPathTracer`](crate::GpuPathTracer) cannot render a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuRenderError {
+    /// The scene needs shading the GPU kernels do not have yet.
+    #[error(
+        "the GPU path tracer cannot shade this scene yet: {0} (render it with the CPU shading)"
+    )]
+    Unsupported(String),
+    /// The settings are invalid (image size, memory).
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// The device refused a buffer (too large for its bindings).
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}

@@ -1,0 +1,27 @@
+//! Whole frames on the GPU: vcm-rs's path tracer as a WGSL compute kernel through wgpu.
+//!
+//! [`GpuPathTracer`] renders with the hierarchy of a [`GpuBvh`](vcm_traversal_wgpu::GpuBvh)
+//! and the scene's shading data uploaded once: each kernel invocation follows one camera path
+//! to its end (camera ray, closest hits, emission with MIS, one light sample with its shadow
+//! ray, BSDF sampling, Russian roulette) and writes its radiance; only those radiances come
+//! back, and the host adds them to the film in the CPU path tracer's order. The kernel draws
+//! the same numbers as the CPU for the same path ([`vcm_scene::sampling::SobolSampler`] in
+//! `shaders/sampler.wgsl`) and shades with the same operations, so both backends render the
+//! same image up to floating-point rounding per path, not only in expectation.
+//!
+//! The GPU shades a subset of the scene model so far ([`check_scene`]): plain Lambert,
+//! mirror (smooth Schlick) and smooth dielectric (thick and thin-walled) surfaces, lit by
+//! emissive triangles of constant radiance; no textures, normal maps, vertex colours,
+//! alpha masks, absorbing volumes, rough (GGX) or layered lobes, punctual, directional or
+//! environment lights yet. Scenes outside it are refused with the reason.
+
+#![warn(missing_docs)]
+
+mod error;
+mod path_tracer;
+mod scene_data;
+pub mod shader;
+
+pub use error::GpuRenderError;
+pub use path_tracer::GpuPathTracer;
+pub use scene_data::check_scene;

@@ -1,0 +1,394 @@
+//! [`GpuPathTracer`]: the path tracing kernel as an [`Integrator`].
+
+use std::sync::Arc;
+use std::sync::mpsc;
+use std::time::Instant;
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use vcm::{Film, FrameStats, Integrator, PtSettings, RenderError, Schedule, StopFlag};
+use vcm_scene::sampling::SampleSequence;
+use vcm_scene::{Decision, Scene};
+use vcm_traversal_wgpu::{GpuBvh, GpuDevice, dispatch_shape};
+
+use crate::error::GpuRenderError;
+use crate::scene_data::{SceneData, check_scene};
+use crate::shader::{PATH_TRACER_ENTRY, path_tracer_module};
+
+/// `Params` of `path_tracer.wgsl`.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct Params {
+    camera_position: [f32; 3],
+    width: u32,
+    camera_forward: [f32; 3],
+    height: u32,
+    camera_right: [f32; 3],
+    first_sample: u32,
+    camera_up: [f32; 3],
+    samples: u32,
+    half_extent: [f32; 2],
+    size: [f32; 2],
+    seed: [u32; 2],
+    first_path: u32,
+    path_count: u32,
+    row_threads: u32,
+    max_segments: u32,
+    independent: u32,
+    light_count: u32,
+}
+
+/// Bytes of one path's radiance in the kernel's output (`vec4<f32>`).
+const RADIANCE_BYTES: u64 = 16;
+/// Bytes of the ray counts (closest hit, shadow).
+const COUNT_BYTES: u64 = 8;
+/// Paths per dispatch on a hardware GPU: enough to fill one, few enough that a frame can
+/// stop between dispatches.
+const PATHS_PER_DISPATCH: u64 = 1 << 20;
+/// Paths per dispatch on a CPU implementation (lavapipe), which runs them on a few cores.
+const PATHS_PER_SOFTWARE_DISPATCH: u64 = 1 << 15;
+
+/// The path tracer with every path shaded on the GPU: the same image as the CPU's
+/// [`vcm::PathTracer`] with the same settings, up to floating-point rounding per path.
+/// Renders the scenes [`check_scene`] accepts.
+pub struct GpuPathTracer {
+    gpu: Arc<GpuDevice>,
+    scene: Arc<Scene>,
+    settings: PtSettings,
+    pipeline: wgpu::ComputePipeline,
+    /// Bind groups 1 (hierarchy) and 2 (shading data).
+    scene_groups: [wgpu::BindGroup; 2],
+    buffers: DispatchBuffers,
+    light_count: u32,
+    samples_per_frame: u32,
+    stop: StopFlag,
+}
+
+/// One dispatch's parameters, output and read-back copy.
+struct DispatchBuffers {
+    paths: u64,
+    params: wgpu::Buffer,
+    radiance: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    group: wgpu::BindGroup,
+}
+
+impl GpuPathTracer {
+    /// A path tracer for `scene` on the hierarchy `bvh` (built over
+    /// [`Scene::triangle_corners`]), with `settings` (`lambert_lanes` does not apply).
+    /// Compiles the kernel and uploads the scene's shading data.
+    pub fn new(
+        scene: Arc<Scene>,
+        bvh: &GpuBvh,
+        settings: PtSettings,
+    ) -> Result<GpuPathTracer, GpuRenderError> {
+        vcm::check_image_size(settings.width, settings.height)?;
+        check_scene(&scene).map_err(GpuRenderError::Unsupported)?;
+        let hierarchy = bvh
+            .hierarchy_buffers()
+            .ok_or_else(|| GpuRenderError::Unsupported("a scene without triangles".into()))?;
+        let gpu = Arc::clone(bvh.device());
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("path tracer"),
+            source: wgpu::ShaderSource::Wgsl(path_tracer_module(&bvh.traversal_functions()).into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(PATH_TRACER_ENTRY),
+            layout: None,
+            module: &module,
+            entry_point: Some(PATH_TRACER_ENTRY),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            cache: None,
+        });
+        let data = SceneData::new(&scene);
+        let shading = [
+            gpu.storage_buffer("shading triangles", bytemuck::cast_slice(&data.triangles))?,
+            gpu.storage_buffer("materials", bytemuck::cast_slice(&data.materials))?,
+            gpu.storage_buffer("area lights", bytemuck::cast_slice(&data.lights))?,
+            gpu.storage_buffer("light pick", bytemuck::cast_slice(&data.light_pick))?,
+        ];
+        let scene_groups = [
+            bind(device, &pipeline, 1, hierarchy.iter()),
+            bind(device, &pipeline, 2, shading.iter()),
+        ];
+        let paths = if gpu.is_software() {
+            PATHS_PER_SOFTWARE_DISPATCH
+        } else {
+            PATHS_PER_DISPATCH
+        }
+        .min(gpu.max_binding_bytes() / RADIANCE_BYTES);
+        let buffers = DispatchBuffers::new(device, &pipeline, paths);
+        Ok(GpuPathTracer {
+            gpu,
+            scene,
+            settings,
+            pipeline,
+            scene_groups,
+            buffers,
+            light_count: data.light_count,
+            samples_per_frame: 1,
+            stop: StopFlag::new(),
+        })
+    }
+
+    /// The settings this tracer renders with.
+    pub fn settings(&self) -> &PtSettings {
+        &self.settings
+    }
+
+    /// The kernel's parameters for paths `first_path …` (`count` of them) of the frame
+    /// starting at sample `first_sample`.
+    fn params(&self, first_sample: u32, (first_path, count): (u64, u64)) -> (Params, (u32, u32)) {
+        let PtSettings {
+            width,
+            height,
+            seed,
+            sequence,
+            max_depth,
+            ..
+        } = self.settings;
+        let camera = &self.scene.camera;
+        let projection = camera.projection(width, height);
+        let max_per_dimension = self
+            .gpu
+            .device
+            .limits()
+            .max_compute_workgroups_per_dimension;
+        let (x, y, row_threads) = dispatch_shape(count, max_per_dimension);
+        let params = Params {
+            camera_position: camera.position.to_array(),
+            width,
+            camera_forward: camera.forward.to_array(),
+            height,
+            camera_right: camera.right.to_array(),
+            first_sample,
+            camera_up: camera.up.to_array(),
+            samples: self.samples_per_frame,
+            half_extent: projection.half_extent().to_array(),
+            size: [width as f32, height as f32],
+            seed: [seed as u32, (seed >> 32) as u32],
+            first_path: first_path as u32,
+            path_count: count as u32,
+            row_threads,
+            max_segments: max_depth.unwrap_or(u32::MAX),
+            independent: u32::from(sequence == SampleSequence::Independent),
+            light_count: self.light_count,
+        };
+        (params, (x, y))
+    }
+
+    /// Renders paths `first_path …` (`count` of them) and returns their radiances and the
+    /// closest-hit and shadow rays they traced.
+    fn dispatch(
+        &self,
+        first_sample: u32,
+        (first_path, count): (u64, u64),
+    ) -> (Vec<Vec3>, [u64; 2]) {
+        let (params, (x, y)) = self.params(first_sample, (first_path, count));
+        let b = &self.buffers;
+        let queue = &self.gpu.queue;
+        queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&params));
+        let device = &self.gpu.device;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&b.counts, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("path tracer"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &b.group, &[]);
+            pass.set_bind_group(1, &self.scene_groups[0], &[]);
+            pass.set_bind_group(2, &self.scene_groups[1], &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        let radiance_bytes = count * RADIANCE_BYTES;
+        encoder.copy_buffer_to_buffer(&b.radiance, 0, &b.readback, 0, radiance_bytes);
+        encoder.copy_buffer_to_buffer(&b.counts, 0, &b.readback, radiance_bytes, COUNT_BYTES);
+        let submission = queue.submit([encoder.finish()]);
+        let (sender, mapped) = mpsc::channel();
+        let used = b.readback.slice(..radiance_bytes + COUNT_BYTES);
+        used.map_async(wgpu::MapMode::Read, move |result| {
+            // The receiver waits below.
+            let _ = sender.send(result);
+        });
+        let poll = wgpu::PollType::Wait {
+            submission_index: Some(submission),
+            timeout: None,
+        };
+        device.poll(poll).expect("the GPU device was lost");
+        mapped
+            .recv()
+            .expect("the mapping callback ran")
+            .expect("the read-back buffer maps");
+        let (radiance, counts) = {
+            let bytes = used
+                .get_mapped_range()
+                .expect("the read-back buffer is mapped");
+            let (radiance, counts) = bytes.split_at(radiance_bytes as usize);
+            let radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(radiance);
+            let counts: Vec<u32> = bytemuck::pod_collect_to_vec(counts);
+            (
+                radiance
+                    .iter()
+                    .map(|r| Vec3::new(r[0], r[1], r[2]))
+                    .collect(),
+                [u64::from(counts[0]), u64::from(counts[1])],
+            )
+        };
+        b.readback.unmap();
+        (radiance, counts)
+    }
+}
+
+impl DispatchBuffers {
+    /// Buffers for dispatches of up to `paths` paths.
+    fn new(device: &wgpu::Device, pipeline: &wgpu::ComputePipeline, paths: u64) -> Self {
+        use wgpu::BufferUsages as U;
+        let buffer = |label, size, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let radiance_bytes = paths * RADIANCE_BYTES;
+        let params = buffer(
+            "path tracer parameters",
+            size_of::<Params>() as u64,
+            U::UNIFORM | U::COPY_DST,
+        );
+        let radiance = buffer("path radiance", radiance_bytes, U::STORAGE | U::COPY_SRC);
+        let counts = buffer(
+            "ray counts",
+            COUNT_BYTES,
+            U::STORAGE | U::COPY_SRC | U::COPY_DST,
+        );
+        let readback = buffer(
+            "path radiance read-back",
+            radiance_bytes + COUNT_BYTES,
+            U::MAP_READ | U::COPY_DST,
+        );
+        let group = bind(
+            device,
+            pipeline,
+            0,
+            [&params, &radiance, &counts].into_iter(),
+        );
+        DispatchBuffers {
+            paths,
+            params,
+            radiance,
+            counts,
+            readback,
+            group,
+        }
+    }
+}
+
+/// Binds `buffers` to bindings 0, 1, … of bind group `group` of `pipeline`.
+fn bind<'a>(
+    device: &wgpu::Device,
+    pipeline: &wgpu::ComputePipeline,
+    group: u32,
+    buffers: impl Iterator<Item = &'a wgpu::Buffer>,
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = (0u32..)
+        .zip(buffers)
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("path tracer"),
+        layout: &pipeline.get_bind_group_layout(group),
+        entries: &entries,
+    })
+}
+
+impl Integrator for GpuPathTracer {
+    /// Renders samples `first_sample …` (`samples_per_frame` per pixel) on the GPU, in
+    /// dispatches of consecutive paths, and adds them to `film` in pixel and sample order.
+    fn render_frame(&mut self, film: &mut Film, first_sample: u32) -> FrameStats {
+        let PtSettings { width, height, .. } = self.settings;
+        assert_eq!(
+            (film.width(), film.height()),
+            (width, height),
+            "film size differs from the settings"
+        );
+        let start = Instant::now();
+        let samples = u64::from(self.samples_per_frame);
+        let paths = u64::from(width) * u64::from(height) * samples;
+        let mut radiance = Vec::with_capacity(paths as usize);
+        let mut rays = [0u64; 2];
+        for first in (0..paths).step_by(self.buffers.paths as usize) {
+            if self.stop.is_raised() {
+                return FrameStats::INTERRUPTED;
+            }
+            let count = self.buffers.paths.min(paths - first);
+            let (part, counts) = self.dispatch(first_sample, (first, count));
+            radiance.extend(part);
+            rays[0] += counts[0];
+            rays[1] += counts[1];
+        }
+        for (path, rgb) in (0u64..).zip(radiance) {
+            film.add((path / samples) as usize, rgb);
+        }
+        let camera_rays = paths;
+        FrameStats {
+            camera_rays,
+            continuation_rays: rays[0] - camera_rays,
+            shadow_rays: rays[1],
+            shading_time: start.elapsed(),
+            ..FrameStats::default()
+        }
+    }
+
+    fn image_size(&self) -> (u32, u32) {
+        (self.settings.width, self.settings.height)
+    }
+
+    /// Takes the samples per pixel per frame; the scheduler, a CPU matter, does not apply.
+    fn set_schedule(&mut self, schedule: Schedule) -> Result<(), RenderError> {
+        let schedule = schedule.validated()?;
+        let paths = u64::from(self.settings.width)
+            * u64::from(self.settings.height)
+            * u64::from(schedule.samples_per_frame);
+        if paths > u64::from(u32::MAX) {
+            return Err(RenderError::InvalidSetting(format!(
+                "{} samples per pixel per frame make {paths} paths, more than the GPU path \
+                 tracer numbers in one frame (2³² − 1)",
+                schedule.samples_per_frame
+            )));
+        }
+        self.samples_per_frame = schedule.samples_per_frame;
+        Ok(())
+    }
+
+    fn set_stop(&mut self, stop: StopFlag) {
+        self.stop = stop;
+    }
+
+    fn samples_per_frame(&self) -> u32 {
+        self.samples_per_frame
+    }
+
+    fn decisions(&self) -> Vec<Decision> {
+        let reason = "path tracing neither connects nor merges";
+        vec![
+            Decision::runs(
+                "shading on the GPU",
+                format!(
+                    "one WGSL kernel follows each path to its end on {}; only radiances come back",
+                    self.gpu.describe()
+                ),
+            ),
+            Decision::left_out("light paths", reason),
+            Decision::left_out("merging and hash grid", reason),
+        ]
+    }
+}

@@ -1,0 +1,78 @@
+//! Composing the path tracing kernel from the WGSL sources in this crate's `shaders/` and
+//! the traversal functions of vcm-traversal-wgpu (WGSL has no includes).
+
+use vcm::ray_offset::gamma;
+
+/// The CPU's numbers: keyed hashes and Owen-scrambled Sobol pairs.
+pub const SAMPLER_WGSL: &str = include_str!("../shaders/sampler.wgsl");
+/// The surface scattering model (the lobes the GPU shades so far).
+pub const BSDF_WGSL: &str = include_str!("../shaders/bsdf.wgsl");
+/// The path tracing kernel and the scene's shading data.
+pub const PATH_TRACER_WGSL: &str = include_str!("../shaders/path_tracer.wgsl");
+
+/// The kernel's entry point.
+pub const PATH_TRACER_ENTRY: &str = "render_paths";
+/// Invocations per workgroup (`WORKGROUP` in `path_tracer.wgsl`).
+pub const WORKGROUP_SIZE: u32 = 64;
+
+/// The path tracing module over `traversal` (the traversal functions of the scene's
+/// hierarchy, [`vcm_traversal_wgpu::GpuBvh::traversal_functions`]).
+pub fn path_tracer_module(traversal: &str) -> String {
+    // The CPU's rounding-error factors, written so that they parse to the same f32.
+    let constants = format!(
+        "const GAMMA_7: f32 = {:?}f;\nconst GAMMA_16: f32 = {:?}f;\n",
+        gamma(7),
+        gamma(16)
+    );
+    format!("{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{PATH_TRACER_WGSL}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vcm_traversal_wgpu::NodeLayout;
+    use vcm_traversal_wgpu::shader::traversal_functions;
+
+    /// Parses and validates the module with naga and writes SPIR-V, as wgpu does on Vulkan.
+    fn validate(source: &str) {
+        let module = naga::front::wgsl::parse_str(source)
+            .unwrap_or_else(|e| panic!("WGSL parse error:\n{}", e.emit_to_string(source)));
+        let info = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("WGSL validation error:\n{}", e.emit_to_string(source)));
+        let stage = Some((naga::ShaderStage::Compute, PATH_TRACER_ENTRY));
+        let constants = naga::back::PipelineConstants::default();
+        let (module, info) =
+            naga::back::pipeline_constants::process_overrides(&module, &info, stage, &constants)
+                .unwrap_or_else(|e| panic!("overrides: {e}"));
+        naga::back::spv::write_vec(&module, &info, &Default::default(), None)
+            .unwrap_or_else(|e| panic!("SPIR-V: {e}"));
+    }
+
+    #[test]
+    fn the_kernel_validates_over_both_node_layouts() {
+        for layout in [NodeLayout::Binary, NodeLayout::Wide] {
+            validate(&path_tracer_module(&traversal_functions(layout, 32, false)));
+        }
+    }
+
+    #[test]
+    fn workgroup_size_matches_the_shader() {
+        let line = format!("const WORKGROUP: u32 = {WORKGROUP_SIZE}u;");
+        assert!(PATH_TRACER_WGSL.contains(&line));
+    }
+
+    #[test]
+    fn rounding_factors_parse_back_to_the_same_floats() {
+        for n in [7, 16] {
+            let written = format!("{:?}", gamma(n));
+            assert_eq!(
+                written.parse::<f32>().unwrap().to_bits(),
+                gamma(n).to_bits()
+            );
+        }
+    }
+}

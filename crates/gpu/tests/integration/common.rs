@@ -1,0 +1,76 @@
+//! Shared helpers: the adapter (or a clear skip), scenes and both path tracers' images.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::Vec3;
+use vcm::{Film, Integrator, PathTracer, PtSettings, Schedule};
+use vcm_gpu::GpuPathTracer;
+use vcm_scene::Scene;
+use vcm_traversal::{CpuBvh, CpuBvhOptions};
+use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
+
+/// Set to `1` (as `.ci/run` does) to make a missing adapter a test failure instead of a skip.
+pub const REQUIRE_GPU: &str = "VCM_REQUIRE_GPU";
+
+/// The preferred adapter, or `None` (with a note on stderr) when there is none and
+/// [`REQUIRE_GPU`] is not set.
+pub fn gpu() -> Option<Arc<GpuDevice>> {
+    match GpuDevice::open() {
+        Ok(gpu) => Some(Arc::new(gpu)),
+        Err(error) if std::env::var(REQUIRE_GPU).is_ok_and(|v| v == "1") => {
+            panic!("{REQUIRE_GPU}=1 but no GPU adapter: {error}")
+        }
+        Err(error) => {
+            eprintln!("skipping GPU test ({error}); set {REQUIRE_GPU}=1 to make this an error");
+            None
+        }
+    }
+}
+
+/// A scene of the repository's `scenes/`.
+pub fn scene(name: &str) -> Arc<Scene> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenes/{name}.gltf"));
+    Arc::new(Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
+}
+
+/// The mean radiance per pixel after `frames` frames of `samples` samples per pixel each.
+pub fn render(integrator: &mut dyn Integrator, frames: u32, samples: u32) -> Vec<Vec3> {
+    let (width, height) = integrator.image_size();
+    integrator
+        .set_schedule(Schedule {
+            samples_per_frame: samples,
+            ..Schedule::ONE_BATCH
+        })
+        .unwrap();
+    let mut film = Film::new(width, height);
+    for frame in 0..frames {
+        integrator.render_frame(&mut film, frame * samples);
+    }
+    film.mean()
+}
+
+/// The CPU path tracer's image of `scene`.
+pub fn cpu_image(scene: &Arc<Scene>, settings: PtSettings, frames: u32, samples: u32) -> Vec<Vec3> {
+    let traversal = CpuBvh::new(&scene.triangle_corners(), CpuBvhOptions::default()).unwrap();
+    let mut tracer = PathTracer::new(Arc::clone(scene), Arc::new(traversal), settings).unwrap();
+    render(&mut tracer, frames, samples)
+}
+
+/// The GPU path tracer's image of `scene`.
+pub fn gpu_image(
+    gpu: &Arc<GpuDevice>,
+    scene: &Arc<Scene>,
+    settings: PtSettings,
+    frames: u32,
+    samples: u32,
+) -> Vec<Vec3> {
+    let bvh = GpuBvh::new(
+        Arc::clone(gpu),
+        &scene.triangle_corners(),
+        GpuBvhOptions::default(),
+    )
+    .unwrap();
+    let mut tracer = GpuPathTracer::new(Arc::clone(scene), &bvh, settings).unwrap();
+    render(&mut tracer, frames, samples)
+}
