@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use vcm_scene::{Decision, Scene};
 use vcm_traversal::{BuildError, Traversal};
-use vcm_traversal_wgpu::GpuError;
+use vcm_traversal_wgpu::{GpuBvh, GpuError};
 
 /// Ray traversal backends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
@@ -13,6 +13,17 @@ pub enum Backend {
     /// obvhs 8-wide BVH on rayon threads.
     Cpu,
     /// WGSL compute shaders through wgpu: a hardware GPU, else Mesa lavapipe.
+    Gpu,
+}
+
+/// Where a frame's paths are shaded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Shading {
+    /// On rayon threads; rays go to the traversal backend in batches.
+    #[default]
+    Cpu,
+    /// Whole paths in one WGSL kernel on the GPU backend's device (path tracing only, and
+    /// the scenes [`vcm_gpu::check_scene`] accepts); only the image comes back.
     Gpu,
 }
 
@@ -33,6 +44,9 @@ pub struct BuiltTraversal {
     pub traversal: Arc<dyn Traversal>,
     /// e.g. `cpu (2 threads)`, or `gpu: ` and the adapter's name and driver.
     pub description: String,
+    /// The GPU backend's hierarchy, for kernels that trace rays of their own (GPU shading);
+    /// `None` for the CPU backend.
+    pub gpu: Option<Arc<GpuBvh>>,
 }
 
 impl Backend {
@@ -73,13 +87,15 @@ impl Backend {
             Backend::Cpu => BuiltTraversal {
                 traversal: Arc::new(crate::cpu_traversal(scene)?),
                 description: format!("cpu ({} threads)", rayon::current_num_threads()),
+                gpu: None,
             },
             Backend::Gpu => {
-                let bvh = crate::gpu_traversal(scene)?;
+                let bvh = Arc::new(crate::gpu_traversal(scene)?);
                 let description = format!("gpu: {}", bvh.device().describe());
                 BuiltTraversal {
-                    traversal: Arc::new(bvh),
+                    traversal: Arc::clone(&bvh) as Arc<dyn Traversal>,
                     description,
+                    gpu: Some(bvh),
                 }
             }
         })

@@ -8,9 +8,11 @@ pub mod choice;
 
 pub use vcm::{Algorithm, MergeRadius};
 use vcm::{DEFAULT_ALPHA, Integrator, PathTracer, PtSettings, RenderError, Vcm, VcmSettings};
+use vcm_gpu::{GpuPathTracer, GpuRenderError};
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Scene, ShadingPlan};
 use vcm_traversal::Traversal;
+use vcm_traversal_wgpu::GpuBvh;
 
 /// What `--algo` asks for: one algorithm, or `auto`, the one [`choice::choose`] finds the
 /// most efficient for the scene.
@@ -165,13 +167,7 @@ pub fn build(
     };
     Ok(match algorithm {
         Algorithm::Pt => {
-            let settings = PtSettings {
-                seed: options.seed,
-                sequence: options.sampler.sequence(),
-                max_depth: options.max_depth,
-                lambert_lanes: !options.no_prune,
-                ..PtSettings::new(width, height)
-            };
+            let settings = pt_settings(options, (width, height));
             Box::new(PathTracer::new(scene, traversal, settings)?)
         }
         bidirectional => {
@@ -189,6 +185,34 @@ pub fn build(
             Box::new(Vcm::new(scene, traversal, settings)?)
         }
     })
+}
+
+/// The path tracer's settings for `options` at `width` × `height`.
+fn pt_settings(options: &IntegratorOptions, (width, height): (u32, u32)) -> PtSettings {
+    PtSettings {
+        seed: options.seed,
+        sequence: options.sampler.sequence(),
+        max_depth: options.max_depth,
+        lambert_lanes: !options.no_prune,
+        ..PtSettings::new(width, height)
+    }
+}
+
+/// The path tracer with every path shaded on the GPU ([`GpuPathTracer`]), on the GPU
+/// backend's hierarchy `bvh`, for a `width` × `height` image: the same image as
+/// [`build`]'s path tracer up to rounding. Fails for scenes the GPU cannot shade yet.
+pub fn build_on_gpu(
+    scene: &Arc<Scene>,
+    bvh: &GpuBvh,
+    size: (u32, u32),
+    options: &IntegratorOptions,
+) -> Result<Box<dyn Integrator>, GpuRenderError> {
+    let settings = pt_settings(options, size);
+    Ok(Box::new(GpuPathTracer::new(
+        Arc::clone(scene),
+        bvh,
+        settings,
+    )?))
 }
 
 /// The image size: `width`, and `height` or else the one the camera's aspect ratio gives

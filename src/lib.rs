@@ -70,11 +70,12 @@ pub mod render_loop;
 pub mod state;
 
 pub use vcm;
+pub use vcm_gpu as gpu;
 pub use vcm_scene as scene;
 pub use vcm_traversal as traversal;
 pub use vcm_traversal_wgpu as traversal_wgpu;
 
-pub use backend::{Backend, BackendError, BuiltTraversal, Traversals};
+pub use backend::{Backend, BackendError, BuiltTraversal, Shading, Traversals};
 
 use vcm_scene::texture::{Filter, UvTransform, WrapMode};
 use vcm_scene::{Scene, Texture};

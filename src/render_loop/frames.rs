@@ -13,8 +13,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use vcm::{Film, FrameStats, Integrator, RenderError};
+use vcm_gpu::GpuRenderError;
 use vcm_scene::Scene;
 use vcm_traversal::Traversal;
+use vcm_traversal_wgpu::GpuBvh;
 
 use super::pacer::{Pacer, Remaining};
 use super::schedule::ScheduleOptions;
@@ -83,6 +85,22 @@ impl Frames {
         samples_left: Option<u32>,
     ) -> Result<Box<dyn Integrator>, RenderError> {
         let mut integrator = integrators::build(algorithm, scene, traversal, size, options)?;
+        let schedule = self.options.first_schedule_on(self.backend, samples_left);
+        integrator.set_schedule(schedule)?;
+        Ok(integrator)
+    }
+
+    /// [`integrator`](Self::integrator) for the path tracer with every path shaded on the
+    /// GPU, on the GPU backend's hierarchy `bvh` ([`integrators::build_on_gpu`]).
+    pub fn gpu_integrator(
+        &self,
+        scene: &Arc<Scene>,
+        bvh: &GpuBvh,
+        size: (u32, u32),
+        options: &IntegratorOptions,
+        samples_left: Option<u32>,
+    ) -> Result<Box<dyn Integrator>, GpuRenderError> {
+        let mut integrator = integrators::build_on_gpu(scene, bvh, size, options)?;
         let schedule = self.options.first_schedule_on(self.backend, samples_left);
         integrator.set_schedule(schedule)?;
         Ok(integrator)

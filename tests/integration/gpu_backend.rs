@@ -241,3 +241,96 @@ fn assert_masks_agree(scene: &Arc<vcm_rs::scene::Scene>) -> Vec<u32> {
     );
     cpu_prims
 }
+
+/// `--shading gpu`: the GPU path tracer renders the CPU path tracer's image up to rounding
+/// (`--algo auto` becomes pt, with no pilots), `--explain` says where paths are shaded, and
+/// what it cannot do yet fails with the reason before anything is written.
+#[test]
+fn gpu_shading_renders_the_cpu_path_tracers_image() {
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let (cpu, gpu) = (path("cpu.exr"), path("gpu.exr"));
+    let common = [
+        "render",
+        "scenes/cornell-water.gltf",
+        "--spp",
+        "4",
+        "--width",
+        "48",
+    ];
+    let run = |extra: &[&str], out: &str| {
+        let args: Vec<&str> = common
+            .iter()
+            .chain(extra)
+            .copied()
+            .chain(["-o", out])
+            .collect();
+        let output = vcm(&args, &[]);
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert!(output.status.success(), "{stderr}");
+        (String::from_utf8_lossy(&output.stdout).into_owned(), stderr)
+    };
+    run(&["--algo", "pt"], &cpu);
+    let (stdout, stderr) = run(&["--backend", "gpu", "--shading", "gpu", "--explain"], &gpu);
+    assert!(stdout.contains("shading on the GPU: runs"), "{stdout}");
+    assert!(!stderr.contains("pilot"), "auto ran pilots: {stderr}");
+    let read = |path: &str| RgbImage::read_exr(std::path::Path::new(path)).unwrap();
+    let (a, b) = (read(&cpu), read(&gpu));
+    let close = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .filter(|(p, q)| (**p - **q).abs().max_element() <= 1e-4 * p.max_element().max(1e-2))
+        .count();
+    assert!(
+        close * 100 >= 99 * a.pixels.len(),
+        "{close} of {} pixels agree",
+        a.pixels.len()
+    );
+
+    let refused = [
+        (&["--shading", "gpu"][..], "give --backend gpu too"),
+        (
+            &["--backend", "gpu", "--shading", "gpu", "--algo", "bpt"],
+            "path tracing only",
+        ),
+    ];
+    for (extra, message) in refused {
+        let out = path("refused.exr");
+        let args: Vec<&str> = common
+            .iter()
+            .chain(extra)
+            .copied()
+            .chain(["-o", &out])
+            .collect();
+        let output = vcm(&args, &[]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(
+            !output.status.success() && stderr.contains(message),
+            "{stderr}"
+        );
+        assert!(!dir.path().join("refused.exr").exists());
+    }
+    let out = path("large.exr");
+    let args = [
+        "render",
+        "scenes/large.gltf",
+        "--backend",
+        "gpu",
+        "--shading",
+        "gpu",
+        "-o",
+        &out,
+    ];
+    let output = vcm(&args, &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("cannot shade this scene yet: rough (GGX)"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("large.exr").exists());
+}

@@ -18,7 +18,7 @@ use vcm::{Film, Integrator, RenderError, StopFlag};
 use vcm_rs::scene::{LoadOptions, Scene, ShadingPlan};
 use vcm_rs::state::{RenderSettings, RenderState, SETTINGS, parse_range, scene_hash};
 use vcm_rs::traversal::Traversal;
-use vcm_rs::{Backend, BuiltTraversal};
+use vcm_rs::{Backend, BuiltTraversal, Shading};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic, Watch};
 use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions, choice, image_size};
@@ -166,6 +166,12 @@ pub struct RenderArgs {
     resume: Option<PathBuf>,
     #[command(flatten)]
     setup: RenderSetup,
+    /// Where paths are shaded: `gpu` follows each whole path in one WGSL kernel on the GPU
+    /// backend's device and brings back only radiances (needs --backend gpu; path tracing
+    /// only, and scenes without textures, rough lobes or punctual lights so far; see
+    /// docs/gpu.md).
+    #[arg(long, value_enum, default_value_t = Shading::Cpu)]
+    shading: Shading,
     /// Output EXR (linear radiance); a tone-mapped PNG is written beside it (default out.exr,
     /// or with --resume the resumed render's).
     #[arg(short, long)]
@@ -325,6 +331,9 @@ impl RenderArgs {
 
 /// Renders as the arguments say; `matches` tells which options the command line gave.
 pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
+    if args.shading == Shading::Gpu && args.setup.backend != Backend::Gpu {
+        bail!("--shading gpu shades on the GPU backend's device: give --backend gpu too");
+    }
     set_threads(args.setup.threads)?;
     let mut plan = args.plan(matches)?;
     check_outputs(&args.outputs(&plan), &args.inputs(&plan))?;
@@ -339,7 +348,8 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
         Some(path) => Some(read_reference(path, (width, height))?),
         None => None,
     };
-    let traversal = build_traversal(args.setup.backend, &scene)?;
+    let built = build_backend(args.setup.backend, &scene)?;
+    let traversal = Arc::clone(&built.traversal);
     let started = Instant::now();
     let stop = stop_flag()?;
     // A resumed render keeps the algorithm its state records.
@@ -349,23 +359,39 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     };
     let options = &plan.settings.options;
     let how = (&stop, args.explain);
-    plan.settings.algorithm = settle_algorithm(
-        algorithm,
-        (&scene, &traversal),
-        (width, height),
-        options,
-        how,
-    )?;
+    plan.settings.algorithm = match args.shading {
+        Shading::Cpu => settle_algorithm(
+            algorithm,
+            (&scene, &traversal),
+            (width, height),
+            options,
+            how,
+        )?,
+        Shading::Gpu => gpu_shaded_algorithm(algorithm)?,
+    };
     let mut state = prepare_state(&mut plan, &scene, args)?;
     let samples_left = plan.budget.remaining(0, Duration::ZERO).samples;
-    let mut integrator = args.setup.integrator(
-        plan.settings.algorithm,
-        &scene,
-        traversal,
-        (width, height),
-        &plan.settings.options,
-        samples_left,
-    )?;
+    let mut integrator = match &built.gpu {
+        Some(bvh) if args.shading == Shading::Gpu => args
+            .setup
+            .frames()
+            .gpu_integrator(
+                &scene,
+                bvh,
+                (width, height),
+                &plan.settings.options,
+                samples_left,
+            )
+            .context("shading on the GPU")?,
+        _ => args.setup.integrator(
+            plan.settings.algorithm,
+            &scene,
+            traversal,
+            (width, height),
+            &plan.settings.options,
+            samples_left,
+        )?,
+    };
     if args.explain {
         let shading = plan.settings.options.shading_plan(&scene);
         print_explanation(&scene, shading, args.setup.backend, integrator.as_ref());
@@ -583,11 +609,28 @@ fn print_explanation(
 
 /// Builds `backend` for `scene` and says on stderr what it runs on.
 pub fn build_traversal(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<Arc<dyn Traversal>> {
+    Ok(build_backend(backend, scene)?.traversal)
+}
+
+/// [`build_traversal`], keeping what the GPU backend offers besides traversal.
+fn build_backend(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<BuiltTraversal> {
     let built = backend
         .build(scene)
         .context("building the ray traversal backend")?;
     tell_traversal(&built);
-    Ok(built.traversal)
+    Ok(built)
+}
+
+/// The algorithm `--shading gpu` renders for `--algo`: path tracing, the only one its kernels
+/// have so far.
+fn gpu_shaded_algorithm(algorithm: AlgorithmOption) -> anyhow::Result<Algorithm> {
+    match algorithm {
+        AlgorithmOption::Auto | AlgorithmOption::Fixed(Algorithm::Pt) => Ok(Algorithm::Pt),
+        AlgorithmOption::Fixed(other) => bail!(
+            "--shading gpu renders path tracing only so far (--algo pt or auto), not {}",
+            other.name()
+        ),
+    }
 }
 
 /// Says what a traversal backend just built runs on.
