@@ -1,16 +1,21 @@
-// The surface scattering model of vcm-scene (bsdf/), radiance transport with forward pdfs,
-// for the lobes the GPU shades so far: plain Lambert (no specular layer), Schlick mirror
-// reflection, and smooth dielectric interfaces, thick and thin-walled. Each function is the
-// CPU's of the same name, in the same order of operations; the host refuses scenes with
-// other lobes (rough GGX, layered diffuse) before any of this runs.
+// The surface scattering model of vcm-scene (bsdf/), radiance transport with forward pdfs:
+// the glTF metallic-roughness mixture of a Schlick reflection lobe (mirror or GGX), a
+// diffuse base (plain Lambert or energy-compensated under a specular layer) and a dielectric
+// interface (thick or thin-walled, smooth or GGX). Each function is the CPU's of the same
+// name, in the same order of operations, so that a path takes the CPU's decisions.
 
 const GRAZING_COS: f32 = 1e-6;
+const PI: f32 = 3.1415927;
 const FRAC_1_PI: f32 = 0.31830987;
 const FRAC_PI_4: f32 = 0.7853982;
 // 1 − ε/2: the largest f32 below 1.
 const ONE_MINUS_EPSILON: f32 = 0.99999994;
 // The specular lobe's smallest selection weight, relative to its largest reflectance.
 const MIN_SELECTION: f32 = 1e-3;
+// A Schlick albedo without a table row (a mirror's).
+const NO_ROW: u32 = 0xffffffffu;
+// The albedo tables' columns (over √μ) and rows (over the roughness); the host defines
+// ALBEDO_COLUMNS and ALBEDO_ROWS.
 
 // `Material::flags` bits: which lobes exist, and how the material is seen.
 const HAS_SPECULAR: u32 = 1u;
@@ -19,12 +24,15 @@ const HAS_DIELECTRIC: u32 = 4u;
 const HAS_THIN: u32 = 8u;
 const DOUBLE_SIDED: u32 = 16u;
 const CONSTANT_SELECTION: u32 = 32u;
+const HAS_LAYER: u32 = 64u;
 
 // `LobeKind`.
 const KIND_DIFFUSE: u32 = 0u;
+const KIND_GLOSSY: u32 = 1u;
 const KIND_SPECULAR: u32 = 2u;
 
-// One material's lobes, `FlatLobes` with the material's sidedness (`GpuMaterial` on the host).
+// One material's lobes, `FlatLobes` with the material's sidedness (`GpuMaterial` on the
+// host). An α of 0 is a smooth (Dirac delta) lobe.
 struct Material {
     f0: vec3<f32>,
     ior: f32,
@@ -35,10 +43,19 @@ struct Material {
     diffuse_scale: vec3<f32>,
     thin_weight: f32,
     dielectric_tint: vec3<f32>,
-    unused0: u32,
+    specular_alpha: f32,
     thin_tint: vec3<f32>,
-    unused1: u32,
+    dielectric_alpha: f32,
+    // The diffuse base's specular layer (its albedo compensates the base's energy).
+    layer_f0: vec3<f32>,
+    thin_alpha: f32,
+    layer_f90: vec3<f32>,
+    specular_row_t: f32,
     selection: vec4<f32>,
+    specular_row: u32,
+    layer_row: u32,
+    layer_row_t: f32,
+    unused: u32,
 }
 
 fn is_finite(x: f32) -> bool {
@@ -57,6 +74,19 @@ fn dot3(a: vec3<f32>, b: vec3<f32>) -> f32 {
 // glam's `normalize`: times the reciprocal of the length.
 fn normalized(v: vec3<f32>) -> vec3<f32> {
     return v * (1.0 / sqrt(dot3(v, v)));
+}
+
+// glam's `try_normalize`: a zero vector where it gives `None`.
+fn try_normalized(v: vec3<f32>) -> vec3<f32> {
+    let rcp = 1.0 / sqrt(dot3(v, v));
+    if is_finite(rcp) && rcp > 0.0 {
+        return v * rcp;
+    }
+    return vec3(0.0);
+}
+
+fn is_zero(v: vec3<f32>) -> bool {
+    return all(v == vec3(0.0));
 }
 
 fn max_element(v: vec3<f32>) -> f32 {
@@ -150,16 +180,105 @@ fn thin_sheet_reflectance(r: f32) -> f32 {
     return r + t * t * r / (1.0 - r * r);
 }
 
-// The refracted direction through the normal +z, or a zero vector under total internal
+fn reflect(wo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    return 2.0 * dot3(wo, n) * n - wo;
+}
+
+// The refracted direction through the normal n, or a zero vector under total internal
 // reflection.
-fn refract_z(wo: vec3<f32>, eta: f32) -> vec3<f32> {
-    let cos_i = wo.z;
+fn refract(wo: vec3<f32>, n: vec3<f32>, eta: f32) -> vec3<f32> {
+    let cos_i = dot3(wo, n);
     let sin2_t = max(1.0 - cos_i * cos_i, 0.0) / (eta * eta);
     if sin2_t >= 1.0 {
         return vec3(0.0);
     }
     let cos_t = sqrt(1.0 - sin2_t);
-    return -wo / eta + (cos_i / eta - cos_t) * vec3(0.0, 0.0, 1.0);
+    return -wo / eta + (cos_i / eta - cos_t) * n;
+}
+
+fn mirror_of(wo: vec3<f32>) -> vec3<f32> {
+    return vec3(-wo.x, -wo.y, wo.z);
+}
+
+// The isotropic GGX distribution of width α (microfacet.rs).
+fn ggx_d(alpha: f32, m: vec3<f32>) -> f32 {
+    if m.z <= 0.0 {
+        return 0.0;
+    }
+    let a2 = alpha * alpha;
+    let t = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
+    return 1.0 / (PI * a2 * t * t);
+}
+
+fn ggx_lambda(alpha: f32, w: vec3<f32>) -> f32 {
+    let z2 = w.z * w.z;
+    if z2 == 0.0 {
+        return bitcast<f32>(0x7f800000u);
+    }
+    let tan2 = (w.x * w.x + w.y * w.y) / z2;
+    return 0.5 * (sqrt(1.0 + alpha * alpha * tan2) - 1.0);
+}
+
+fn ggx_g1(alpha: f32, w: vec3<f32>) -> f32 {
+    return 1.0 / (1.0 + ggx_lambda(alpha, w));
+}
+
+fn ggx_g2(alpha: f32, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    return 1.0 / (1.0 + ggx_lambda(alpha, wo) + ggx_lambda(alpha, wi));
+}
+
+fn ggx_visible_pdf(alpha: f32, wo: vec3<f32>, m: vec3<f32>) -> f32 {
+    return ggx_g1(alpha, wo) * max(dot3(wo, m), 0.0) * ggx_d(alpha, m) / wo.z;
+}
+
+// A visible normal (Dupuy & Benyoub 2023), or a zero vector where sampling fails.
+fn ggx_sample_visible(alpha: f32, wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let wo_std = normalized(vec3(wo.x * alpha, wo.y * alpha, wo.z));
+    let phi = 2.0 * PI * u.x;
+    let z = (1.0 - u.y) * (1.0 + wo_std.z) - wo_std.z;
+    let sin_theta = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
+    let c = vec3(sin_theta * cos(phi), sin_theta * sin(phi), z);
+    let h = c + wo_std;
+    let m = try_normalized(vec3(h.x * alpha, h.y * alpha, max(h.z, 0.0)));
+    return select(vec3(0.0), m, m.z > 0.0);
+}
+
+// The directional albedo of a Schlick GGX lobe, `SpecularAlbedo::directional`: bilinear in
+// the tables (A in the first half of `albedo_tables`, B in the second) at row `row` + `row_t`.
+fn albedo_directional(f0: vec3<f32>, f90: vec3<f32>, row: u32, row_t: f32, mu: f32) -> vec3<f32> {
+    if row == NO_ROW {
+        return schlick(f0, f90, mu);
+    }
+    let s = clamp(sqrt(max(mu, 0.0)), 0.0, 1.0) * f32(ALBEDO_COLUMNS - 1u);
+    let j = min(u32(s), ALBEDO_COLUMNS - 2u);
+    let tj = s - f32(j);
+    let b_start = ALBEDO_ROWS * ALBEDO_COLUMNS;
+    let i = row * ALBEDO_COLUMNS + j;
+    let next = i + ALBEDO_COLUMNS;
+    let a = lerp(
+        lerp(albedo_tables[i], albedo_tables[i + 1u], tj),
+        lerp(albedo_tables[next], albedo_tables[next + 1u], tj),
+        row_t,
+    );
+    let b = lerp(
+        lerp(albedo_tables[b_start + i], albedo_tables[b_start + i + 1u], tj),
+        lerp(albedo_tables[b_start + next], albedo_tables[b_start + next + 1u], tj),
+        row_t,
+    );
+    return f0 * a + f90 * b;
+}
+
+fn lerp(a: f32, b: f32, t: f32) -> f32 {
+    return a + (b - a) * t;
+}
+
+// 1 − E(μ) of the diffuse base's specular layer (1 without one).
+fn layer_transmission(m: Material, mu: f32) -> vec3<f32> {
+    if (m.flags & HAS_LAYER) == 0u {
+        return vec3(1.0);
+    }
+    let e = albedo_directional(m.layer_f0, m.layer_f90, m.layer_row, m.layer_row_t, mu);
+    return max(vec3(1.0) - e, vec3(0.0));
 }
 
 // A BSDF placed at a surface point (`Bsdf`).
@@ -174,7 +293,10 @@ fn transmits(m: Material) -> bool {
 }
 
 fn has_non_delta(m: Material) -> bool {
-    return (m.flags & HAS_DIFFUSE) != 0u;
+    let glossy = ((m.flags & HAS_SPECULAR) != 0u && m.specular_alpha > 0.0)
+        || ((m.flags & HAS_DIELECTRIC) != 0u && m.dielectric_alpha > 0.0)
+        || ((m.flags & HAS_THIN) != 0u && m.thin_alpha > 0.0);
+    return (m.flags & HAS_DIFFUSE) != 0u || glossy;
 }
 
 fn bsdf_new(material: u32, n_g: vec3<f32>, n_s_in: vec3<f32>) -> Bsdf {
@@ -210,11 +332,11 @@ fn world_on_side(b: Bsdf, back: bool, l: vec3<f32>) -> vec3<f32> {
 fn selection_at(m: Material, wo: vec3<f32>, eta: f32) -> vec4<f32> {
     var w = vec4(0.0);
     if (m.flags & HAS_SPECULAR) != 0u {
-        let albedo = mean3(schlick(m.f0, m.f90, wo.z));
-        w.x = max(max(albedo, MIN_SELECTION * max_element(max(m.f0, m.f90))), 0.0);
+        let e = albedo_directional(m.f0, m.f90, m.specular_row, m.specular_row_t, wo.z);
+        w.x = max(max(mean3(e), MIN_SELECTION * max_element(max(m.f0, m.f90))), 0.0);
     }
     if (m.flags & HAS_DIFFUSE) != 0u {
-        w.y = max(mean3(m.diffuse_albedo), 0.0);
+        w.y = max(mean3(m.diffuse_albedo * layer_transmission(m, wo.z)), 0.0);
     }
     if (m.flags & HAS_DIELECTRIC) != 0u {
         let r = fresnel_dielectric(wo.z, eta);
@@ -265,10 +387,116 @@ fn consistent(b: Bsdf, back: bool, wi: vec3<f32>, wi_local: vec3<f32>) -> f32 {
     return select(-1.0, abs(cos_gi), ok);
 }
 
-// f·|cos| and the forward pdf of the non-delta lobes (`BsdfEval`, `Pdfs::Forward`).
+// f·|cos| and the forward pdf (`BsdfEval`, `Pdfs::Forward`; of one lobe, its pdf).
 struct BsdfEval {
     f_cos: vec3<f32>,
     pdf_fwd: f32,
+}
+
+fn specular_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> BsdfEval {
+    let alpha = m.specular_alpha;
+    let mh = try_normalized(wo + wi);
+    if alpha == 0.0 || wi.z <= 0.0 || is_zero(mh) {
+        return BsdfEval(vec3(0.0), 0.0);
+    }
+    let d = ggx_d(alpha, mh);
+    let f_cos = schlick(m.f0, m.f90, dot3(wo, mh)) * (d * ggx_g2(alpha, wo, wi) / (4.0 * wo.z));
+    return BsdfEval(f_cos, ggx_visible_pdf(alpha, wo, mh) / (4.0 * dot3(wo, mh)));
+}
+
+fn diffuse_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> BsdfEval {
+    if wi.z <= 0.0 {
+        return BsdfEval(vec3(0.0), 0.0);
+    }
+    let f = m.diffuse_scale * layer_transmission(m, wo.z) * layer_transmission(m, wi.z);
+    return BsdfEval(f * wi.z, cosine_hemisphere_pdf(wi.z));
+}
+
+// The half vector of a refraction from wo into wi, or a zero vector (`transmission_half_vector`).
+fn transmission_half_vector(wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec3<f32> {
+    var mh = try_normalized(wo + eta * wi);
+    if is_zero(mh) {
+        return mh;
+    }
+    if mh.z < 0.0 {
+        mh = -mh;
+    }
+    return select(vec3(0.0), mh, dot3(wo, mh) > 0.0 && dot3(wi, mh) < 0.0);
+}
+
+fn dielectric_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> BsdfEval {
+    let none = BsdfEval(vec3(0.0), 0.0);
+    let alpha = m.dielectric_alpha;
+    if alpha == 0.0 {
+        return none;
+    }
+    if wi.z > 0.0 {
+        let mh = try_normalized(wo + wi);
+        if is_zero(mh) {
+            return none;
+        }
+        let f = fresnel_dielectric(dot3(wo, mh), eta);
+        let f_cos = m.dielectric_weight * f * ggx_d(alpha, mh) * ggx_g2(alpha, wo, wi) / (4.0 * wo.z);
+        return BsdfEval(vec3(f_cos), ggx_visible_pdf(alpha, wo, mh) * f / (4.0 * dot3(wo, mh)));
+    }
+    let mh = transmission_half_vector(wo, wi, eta);
+    if is_zero(mh) {
+        return none;
+    }
+    let wo_m = dot3(wo, mh);
+    let wi_m = dot3(wi, mh);
+    let root = wi_m + wo_m / eta;
+    let denom = root * root;
+    if denom <= 0.0 {
+        return none;
+    }
+    let t = 1.0 - fresnel_dielectric(wo_m, eta);
+    let f_cos = t * ggx_d(alpha, mh) * ggx_g2(alpha, wo, wi) * abs(wi_m * wo_m) / (wo.z * denom)
+        * (1.0 / (eta * eta)) * m.dielectric_weight;
+    let pdf = ggx_visible_pdf(alpha, wo, mh) * abs(wi_m) / denom * t;
+    return BsdfEval(m.dielectric_tint * f_cos, pdf);
+}
+
+fn thin_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> BsdfEval {
+    let alpha = m.thin_alpha;
+    let transmitted = wi.z < 0.0;
+    let wr = select(wi, vec3(wi.x, wi.y, -wi.z), transmitted);
+    let mh = try_normalized(wo + wr);
+    if alpha == 0.0 || is_zero(mh) {
+        return BsdfEval(vec3(0.0), 0.0);
+    }
+    let r = thin_sheet_reflectance(fresnel_dielectric(dot3(wo, mh), m.ior));
+    let fresnel = select(r, 1.0 - r, transmitted);
+    let tint = select(vec3(1.0), m.thin_tint, transmitted);
+    let f_cos = m.thin_weight * fresnel * ggx_d(alpha, mh) * ggx_g2(alpha, wo, wr) / (4.0 * wo.z);
+    return BsdfEval(tint * f_cos, ggx_visible_pdf(alpha, wo, mh) * fresnel / (4.0 * dot3(wo, mh)));
+}
+
+// Every lobe's f·|cos| summed, and the selection-weighted pdf (`Mixture::eval`).
+fn mixture_eval(m: Material, p: vec4<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> BsdfEval {
+    var f_cos = vec3(0.0);
+    var pdf = 0.0;
+    if (m.flags & HAS_SPECULAR) != 0u {
+        let e = specular_eval(m, wo, wi);
+        f_cos += e.f_cos;
+        pdf += p.x * e.pdf_fwd;
+    }
+    if (m.flags & HAS_DIFFUSE) != 0u {
+        let e = diffuse_eval(m, wo, wi);
+        f_cos += e.f_cos;
+        pdf += p.y * e.pdf_fwd;
+    }
+    if (m.flags & HAS_DIELECTRIC) != 0u {
+        let e = dielectric_eval(m, wo, wi, eta);
+        f_cos += e.f_cos;
+        pdf += p.z * e.pdf_fwd;
+    }
+    if (m.flags & HAS_THIN) != 0u {
+        let e = thin_eval(m, wo, wi);
+        f_cos += e.f_cos;
+        pdf += p.w * e.pdf_fwd;
+    }
+    return BsdfEval(f_cos, pdf);
 }
 
 fn bsdf_eval(b: Bsdf, out: Outgoing, wi: vec3<f32>) -> BsdfEval {
@@ -277,17 +505,11 @@ fn bsdf_eval(b: Bsdf, out: Outgoing, wi: vec3<f32>) -> BsdfEval {
     if consistent(b, out.back, wi, wi_l) < 0.0 {
         return none;
     }
-    let m = materials[b.material];
-    var f_cos = vec3(0.0);
-    var pdf = 0.0;
-    if (m.flags & HAS_DIFFUSE) != 0u && wi_l.z > 0.0 {
-        f_cos = m.diffuse_scale * wi_l.z;
-        pdf = out.selection.y * cosine_hemisphere_pdf(wi_l.z);
-    }
-    if !(all_finite(f_cos) && is_finite(pdf) && pdf > 0.0) {
+    let e = mixture_eval(materials[b.material], out.selection, out.local, wi_l, out.eta);
+    if !(all_finite(e.f_cos) && is_finite(e.pdf_fwd) && e.pdf_fwd > 0.0) {
         return none;
     }
-    return BsdfEval(f_cos, pdf);
+    return e;
 }
 
 // A sampled direction (`BsdfSample` without the reverse pdf); `valid` false where sampling
@@ -301,8 +523,11 @@ struct BsdfSample {
     eta: f32,
 }
 
-// A delta lobe's direction in local space, its weight and probability.
-struct DeltaSample {
+// What one lobe sampled, in local space (`LobeSample`): a direction the whole mixture
+// values, or a delta with its weight and probability; `ok` false where it failed.
+struct LobeSample {
+    ok: bool,
+    delta: bool,
     wi: vec3<f32>,
     weight: vec3<f32>,
     prob: f32,
@@ -310,8 +535,82 @@ struct DeltaSample {
     eta: f32,
 }
 
-fn mirror_of(wo: vec3<f32>) -> vec3<f32> {
-    return vec3(-wo.x, -wo.y, wo.z);
+fn direction_sample(wi: vec3<f32>, ok: bool) -> LobeSample {
+    return LobeSample(ok, false, wi, vec3(0.0), 0.0, false, 1.0);
+}
+
+fn delta_sample(wi: vec3<f32>, weight: vec3<f32>, prob: f32, transmitted: bool, eta: f32) -> LobeSample {
+    return LobeSample(true, true, wi, weight, prob, transmitted, eta);
+}
+
+fn specular_sample(m: Material, wo: vec3<f32>, u: vec2<f32>) -> LobeSample {
+    if m.specular_alpha == 0.0 {
+        return delta_sample(mirror_of(wo), schlick(m.f0, m.f90, wo.z), 1.0, false, 1.0);
+    }
+    let mh = ggx_sample_visible(m.specular_alpha, wo, u);
+    let wi = reflect(wo, mh);
+    return direction_sample(wi, !is_zero(mh) && wi.z > 0.0);
+}
+
+fn dielectric_sample(m: Material, wo: vec3<f32>, eta: f32, u_sub: f32, u: vec2<f32>) -> LobeSample {
+    let alpha = m.dielectric_alpha;
+    if alpha == 0.0 {
+        let r = fresnel_dielectric(wo.z, eta);
+        if u_sub < r {
+            return delta_sample(mirror_of(wo), vec3(m.dielectric_weight * r), r, false, 1.0);
+        }
+        let wi = refract(wo, vec3(0.0, 0.0, 1.0), eta);
+        let t = 1.0 - r;
+        let weight = m.dielectric_tint * (m.dielectric_weight * t * (1.0 / (eta * eta)));
+        return LobeSample(!is_zero(wi), true, wi, weight, t, true, eta);
+    }
+    let mh = ggx_sample_visible(alpha, wo, u);
+    if is_zero(mh) {
+        return direction_sample(vec3(0.0), false);
+    }
+    let f = fresnel_dielectric(dot3(wo, mh), eta);
+    if u_sub < f {
+        let wi = reflect(wo, mh);
+        return direction_sample(wi, wi.z > 0.0);
+    }
+    let wi = refract(wo, mh, eta);
+    return direction_sample(wi, !is_zero(wi) && wi.z < 0.0);
+}
+
+fn thin_sample(m: Material, wo: vec3<f32>, u_sub: f32, u: vec2<f32>) -> LobeSample {
+    let alpha = m.thin_alpha;
+    if alpha == 0.0 {
+        let r = thin_sheet_reflectance(fresnel_dielectric(wo.z, m.ior));
+        if u_sub < r {
+            return delta_sample(mirror_of(wo), vec3(m.thin_weight * r), r, false, 1.0);
+        }
+        return delta_sample(-wo, m.thin_tint * (m.thin_weight * (1.0 - r)), 1.0 - r, true, 1.0);
+    }
+    let mh = ggx_sample_visible(alpha, wo, u);
+    let wr = reflect(wo, mh);
+    if is_zero(mh) || wr.z <= 0.0 {
+        return direction_sample(vec3(0.0), false);
+    }
+    let r = thin_sheet_reflectance(fresnel_dielectric(dot3(wo, mh), m.ior));
+    return direction_sample(select(vec3(wr.x, wr.y, -wr.z), wr, u_sub < r), true);
+}
+
+// The class of lobe k (`Lobe::kind`).
+fn lobe_kind(m: Material, k: u32) -> u32 {
+    var alpha = m.thin_alpha;
+    switch k {
+        case 0u: {
+            alpha = m.specular_alpha;
+        }
+        case 1u: {
+            return KIND_DIFFUSE;
+        }
+        case 2u: {
+            alpha = m.dielectric_alpha;
+        }
+        default: {}
+    }
+    return select(KIND_SPECULAR, KIND_GLOSSY, alpha > 0.0);
 }
 
 fn bsdf_sample(b: Bsdf, out: Outgoing, u_lobe: f32, u: vec2<f32>) -> BsdfSample {
@@ -339,63 +638,55 @@ fn bsdf_sample(b: Bsdf, out: Outgoing, u_lobe: f32, u: vec2<f32>) -> BsdfSample 
     let pk = p[k];
     let u_sub = clamp((u_lobe - start) / pk, 0.0, ONE_MINUS_EPSILON);
     let wo = out.local;
-    if k == 1u {
-        // The diffuse lobe: a direction, valued by the whole BSDF.
-        let wi_l = sample_cosine_hemisphere(u);
-        if !(wi_l.z > 0.0) {
+    var lobe: LobeSample;
+    switch k {
+        case 0u: {
+            lobe = specular_sample(m, wo, u);
+        }
+        case 1u: {
+            let wi = sample_cosine_hemisphere(u);
+            lobe = direction_sample(wi, wi.z > 0.0);
+        }
+        case 2u: {
+            lobe = dielectric_sample(m, wo, out.eta, u_sub, u);
+        }
+        default: {
+            lobe = thin_sample(m, wo, u_sub, u);
+        }
+    }
+    if !lobe.ok {
+        return s;
+    }
+    s.kind = lobe_kind(m, k);
+    if lobe.delta {
+        let prob = pk * lobe.prob;
+        if !(prob > 0.0) {
             return s;
         }
-        let wi = normalized(world_on_side(b, out.back, wi_l));
+        lobe.prob = prob;
+    } else {
+        lobe.transmitted = lobe.wi.z < 0.0;
+        lobe.eta = select(1.0, out.eta, lobe.transmitted && (m.flags & HAS_DIELECTRIC) != 0u);
+    }
+    let wi = normalized(world_on_side(b, out.back, lobe.wi));
+    if lobe.delta {
+        if consistent(b, out.back, wi, lobe.wi) < 0.0 {
+            return s;
+        }
+        s.f_cos = lobe.weight;
+        s.pdf_fwd = lobe.prob;
+    } else {
         let eval = bsdf_eval(b, out, wi);
         if !(eval.pdf_fwd > 0.0) {
             return s;
         }
-        s.wi = wi;
         s.f_cos = eval.f_cos;
         s.pdf_fwd = eval.pdf_fwd;
-        s.kind = KIND_DIFFUSE;
-        let transmitted = dot3(wi, b.n_g) * dot3(out.world, b.n_g) < 0.0;
-        s.valid = all_finite(wi) && !transmitted;
-        return s;
-    }
-    var d: DeltaSample;
-    if k == 0u {
-        d = DeltaSample(mirror_of(wo), schlick(m.f0, m.f90, wo.z), 1.0, false, 1.0);
-    } else if k == 2u {
-        let r = fresnel_dielectric(wo.z, out.eta);
-        if u_sub < r {
-            d = DeltaSample(mirror_of(wo), vec3(m.dielectric_weight * r), r, false, 1.0);
-        } else {
-            let wi = refract_z(wo, out.eta);
-            if all(wi == vec3(0.0)) {
-                return s;
-            }
-            let t = 1.0 - r;
-            let scale = 1.0 / (out.eta * out.eta);
-            d = DeltaSample(wi, m.dielectric_tint * (m.dielectric_weight * t * scale), t, true, out.eta);
-        }
-    } else {
-        let r = thin_sheet_reflectance(fresnel_dielectric(wo.z, m.ior));
-        if u_sub < r {
-            d = DeltaSample(mirror_of(wo), vec3(m.thin_weight * r), r, false, 1.0);
-        } else {
-            d = DeltaSample(-wo, m.thin_tint * (m.thin_weight * (1.0 - r)), 1.0 - r, true, 1.0);
-        }
-    }
-    let prob = pk * d.prob;
-    if !(prob > 0.0) {
-        return s;
-    }
-    let wi = normalized(world_on_side(b, out.back, d.wi));
-    if consistent(b, out.back, wi, d.wi) < 0.0 {
-        return s;
     }
     s.wi = wi;
-    s.f_cos = d.weight;
-    s.pdf_fwd = prob;
-    s.eta = d.eta;
+    s.eta = lobe.eta;
     let transmitted = dot3(wi, b.n_g) * dot3(out.world, b.n_g) < 0.0;
-    s.valid = all_finite(d.weight) && is_finite(prob) && all_finite(wi)
-        && transmitted == d.transmitted;
+    s.valid = all_finite(s.f_cos) && is_finite(s.pdf_fwd) && s.pdf_fwd > 0.0 && all_finite(wi)
+        && transmitted == lobe.transmitted;
     return s;
 }

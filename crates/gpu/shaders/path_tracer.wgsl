@@ -6,7 +6,7 @@
 //
 // Bind groups: 0 this dispatch (parameters, radiance out, ray counts), 1 the hierarchy
 // (traversal functions), 2 the scene's shading data. The host defines GAMMA_7 and GAMMA_16
-// (`gamma(n)` of vcm's ray_offset.rs, as the CPU rounds them).
+// (`gamma(n)` of vcm's ray_offset.rs, as the CPU rounds them) and the albedo tables' size.
 
 struct Params {
     camera_position: vec3<f32>,
@@ -77,6 +77,8 @@ const CAPPED_CONTINUATION: f32 = 0.95;
 @group(2) @binding(2) var<storage, read> lights: array<AreaLight>;
 // Per light: the smallest number that picks it or a later one, and its pick probability.
 @group(2) @binding(3) var<storage, read> light_pick: array<vec2<f32>>;
+// The Schlick GGX albedo tables A and B (`albedo_tables`), rows over the roughness.
+@group(2) @binding(4) var<storage, read> albedo_tables: array<f32>;
 
 fn infinity() -> f32 {
     return bitcast<f32>(0x7f800000u);

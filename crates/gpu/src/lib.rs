@@ -9,11 +9,10 @@
 //! `shaders/sampler.wgsl`) and shades with the same operations, so both backends render the
 //! same image up to floating-point rounding per path, not only in expectation.
 //!
-//! The GPU shades a subset of the scene model so far ([`check_scene`]): plain Lambert,
-//! mirror (smooth Schlick) and smooth dielectric (thick and thin-walled) surfaces, lit by
-//! emissive triangles of constant radiance; no textures, normal maps, vertex colours,
-//! alpha masks, absorbing volumes, rough (GGX) or layered lobes, punctual, directional or
-//! environment lights yet. Scenes outside it are refused with the reason.
+//! The GPU shades the whole surface model of vcm-scene (every lobe of the glTF
+//! metallic-roughness mixture, smooth and GGX) lit by emissive triangles of constant
+//! radiance; not yet textures, normal maps, vertex colours, alpha masks, absorbing volumes,
+//! punctual, directional or environment lights ([`check_scene`] names what a scene needs).
 
 #![warn(missing_docs)]
 

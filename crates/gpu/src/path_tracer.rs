@@ -108,6 +108,7 @@ impl GpuPathTracer {
             gpu.storage_buffer("materials", bytemuck::cast_slice(&data.materials))?,
             gpu.storage_buffer("area lights", bytemuck::cast_slice(&data.lights))?,
             gpu.storage_buffer("light pick", bytemuck::cast_slice(&data.light_pick))?,
+            gpu.storage_buffer("albedo tables", bytemuck::cast_slice(&data.albedo_tables))?,
         ];
         let scene_groups = [
             bind(device, &pipeline, 1, hierarchy.iter()),

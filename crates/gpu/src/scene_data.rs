@@ -4,7 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use vcm_scene::Scene;
-use vcm_scene::bsdf::FlatLobes;
+use vcm_scene::bsdf::{FlatLobes, albedo_tables};
 use vcm_scene::light::{Light, LightSampler};
 
 /// `ShadeTriangle`: corners with the material and the area light (or `NO_LIGHT`) as bits in
@@ -16,7 +16,8 @@ pub(crate) struct GpuTriangle {
     normals: [[f32; 4]; 3],
 }
 
-/// `Material` of `bsdf.wgsl`: a material's [`FlatLobes`] and sidedness.
+/// `Material` of `bsdf.wgsl`: a material's [`FlatLobes`] and sidedness; α 0 for a smooth
+/// lobe, row `NO_ROW` for a mirror's albedo.
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
 pub(crate) struct GpuMaterial {
@@ -29,10 +30,18 @@ pub(crate) struct GpuMaterial {
     diffuse_scale: [f32; 3],
     thin_weight: f32,
     dielectric_tint: [f32; 3],
-    unused0: u32,
+    specular_alpha: f32,
     thin_tint: [f32; 3],
-    unused1: u32,
+    dielectric_alpha: f32,
+    layer_f0: [f32; 3],
+    thin_alpha: f32,
+    layer_f90: [f32; 3],
+    specular_row_t: f32,
     selection: [f32; 4],
+    specular_row: u32,
+    layer_row: u32,
+    layer_row_t: f32,
+    unused: u32,
 }
 
 /// `AreaLight` of `path_tracer.wgsl`: corners (the first with the area in w), normal and
@@ -52,6 +61,9 @@ const HAS_DIELECTRIC: u32 = 4;
 const HAS_THIN: u32 = 8;
 const DOUBLE_SIDED: u32 = 16;
 const CONSTANT_SELECTION: u32 = 32;
+const HAS_LAYER: u32 = 64;
+/// `NO_ROW` of `bsdf.wgsl`.
+const NO_ROW: u32 = u32::MAX;
 
 /// `NO_LIGHT` of `path_tracer.wgsl`.
 const NO_LIGHT: u32 = u32::MAX;
@@ -65,6 +77,8 @@ pub(crate) struct SceneData {
     pub light_pick: Vec<[f32; 2]>,
     /// Lights the light sampler picks from (0 when it has none to pick).
     pub light_count: u32,
+    /// The albedo tables A then B, each row by row.
+    pub albedo_tables: Vec<f32>,
 }
 
 fn vec4(v: Vec3, w: f32) -> [f32; 4] {
@@ -102,26 +116,10 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
     }
     let materials = scene.materials.iter().zip(&scene.material_lobes);
     for ((material, lobes), _) in materials.zip(used).filter(|(_, used)| *used) {
-        let name = &material.name;
-        let Some(lobes) = lobes else {
+        if lobes.is_none() {
+            let name = &material.name;
             return Err(format!("material '{name}' varies over its surface"));
-        };
-        check_lobes(&lobes.flat()).map_err(|what| format!("{what} (material '{name}')"))?;
-    }
-    Ok(())
-}
-
-/// Whether the kernels have every lobe of `lobes`.
-fn check_lobes(lobes: &FlatLobes) -> Result<(), &'static str> {
-    let rough_interface = [lobes.dielectric, lobes.thin]
-        .iter()
-        .flatten()
-        .any(|interface| interface.alpha.is_some());
-    if lobes.specular.is_some_and(|s| s.alpha.is_some()) || rough_interface {
-        return Err("rough (GGX) reflection or transmission");
-    }
-    if lobes.diffuse.is_some_and(|d| d.layered) {
-        return Err("a specular layer over a diffuse base");
+        }
     }
     Ok(())
 }
@@ -189,6 +187,11 @@ impl SceneData {
             lights,
             light_pick,
             light_count,
+            albedo_tables: albedo_tables()
+                .iter()
+                .flat_map(|t| t.iter().flatten())
+                .copied()
+                .collect(),
         }
     }
 }
@@ -205,30 +208,45 @@ fn pack_material(lobes: Option<&FlatLobes>, double_sided: bool) -> GpuMaterial {
         return m;
     };
     m.ior = lobes.ior;
+    (m.specular_row, m.layer_row) = (NO_ROW, NO_ROW);
     if let Some(specular) = lobes.specular {
         m.flags |= HAS_SPECULAR;
         (m.f0, m.f90) = (specular.f0.to_array(), specular.f90.to_array());
+        m.specular_alpha = specular.alpha.unwrap_or(0.0);
+        (m.specular_row, m.specular_row_t) = table_row(specular.albedo.row);
     }
     if let Some(diffuse) = lobes.diffuse {
         m.flags |= HAS_DIFFUSE;
         m.diffuse_albedo = diffuse.albedo.to_array();
         m.diffuse_scale = diffuse.scale.to_array();
+        if let Some(layer) = diffuse.layer {
+            m.flags |= HAS_LAYER;
+            (m.layer_f0, m.layer_f90) = (layer.f0.to_array(), layer.f90.to_array());
+            (m.layer_row, m.layer_row_t) = table_row(layer.row);
+        }
     }
     if let Some(dielectric) = lobes.dielectric {
         m.flags |= HAS_DIELECTRIC;
         m.dielectric_weight = dielectric.weight;
         m.dielectric_tint = dielectric.tint.to_array();
+        m.dielectric_alpha = dielectric.alpha.unwrap_or(0.0);
     }
     if let Some(thin) = lobes.thin {
         m.flags |= HAS_THIN;
         m.thin_weight = thin.weight;
         m.thin_tint = thin.tint.to_array();
+        m.thin_alpha = thin.alpha.unwrap_or(0.0);
     }
     if let Some(selection) = lobes.constant_selection {
         m.flags |= CONSTANT_SELECTION;
         m.selection = selection;
     }
     m
+}
+
+/// An albedo's table row and fraction as the kernel reads them.
+fn table_row(row: Option<(usize, f32)>) -> (u32, f32) {
+    row.map_or((NO_ROW, 0.0), |(k, t)| (k as u32, t))
 }
 
 /// The smallest number in [0, 1) for which `sampler` picks light `light` or a later one
@@ -264,7 +282,7 @@ mod tests {
     #[test]
     fn kernel_structs_have_the_wgsl_sizes() {
         assert_eq!(size_of::<GpuTriangle>(), 96);
-        assert_eq!(size_of::<GpuMaterial>(), 112);
+        assert_eq!(size_of::<GpuMaterial>(), 160);
         assert_eq!(size_of::<GpuAreaLight>(), 80);
     }
 }

@@ -2,6 +2,7 @@
 //! the traversal functions of vcm-traversal-wgpu (WGSL has no includes).
 
 use vcm::ray_offset::gamma;
+use vcm_scene::bsdf::ALBEDO_TABLE_SIZE;
 
 /// The CPU's numbers: keyed hashes and Owen-scrambled Sobol pairs.
 pub const SAMPLER_WGSL: &str = include_str!("../shaders/sampler.wgsl");
@@ -18,9 +19,12 @@ pub const WORKGROUP_SIZE: u32 = 64;
 /// The path tracing module over `traversal` (the traversal functions of the scene's
 /// hierarchy, [`vcm_traversal_wgpu::GpuBvh::traversal_functions`]).
 pub fn path_tracer_module(traversal: &str) -> String {
-    // The CPU's rounding-error factors, written so that they parse to the same f32.
+    // The CPU's rounding-error factors, written so that they parse to the same f32, and
+    // the size of the albedo tables.
+    let (columns, rows) = ALBEDO_TABLE_SIZE;
     let constants = format!(
-        "const GAMMA_7: f32 = {:?}f;\nconst GAMMA_16: f32 = {:?}f;\n",
+        "const GAMMA_7: f32 = {:?}f;\nconst GAMMA_16: f32 = {:?}f;\n\
+         const ALBEDO_COLUMNS: u32 = {columns}u;\nconst ALBEDO_ROWS: u32 = {rows}u;\n",
         gamma(7),
         gamma(16)
     );

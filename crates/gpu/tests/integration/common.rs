@@ -34,6 +34,18 @@ pub fn scene(name: &str) -> Arc<Scene> {
     Arc::new(Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
 }
 
+/// A scene of `scenes/` with its glTF changed by `edit` (written to a temporary folder).
+pub fn scene_variant(name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> Arc<Scene> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenes/{name}.gltf"));
+    let mut gltf: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    edit(&mut gltf);
+    let dir = tempfile::tempdir().unwrap();
+    let changed = dir.path().join(format!("{name}.gltf"));
+    std::fs::write(&changed, gltf.to_string()).unwrap();
+    Arc::new(Scene::load(&changed).unwrap_or_else(|e| panic!("{name} variant: {e}")))
+}
+
 /// The mean radiance per pixel after `frames` frames of `samples` samples per pixel each.
 pub fn render(integrator: &mut dyn Integrator, frames: u32, samples: u32) -> Vec<Vec3> {
     let (width, height) = integrator.image_size();

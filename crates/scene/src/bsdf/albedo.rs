@@ -20,9 +20,9 @@
 //! A mirror (roughness 0, no GGX lobe) has the analytic E:
 //! E(μ) = F0 + (F90 − F0)(1 − μ)^5, E_avg = F0 · 20/21 + F90 / 21.
 
-use super::MIN_ALPHA;
 use super::fresnel::{reflect, schlick, schlick_weight};
 use super::microfacet::Ggx;
+use super::{FlatAlbedo, MIN_ALPHA};
 use glam::{Vec2, Vec3};
 use std::sync::OnceLock;
 
@@ -176,7 +176,26 @@ pub(super) struct SpecularAlbedo {
     row: Option<(usize, f32)>,
 }
 
+/// Entries of the albedo tables in μ (columns, over √μ) and in roughness (rows).
+pub const ALBEDO_TABLE_SIZE: (usize, usize) = (MU_RES, R_RES);
+
+/// The tabulated A(μ, α) and B(μ, α) of the Schlick GGX albedo, `[row][column]` (rows over
+/// the roughness, columns over √μ), for shading code outside this crate.
+pub fn albedo_tables() -> [&'static [[f32; MU_RES]; R_RES]; 2] {
+    let t = tables();
+    [&t.a, &t.b]
+}
+
 impl SpecularAlbedo {
+    /// The albedo as plain numbers.
+    pub fn flat(&self) -> FlatAlbedo {
+        FlatAlbedo {
+            f0: self.f0,
+            f90: self.f90,
+            row: self.row,
+        }
+    }
+
     /// Lobe with Schlick (F0, F90) and the distribution `ggx` (`None`: a mirror).
     pub fn new(f0: Vec3, f90: Vec3, ggx: Option<Ggx>) -> SpecularAlbedo {
         // A layer that reflects nothing (F0 = F90 = 0, e.g. specularFactor 0) has E = 0 at any

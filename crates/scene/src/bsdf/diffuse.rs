@@ -47,7 +47,7 @@ impl CompensatedDiffuse {
         FlatDiffuse {
             albedo: self.albedo,
             scale: self.scale,
-            layered: self.layer.is_some(),
+            layer: self.layer.map(|layer| layer.flat()),
         }
     }
 

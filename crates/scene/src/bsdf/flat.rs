@@ -32,6 +32,21 @@ pub struct FlatSchlick {
     pub f90: Vec3,
     /// GGX α, `None` for a mirror (Dirac delta).
     pub alpha: Option<f32>,
+    /// Its directional albedo (its selection weight).
+    pub albedo: FlatAlbedo,
+}
+
+/// The directional albedo E(μ) = F0·A(μ, α) + F90·B(μ, α) of a Schlick GGX lobe, A and B
+/// bilinear in the tables of [`albedo_tables`](super::albedo_tables) (E = the Schlick
+/// Fresnel itself for a mirror).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlatAlbedo {
+    /// The lobe's F0.
+    pub f0: Vec3,
+    /// The lobe's F90.
+    pub f90: Vec3,
+    /// The tables' lower row in α and the fraction toward the next; `None` for a mirror.
+    pub row: Option<(usize, f32)>,
 }
 
 /// The diffuse base.
@@ -41,9 +56,9 @@ pub struct FlatDiffuse {
     pub albedo: Vec3,
     /// f = scale · (1 − E(μo))(1 − E(μi)); without a specular layer plain Lambert, ρ/π.
     pub scale: Vec3,
-    /// Whether a reflecting specular layer lies over it (energy compensation by the
-    /// tabulated layer albedo E).
-    pub layered: bool,
+    /// The reflecting specular layer over it, whose albedo E compensates the energy;
+    /// `None` for plain Lambert.
+    pub layer: Option<FlatAlbedo>,
 }
 
 /// A dielectric interface, thick or thin-walled.

@@ -70,7 +70,8 @@ mod thin_dielectric;
 #[cfg(test)]
 mod tests;
 
-pub use flat::{FlatDiffuse, FlatInterface, FlatLobes, FlatSchlick};
+pub use albedo::{ALBEDO_TABLE_SIZE, albedo_tables};
+pub use flat::{FlatAlbedo, FlatDiffuse, FlatInterface, FlatLobes, FlatSchlick};
 pub use surface::{Bsdf, FixedOutgoing, GRAZING_COS, Lobes};
 
 use glam::Vec3;

@@ -46,6 +46,7 @@ impl SchlickReflection {
             f0: self.f0,
             f90: self.f90,
             alpha: self.ggx.map(|g| g.alpha),
+            albedo: self.albedo.flat(),
         }
     }
 }
