@@ -35,6 +35,11 @@ struct Params {
     independent: u32,
     // Lights the light sampler picks from (0: no light sampling).
     light_count: u32,
+    // The environment light, or NO_LIGHT.
+    environment: u32,
+    unused0: u32,
+    unused1: u32,
+    unused2: u32,
 }
 
 // A triangle as shading sees it: corners (w: the material, the area light or NO_LIGHT, as
@@ -48,14 +53,26 @@ struct ShadeTriangle {
     n2: vec4<f32>,
 }
 
-// An emitting triangle with constant radiance (`AreaLight`); c0.w is its area.
-struct AreaLight {
+// A light (`Light`), its kind in `normal.w` (as bits) and its radiance, intensity or
+// irradiance in `emission`:
+// - AREA_LIGHT, an emitting triangle of constant radiance: corners c0..c2, c0.w its area;
+// - POINT_LIGHT at c0;
+// - SPOT_LIGHT at c0 toward c1, c0.w and c1.w the cosines of its inner and outer cones;
+// - DIRECTIONAL_LIGHT shining along c0;
+// - ENVIRONMENT_LIGHT, constant radiance from every direction.
+struct Light {
     c0: vec4<f32>,
     c1: vec4<f32>,
     c2: vec4<f32>,
     normal: vec4<f32>,
     emission: vec4<f32>,
 }
+
+const AREA_LIGHT: u32 = 0u;
+const POINT_LIGHT: u32 = 1u;
+const SPOT_LIGHT: u32 = 2u;
+const DIRECTIONAL_LIGHT: u32 = 3u;
+const ENVIRONMENT_LIGHT: u32 = 4u;
 
 const NO_LIGHT: u32 = 0xffffffffu;
 const WORKGROUP: u32 = 64u;
@@ -74,7 +91,7 @@ const CAPPED_CONTINUATION: f32 = 0.95;
 
 @group(2) @binding(0) var<storage, read> triangles: array<ShadeTriangle>;
 @group(2) @binding(1) var<storage, read> materials: array<Material>;
-@group(2) @binding(2) var<storage, read> lights: array<AreaLight>;
+@group(2) @binding(2) var<storage, read> lights: array<Light>;
 // Per light: the smallest number that picks it or a later one, and its pick probability.
 @group(2) @binding(3) var<storage, read> light_pick: array<vec2<f32>>;
 // The Schlick GGX albedo tables A and B (`albedo_tables`), rows over the roughness.
@@ -219,7 +236,106 @@ struct Shadow {
     valid: bool,
     origin: vec3<f32>,
     direction: vec3<f32>,
+    tmax: f32,
     contribution: vec3<f32>,
+}
+
+// A light seen from a receiver (`Illumination`); `valid` false where it sends nothing.
+struct Illumination {
+    valid: bool,
+    direction: vec3<f32>,
+    // Infinite for directional and environment lights.
+    distance: f32,
+    value: vec3<f32>,
+    direct_pdf_w: f32,
+}
+
+fn no_illumination() -> Illumination {
+    return Illumination(false, vec3(0.0), 0.0, vec3(0.0), 0.0);
+}
+
+// A point or spot light at `position` seen from `receiver` (`illuminate_delta`).
+fn illuminate_delta(position: vec3<f32>, receiver: vec3<f32>, value: vec3<f32>) -> Illumination {
+    let to_light = position - receiver;
+    let distance_sq = dot3(to_light, to_light);
+    let distance = sqrt(distance_sq);
+    let valid = distance > 0.0 && is_finite(distance);
+    return Illumination(valid, to_light / distance, distance, value, distance_sq);
+}
+
+fn light_kind(light: Light) -> u32 {
+    return bitcast<u32>(light.normal.w);
+}
+
+// A uniform direction on the sphere (`sample_uniform_sphere`).
+fn sample_uniform_sphere(u: vec2<f32>) -> vec3<f32> {
+    let z = 1.0 - 2.0 * u.x;
+    let r = sqrt(max(1.0 - z * z, 0.0));
+    let phi = 2.0 * PI * u.y;
+    return vec3(r * cos(phi), r * sin(phi), z);
+}
+
+const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
+
+// `Light::illuminate`: the light seen from `receiver`, at a point (or direction) `u` picks.
+fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
+    switch light_kind(light) {
+        case AREA_LIGHT: {
+            // A uniform point on the triangle.
+            let su = sqrt(u.x);
+            let b0 = 1.0 - su;
+            let b1 = u.y * su;
+            let b = vec3(b0, b1, 1.0 - b0 - b1);
+            let point = light.c0.xyz * b.x + light.c1.xyz * b.y + light.c2.xyz * b.z;
+            let to_light = point - receiver;
+            let distance_sq = dot3(to_light, to_light);
+            let distance = sqrt(distance_sq);
+            let direction = to_light / distance;
+            let cos_at_light = dot3(light.normal.xyz, -direction);
+            if !(cos_at_light > 0.0 && distance > 0.0) {
+                return no_illumination();
+            }
+            let inv_area = 1.0 / light.c0.w;
+            let pdf = inv_area * distance_sq / cos_at_light;
+            return Illumination(true, direction, distance, light.emission.xyz, pdf);
+        }
+        case POINT_LIGHT: {
+            return illuminate_delta(light.c0.xyz, receiver, light.emission.xyz);
+        }
+        case SPOT_LIGHT: {
+            var seen = illuminate_delta(light.c0.xyz, receiver, light.emission.xyz);
+            // The falloff between the cones (`SpotLight::falloff`).
+            let cos_inner = light.c0.w;
+            let cos_outer = light.c1.w;
+            let scale = 1.0 / max(cos_inner - cos_outer, 1e-3);
+            let t = clamp((dot3(light.c1.xyz, -seen.direction) - cos_outer) * scale, 0.0, 1.0);
+            let attenuation = t * t;
+            seen.valid = seen.valid && attenuation > 0.0;
+            seen.value = light.emission.xyz * attenuation;
+            return seen;
+        }
+        case DIRECTIONAL_LIGHT: {
+            return Illumination(true, -light.c0.xyz, infinity(), light.emission.xyz, 1.0);
+        }
+        default: {
+            let direction = sample_uniform_sphere(u);
+            return Illumination(true, direction, infinity(), light.emission.xyz, UNIFORM_SPHERE_PDF);
+        }
+    }
+}
+
+// Radiance from the environment toward a path that left the scene along `dir`, MIS-weighted
+// against light sampling like `emission` (`escaped` of shade.rs).
+fn escaped(dir: vec3<f32>, bsdf_pdf: f32) -> vec3<f32> {
+    if params.environment == NO_LIGHT {
+        return vec3(0.0);
+    }
+    let radiance = lights[params.environment].emission.xyz;
+    if bsdf_pdf < 0.0 {
+        return radiance;
+    }
+    let light_pdf_w = light_pick[params.environment].y * UNIFORM_SPHERE_PDF;
+    return radiance * power_heuristic(bsdf_pdf, light_pdf_w);
 }
 
 // One light sample from `s` (`next_event` of shade.rs).
@@ -230,7 +346,7 @@ fn next_event(
     out: Outgoing,
     throughput: vec3<f32>,
 ) -> Shadow {
-    var shadow = Shadow(false, vec3(0.0), vec3(0.0), vec3(0.0));
+    var shadow = Shadow(false, vec3(0.0), vec3(0.0), 0.0, vec3(0.0));
     let u_pick = uniform1(rng);
     let u_light = uniform2(rng);
     if params.light_count == 0u {
@@ -239,38 +355,34 @@ fn next_event(
     let index = pick_light(u_pick);
     let pick_pmf = light_pick[index].y;
     let light = lights[index];
-    // A uniform point on the triangle.
-    let su = sqrt(u_light.x);
-    let b0 = 1.0 - su;
-    let b1 = u_light.y * su;
-    let bary = vec3(b0, b1, 1.0 - b0 - b1);
-    let point = light.c0.xyz * bary.x + light.c1.xyz * bary.y + light.c2.xyz * bary.z;
-    let to_light = point - s.position;
-    let distance_sq = dot3(to_light, to_light);
-    let distance = sqrt(distance_sq);
-    let direction = to_light / distance;
-    let cos_at_light = dot3(light.normal.xyz, -direction);
-    if !(cos_at_light > 0.0 && distance > 0.0) {
+    let seen = illuminate(light, s.position, u_light);
+    if !seen.valid {
         return shadow;
     }
-    let inv_area = 1.0 / light.c0.w;
-    let direct_pdf_w = inv_area * distance_sq / cos_at_light;
-    let eval = bsdf_eval(b, out, direction);
+    let eval = bsdf_eval(b, out, seen.direction);
     if all(eval.f_cos == vec3(0.0)) {
         return shadow;
     }
-    let light_pdf_w = direct_pdf_w * pick_pmf;
-    let weight = power_heuristic(light_pdf_w, eval.pdf_fwd);
-    shadow.contribution = throughput * light.emission.xyz * eval.f_cos * (weight / light_pdf_w);
-    shadow.origin = offset_ray_origin(s.position, s.error, s.n_g, direction);
-    let corners_error = barycentric_error(light.c0.xyz, light.c1.xyz, light.c2.xyz, vec3(1.0));
-    let target_point = offset_ray_origin(
-        s.position + direction * distance,
-        corners_error,
-        light.normal.xyz,
-        -direction,
-    );
-    shadow.direction = target_point - shadow.origin;
+    let light_pdf_w = seen.direct_pdf_w * pick_pmf;
+    let kind = light_kind(light);
+    let delta = kind == POINT_LIGHT || kind == SPOT_LIGHT || kind == DIRECTIONAL_LIGHT;
+    let weight = select(power_heuristic(light_pdf_w, eval.pdf_fwd), 1.0, delta);
+    shadow.contribution = throughput * seen.value * eval.f_cos * (weight / light_pdf_w);
+    shadow.origin = offset_ray_origin(s.position, s.error, s.n_g, seen.direction);
+    // To the light's point, off an emitting triangle's surface (`shadow_segment`); toward
+    // infinity for lights at infinity.
+    if !is_finite(seen.distance) {
+        shadow.direction = seen.direction;
+        shadow.tmax = MISSED;
+    } else {
+        var target_point = s.position + seen.direction * seen.distance;
+        if kind == AREA_LIGHT {
+            let corners_error = barycentric_error(light.c0.xyz, light.c1.xyz, light.c2.xyz, vec3(1.0));
+            target_point = offset_ray_origin(target_point, corners_error, light.normal.xyz, -seen.direction);
+        }
+        shadow.direction = target_point - shadow.origin;
+        shadow.tmax = 1.0 - GAMMA_16;
+    }
     shadow.valid = true;
     return shadow;
 }
@@ -304,7 +416,11 @@ fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         // triangle's MISSED is below it (the traversal backend clamps infinity alike).
         let hit = trace(Ray(origin, 0.0, direction, MISSED), false);
         closest_rays += 1u;
-        if segments > params.max_segments || hit.prim == NO_HIT {
+        if segments > params.max_segments {
+            break;
+        }
+        if hit.prim == NO_HIT {
+            radiance += throughput * escaped(direction, bsdf_pdf);
             break;
         }
         start_step(&rng, segments, PAIRS_PER_VERTEX);
@@ -318,7 +434,7 @@ fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         if !out.valid {
             break;
         }
-        var shadow = Shadow(false, vec3(0.0), vec3(0.0), vec3(0.0));
+        var shadow = Shadow(false, vec3(0.0), vec3(0.0), 0.0, vec3(0.0));
         if has_non_delta(materials[s.material]) {
             shadow = next_event(&rng, s, b, out, throughput);
         }
@@ -346,7 +462,7 @@ fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         if shadow.valid {
             shadow_rays += 1u;
-            let blocker = trace(Ray(shadow.origin, 0.0, shadow.direction, 1.0 - GAMMA_16), true);
+            let blocker = trace(Ray(shadow.origin, 0.0, shadow.direction, shadow.tmax), true);
             if blocker.prim == NO_HIT {
                 radiance += shadow.contribution;
             }

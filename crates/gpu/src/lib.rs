@@ -10,9 +10,10 @@
 //! same image up to floating-point rounding per path, not only in expectation.
 //!
 //! The GPU shades the whole surface model of vcm-scene (every lobe of the glTF
-//! metallic-roughness mixture, smooth and GGX) lit by emissive triangles of constant
-//! radiance; not yet textures, normal maps, vertex colours, alpha masks, absorbing volumes,
-//! punctual, directional or environment lights ([`check_scene`] names what a scene needs).
+//! metallic-roughness mixture, smooth and GGX) under every kind of light but environment
+//! maps (emissive triangles of constant radiance, point, spot and directional lights, a
+//! constant environment); not yet textures, normal maps, vertex colours, alpha masks or
+//! absorbing volumes ([`check_scene`] names what a scene needs).
 
 #![warn(missing_docs)]
 

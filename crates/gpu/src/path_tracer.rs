@@ -36,6 +36,8 @@ struct Params {
     max_segments: u32,
     independent: u32,
     light_count: u32,
+    environment: u32,
+    unused: [u32; 3],
 }
 
 /// Bytes of one path's radiance in the kernel's output (`vec4<f32>`).
@@ -60,6 +62,7 @@ pub struct GpuPathTracer {
     scene_groups: [wgpu::BindGroup; 2],
     buffers: DispatchBuffers,
     light_count: u32,
+    environment: u32,
     samples_per_frame: u32,
     stop: StopFlag,
 }
@@ -129,6 +132,7 @@ impl GpuPathTracer {
             scene_groups,
             buffers,
             light_count: data.light_count,
+            environment: data.environment,
             samples_per_frame: 1,
             stop: StopFlag::new(),
         })
@@ -176,6 +180,8 @@ impl GpuPathTracer {
             max_segments: max_depth.unwrap_or(u32::MAX),
             independent: u32::from(sequence == SampleSequence::Independent),
             light_count: self.light_count,
+            environment: self.environment,
+            unused: [0; 3],
         };
         (params, (x, y))
     }

@@ -44,15 +44,22 @@ pub(crate) struct GpuMaterial {
     unused: u32,
 }
 
-/// `AreaLight` of `path_tracer.wgsl`: corners (the first with the area in w), normal and
-/// radiance.
+/// `Light` of `path_tracer.wgsl`: three points or directions with a number each, a normal
+/// with the kind, and the emission (see there).
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
-pub(crate) struct GpuAreaLight {
+pub(crate) struct GpuLight {
     corners: [[f32; 4]; 3],
     normal: [f32; 4],
     emission: [f32; 4],
 }
+
+/// The light kinds of `path_tracer.wgsl`.
+const AREA_LIGHT: u32 = 0;
+const POINT_LIGHT: u32 = 1;
+const SPOT_LIGHT: u32 = 2;
+const DIRECTIONAL_LIGHT: u32 = 3;
+const ENVIRONMENT_LIGHT: u32 = 4;
 
 /// `Material::flags` bits (`bsdf.wgsl`).
 const HAS_SPECULAR: u32 = 1;
@@ -72,11 +79,13 @@ const NO_LIGHT: u32 = u32::MAX;
 pub(crate) struct SceneData {
     pub triangles: Vec<GpuTriangle>,
     pub materials: Vec<GpuMaterial>,
-    pub lights: Vec<GpuAreaLight>,
+    pub lights: Vec<GpuLight>,
     /// Per light: the smallest number that picks it or a later one, and its probability.
     pub light_pick: Vec<[f32; 2]>,
     /// Lights the light sampler picks from (0 when it has none to pick).
     pub light_count: u32,
+    /// The environment light, or `NO_LIGHT`.
+    pub environment: u32,
     /// The albedo tables A then B, each row by row.
     pub albedo_tables: Vec<f32>,
 }
@@ -102,12 +111,13 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
     }
     for light in &scene.lights {
         match light {
-            Light::Area(area) if area.texture.is_none() && area.cut_out.is_none() => {}
-            Light::Area(_) => return Err("textured or cut-out emitters".into()),
-            Light::Point(_) => return Err("point lights".into()),
-            Light::Spot(_) => return Err("spot lights".into()),
-            Light::Directional(_) => return Err("directional lights".into()),
-            Light::Environment(_) => return Err("environment lights".into()),
+            Light::Area(area) if area.texture.is_some() || area.cut_out.is_some() => {
+                return Err("textured or cut-out emitters".into());
+            }
+            Light::Environment(environment) if environment.map.is_some() => {
+                return Err("environment maps".into());
+            }
+            _ => {}
         }
     }
     let mut used = vec![false; scene.materials.len()];
@@ -128,6 +138,7 @@ impl SceneData {
     /// Packs `scene`, which [`check_scene`] accepts.
     pub fn new(scene: &Scene) -> SceneData {
         let mesh = &scene.mesh;
+        let sampler = &scene.light_sampler;
         let triangles = (0..mesh.triangle_count())
             .map(|t| {
                 let corners = mesh.corners(t);
@@ -155,24 +166,8 @@ impl SceneData {
                 pack_material(flat.as_ref(), material.double_sided)
             })
             .collect();
-        let lights = scene
-            .lights
-            .iter()
-            .map(|light| match light {
-                Light::Area(area) => GpuAreaLight {
-                    corners: [
-                        vec4(area.corners[0], area.area),
-                        vec4(area.corners[1], 0.0),
-                        vec4(area.corners[2], 0.0),
-                    ],
-                    normal: vec4(area.normal, 0.0),
-                    emission: vec4(area.emission, 0.0),
-                },
-                // Refused by `check_scene`.
-                _ => GpuAreaLight::zeroed(),
-            })
-            .collect();
-        let sampler = &scene.light_sampler;
+        let lights = scene.lights.iter().map(pack_light).collect();
+        let environment = sampler.environment().map_or(NO_LIGHT, |l| l as u32);
         let light_count = if sampler.sample(0.0).is_some() {
             scene.lights.len() as u32
         } else {
@@ -187,11 +182,72 @@ impl SceneData {
             lights,
             light_pick,
             light_count,
+            environment,
             albedo_tables: albedo_tables()
                 .iter()
                 .flat_map(|t| t.iter().flatten())
                 .copied()
                 .collect(),
+        }
+    }
+}
+
+/// A light as `path_tracer.wgsl` reads it (textured emitters and environment maps, which
+/// [`check_scene`] refuses, without their textures).
+fn pack_light(light: &Light) -> GpuLight {
+    let kind =
+        |kind: u32, emission: Vec3| (vec4(Vec3::ZERO, f32::from_bits(kind)), vec4(emission, 0.0));
+    let point = |p: Vec3, w: f32| vec4(p, w);
+    let zero = [0.0; 4];
+    match light {
+        Light::Area(area) => {
+            let (mut normal, emission) = kind(AREA_LIGHT, area.emission);
+            normal[..3].copy_from_slice(&area.normal.to_array());
+            GpuLight {
+                corners: [
+                    point(area.corners[0], area.area),
+                    point(area.corners[1], 0.0),
+                    point(area.corners[2], 0.0),
+                ],
+                normal,
+                emission,
+            }
+        }
+        Light::Point(l) => {
+            let (normal, emission) = kind(POINT_LIGHT, l.intensity);
+            GpuLight {
+                corners: [point(l.position, 0.0), zero, zero],
+                normal,
+                emission,
+            }
+        }
+        Light::Spot(l) => {
+            let (normal, emission) = kind(SPOT_LIGHT, l.intensity);
+            GpuLight {
+                corners: [
+                    point(l.position, l.cos_inner),
+                    point(l.direction, l.cos_outer),
+                    zero,
+                ],
+                normal,
+                emission,
+            }
+        }
+        Light::Directional(l) => {
+            let (normal, emission) = kind(DIRECTIONAL_LIGHT, l.irradiance);
+            GpuLight {
+                corners: [point(l.direction, 0.0), zero, zero],
+                normal,
+                emission,
+            }
+        }
+        Light::Environment(l) => {
+            let (normal, emission) = kind(ENVIRONMENT_LIGHT, l.radiance);
+            GpuLight {
+                corners: [zero; 3],
+                normal,
+                emission,
+            }
         }
     }
 }
@@ -283,6 +339,6 @@ mod tests {
     fn kernel_structs_have_the_wgsl_sizes() {
         assert_eq!(size_of::<GpuTriangle>(), 96);
         assert_eq!(size_of::<GpuMaterial>(), 160);
-        assert_eq!(size_of::<GpuAreaLight>(), 80);
+        assert_eq!(size_of::<GpuLight>(), 80);
     }
 }

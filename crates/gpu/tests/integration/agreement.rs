@@ -113,6 +113,55 @@ fn gpu_paths_are_the_cpu_paths_on_every_lobe() {
     );
 }
 
+/// Every kind of light: `cornell-specular` with a point light, a spot light, a directional
+/// light through its open front and a constant environment beside its area light.
+#[test]
+fn gpu_paths_are_the_cpu_paths_under_every_light() {
+    let Some(gpu) = gpu() else { return };
+    // A quarter turn about x: the spot light's −z looks down.
+    let half = std::f64::consts::FRAC_1_SQRT_2;
+    let lit = scene_variant("cornell-specular", |g| {
+        let used = g["extensionsUsed"].as_array_mut().unwrap();
+        used.extend([json!("KHR_lights_punctual"), json!("VCM_environment")]);
+        g["extensions"] = json!({
+            "KHR_lights_punctual": {"lights": [
+                {"type": "point", "color": [1.0, 0.8, 0.6], "intensity": 0.8},
+                {"type": "spot", "color": [0.6, 0.8, 1.0], "intensity": 3.0,
+                 "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.6}},
+                {"type": "directional", "color": [1.0, 1.0, 1.0], "intensity": 0.7}
+            ]},
+            "VCM_environment": {"color": [0.3, 0.4, 0.5], "strength": 0.5}
+        });
+        let nodes = g["nodes"].as_array_mut().unwrap();
+        let first = nodes.len();
+        nodes.extend([
+            json!({"translation": [-0.4, 0.3, 0.2], "extensions": {"KHR_lights_punctual": {"light": 0}}}),
+            json!({"translation": [0.4, 0.9, 0.2], "rotation": [-half, 0.0, 0.0, half],
+                   "extensions": {"KHR_lights_punctual": {"light": 1}}}),
+            json!({"rotation": [-0.2, 0.1, 0.0, 0.9746794],
+                   "extensions": {"KHR_lights_punctual": {"light": 2}}}),
+        ]);
+        let roots = g["scenes"][0]["nodes"].as_array_mut().unwrap();
+        roots.extend((first..first + 3).map(|n| json!(n)));
+    });
+    let counts = lit.features.lights;
+    assert_eq!(
+        (
+            counts.point,
+            counts.spot,
+            counts.directional,
+            counts.environment
+        ),
+        (1, 1, 1, 1)
+    );
+    check_agreement(
+        &gpu,
+        "lit cornell-specular",
+        &lit,
+        (SampleSequence::Sobol, None, 2),
+    );
+}
+
 /// Renders `scene` on the CPU and the GPU with `(sequence, max_depth, samples per frame)`
 /// and checks what [`gpu_paths_are_the_cpu_paths`] says.
 fn check_agreement(
