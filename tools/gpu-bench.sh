@@ -1,16 +1,18 @@
 #!/usr/bin/env bash
-# The GPU backend measured in one short run, for a machine with a GPU that is lent for minutes:
-# PT and VCM on the Cornell scenes and `large`, 1024² by default, once with `--backend gpu` and
-# once with `--backend cpu` on the same machine, as a Markdown table of samples/s, rays/s and
-# where the time went (traversal, which on the GPU backend is the whole `Traversal` call with
-# its transfers, and shading).
+# The GPU measured in one short run, for a machine with a GPU that is lent for minutes: PT and
+# VCM on the Cornell scenes and `large`, 1024² by default, with the GPU backend (rays traced on
+# the GPU, shaded on the CPU), with PT shaded on the GPU too (`--shading gpu`: whole paths in
+# one kernel) and with the CPU backend, on the same machine, as a Markdown table of
+# samples/s, rays/s and where the time went (traversal, which on the GPU backend is the whole
+# `Traversal` call with its transfers, and shading; with GPU shading all of it is "shading").
 #
 #   tools/gpu-bench.sh                        # builds `vcm` with cargo, then measures
 #   VCM_BIN=path/to/vcm tools/gpu-bench.sh    # measures a binary built elsewhere
 #
 # Settings (environment): GPU_BENCH_SIZE (pixels per side, 1024), GPU_BENCH_SPP_PT (16),
-# GPU_BENCH_SPP_VCM (4), GPU_BENCH_SCENES ("cornell-box cornell-water large"),
-# GPU_BENCH_OUT (folder for the images, a new temporary one by default).
+# GPU_BENCH_SPP_SHADED (PT shaded on the GPU, 256), GPU_BENCH_SPP_VCM (4), GPU_BENCH_SCENES
+# ("cornell-box cornell-water large"), GPU_BENCH_OUT (folder for the images, a new
+# temporary one by default).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -32,27 +34,28 @@ if command -v nvidia-smi > /dev/null; then
 fi
 echo "vcm: $bin, images in $out, ${size}², $(date -u +%Y-%m-%dT%H:%MZ)"
 echo
-echo "| scene | algo | backend | spp | M samples/s | M rays/s | time split |"
-echo "| --- | --- | --- | --- | --- | --- | --- |"
+echo "| scene | algo | backend | shading | spp | M samples/s | M rays/s | time split |"
+echo "| --- | --- | --- | --- | --- | --- | --- | --- |"
 adapter=""
 for scene in $scenes; do
-    for algo in pt vcm; do
-        if [ "$algo" = pt ]; then spp=${GPU_BENCH_SPP_PT:-16}; else spp=${GPU_BENCH_SPP_VCM:-4}; fi
-        for backend in gpu cpu; do
-            image="$out/$scene-$algo-$backend.exr"
-            if ! log=$("$bin" render "scenes/$scene.gltf" --algo "$algo" --backend "$backend" \
-                --width "$size" --height "$size" --spp "$spp" -o "$image" 2>&1); then
-                echo "| $scene | $algo | $backend | $spp | failed: $(tail -n1 <<< "$log") | | |"
-                continue
-            fi
-            samples=$(grep -o '[0-9.]* M samples/s' <<< "$log" | head -n1 | cut -d' ' -f1)
-            rays=$(grep '^rays:' <<< "$log" | grep -o '[0-9.]* M/s' | head -n1 | cut -d' ' -f1)
-            split=$(grep '^time:' <<< "$log" | sed 's/^time: //')
-            if [ "$backend" = gpu ] && [ -z "$adapter" ]; then
-                adapter=$(grep -m1 '^traversal:' <<< "$log" || true)
-            fi
-            echo "| $scene | $algo | $backend | $spp | $samples | $rays | $split |"
-        done
+    # algorithm, backend, shading, samples per pixel
+    for run in "pt gpu gpu ${GPU_BENCH_SPP_SHADED:-256}" "pt gpu cpu ${GPU_BENCH_SPP_PT:-16}" \
+        "pt cpu cpu ${GPU_BENCH_SPP_PT:-16}" "vcm gpu cpu ${GPU_BENCH_SPP_VCM:-4}" \
+        "vcm cpu cpu ${GPU_BENCH_SPP_VCM:-4}"; do
+        read -r algo backend shading spp <<< "$run"
+        image="$out/$scene-$algo-$backend-$shading.exr"
+        if ! log=$("$bin" render "scenes/$scene.gltf" --algo "$algo" --backend "$backend" \
+            --shading "$shading" --width "$size" --height "$size" --spp "$spp" -o "$image" 2>&1); then
+            echo "| $scene | $algo | $backend | $shading | $spp | failed: $(tail -n1 <<< "$log") | | |"
+            continue
+        fi
+        samples=$(grep -o '[0-9.]* M samples/s' <<< "$log" | head -n1 | cut -d' ' -f1)
+        rays=$(grep '^rays:' <<< "$log" | grep -o '[0-9.]* M/s' | head -n1 | cut -d' ' -f1)
+        split=$(grep '^time:' <<< "$log" | sed 's/^time: //')
+        if [ "$backend" = gpu ] && [ -z "$adapter" ]; then
+            adapter=$(grep -m1 '^traversal:' <<< "$log" || true)
+        fi
+        echo "| $scene | $algo | $backend | $shading | $spp | $samples | $rays | $split |"
     done
 done
 echo
