@@ -244,7 +244,7 @@ fn ggx_sample_visible(alpha: f32, wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
 }
 
 // The directional albedo of a Schlick GGX lobe, `SpecularAlbedo::directional`: bilinear in
-// the tables (A in the first half of `albedo_tables`, B in the second) at row `row` + `row_t`.
+// the tables (A, then B, in `tables`) at row `row` + `row_t`.
 fn albedo_directional(f0: vec3<f32>, f90: vec3<f32>, row: u32, row_t: f32, mu: f32) -> vec3<f32> {
     if row == NO_ROW {
         return schlick(f0, f90, mu);
@@ -256,13 +256,13 @@ fn albedo_directional(f0: vec3<f32>, f90: vec3<f32>, row: u32, row_t: f32, mu: f
     let i = row * ALBEDO_COLUMNS + j;
     let next = i + ALBEDO_COLUMNS;
     let a = lerp(
-        lerp(albedo_tables[i], albedo_tables[i + 1u], tj),
-        lerp(albedo_tables[next], albedo_tables[next + 1u], tj),
+        lerp(tables[i], tables[i + 1u], tj),
+        lerp(tables[next], tables[next + 1u], tj),
         row_t,
     );
     let b = lerp(
-        lerp(albedo_tables[b_start + i], albedo_tables[b_start + i + 1u], tj),
-        lerp(albedo_tables[b_start + next], albedo_tables[b_start + next + 1u], tj),
+        lerp(tables[b_start + i], tables[b_start + i + 1u], tj),
+        lerp(tables[b_start + next], tables[b_start + next + 1u], tj),
         row_t,
     );
     return f0 * a + f90 * b;
@@ -285,7 +285,7 @@ fn layer_transmission(m: Material, mu: f32) -> vec3<f32> {
 struct Bsdf {
     frame: Frame,
     n_g: vec3<f32>,
-    material: u32,
+    m: Material,
 }
 
 fn transmits(m: Material) -> bool {
@@ -299,14 +299,14 @@ fn has_non_delta(m: Material) -> bool {
     return (m.flags & HAS_DIFFUSE) != 0u || glossy;
 }
 
-fn bsdf_new(material: u32, n_g: vec3<f32>, n_s_in: vec3<f32>) -> Bsdf {
+fn bsdf_new(m: Material, n_g: vec3<f32>, n_s_in: vec3<f32>) -> Bsdf {
     var n_s = n_s_in;
     if !all_finite(n_s) || dot3(n_s, n_s) < 0.25 {
         n_s = n_g;
     } else if dot3(n_s, n_g) < 0.0 {
         n_s = -n_s;
     }
-    return Bsdf(frame_from_z(n_s), n_g, material);
+    return Bsdf(frame_from_z(n_s), n_g, m);
 }
 
 // The outgoing side and direction (`Outgoing`); `valid` false where the BSDF is black.
@@ -355,7 +355,7 @@ fn selection_at(m: Material, wo: vec3<f32>, eta: f32) -> vec4<f32> {
 
 fn outgoing(b: Bsdf, wo: vec3<f32>) -> Outgoing {
     var out = Outgoing(false, false, 1.0, wo, vec3(0.0), vec4(0.0));
-    let m = materials[b.material];
+    let m = b.m;
     let cos_g = dot3(wo, b.n_g);
     if !(abs(cos_g) > GRAZING_COS) {
         return out;
@@ -505,7 +505,7 @@ fn bsdf_eval(b: Bsdf, out: Outgoing, wi: vec3<f32>) -> BsdfEval {
     if consistent(b, out.back, wi, wi_l) < 0.0 {
         return none;
     }
-    let e = mixture_eval(materials[b.material], out.selection, out.local, wi_l, out.eta);
+    let e = mixture_eval(b.m, out.selection, out.local, wi_l, out.eta);
     if !(all_finite(e.f_cos) && is_finite(e.pdf_fwd) && e.pdf_fwd > 0.0) {
         return none;
     }
@@ -615,7 +615,7 @@ fn lobe_kind(m: Material, k: u32) -> u32 {
 
 fn bsdf_sample(b: Bsdf, out: Outgoing, u_lobe: f32, u: vec2<f32>) -> BsdfSample {
     var s = BsdfSample(false, vec3(0.0), vec3(0.0), 0.0, KIND_SPECULAR, 1.0);
-    let m = materials[b.material];
+    let m = b.m;
     let p = out.selection;
     // The lobe: the first k with u_lobe < p₀ + … + p_k among those with p_k > 0.
     var k = 4u;

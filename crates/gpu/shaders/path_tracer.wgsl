@@ -37,7 +37,8 @@ struct Params {
     light_count: u32,
     // The environment light, or NO_LIGHT.
     environment: u32,
-    unused0: u32,
+    // What surface points interpolate: SURFACE_UV, SURFACE_NORMAL_MAPS, SURFACE_COLORS.
+    surface_flags: u32,
     unused1: u32,
     unused2: u32,
 }
@@ -66,7 +67,28 @@ struct Light {
     c2: vec4<f32>,
     normal: vec4<f32>,
     emission: vec4<f32>,
+    // An area light's texture coordinates at its corners, and in `uv2.z` (as bits) the
+    // texture reference of its emission or NO_TEXTURE.
+    uv01: vec4<f32>,
+    uv2: vec4<f32>,
 }
+
+// A triangle's texture coordinates, vertex colours (white without) and tangents (w: the
+// bitangent's sign) at its corners, where the scene has any.
+struct TriangleAttributes {
+    uv01: vec4<f32>,
+    uv2: vec4<f32>,
+    color0: vec4<f32>,
+    color1: vec4<f32>,
+    color2: vec4<f32>,
+    tangent0: vec4<f32>,
+    tangent1: vec4<f32>,
+    tangent2: vec4<f32>,
+}
+
+const SURFACE_UV: u32 = 1u;
+const SURFACE_NORMAL_MAPS: u32 = 2u;
+const SURFACE_COLORS: u32 = 4u;
 
 const AREA_LIGHT: u32 = 0u;
 const POINT_LIGHT: u32 = 1u;
@@ -94,8 +116,14 @@ const CAPPED_CONTINUATION: f32 = 0.95;
 @group(2) @binding(2) var<storage, read> lights: array<Light>;
 // Per light: the smallest number that picks it or a later one, and its pick probability.
 @group(2) @binding(3) var<storage, read> light_pick: array<vec2<f32>>;
-// The Schlick GGX albedo tables A and B (`albedo_tables`), rows over the roughness.
-@group(2) @binding(4) var<storage, read> albedo_tables: array<f32>;
+// The albedo tables A and B (rows over the roughness), their averages, the sRGB table.
+@group(2) @binding(4) var<storage, read> tables: array<f32>;
+@group(2) @binding(5) var<storage, read> texture_infos: array<TextureInfo>;
+// RGBA8 texels, red in the low byte.
+@group(2) @binding(6) var<storage, read> texels: array<u32>;
+@group(2) @binding(7) var<storage, read> texture_refs: array<TextureRef>;
+@group(2) @binding(8) var<storage, read> material_inputs: array<MaterialInputs>;
+@group(2) @binding(9) var<storage, read> attributes: array<TriangleAttributes>;
 
 fn infinity() -> f32 {
     return bitcast<f32>(0x7f800000u);
@@ -132,6 +160,8 @@ struct Surface {
     n_s: vec3<f32>,
     // Per-axis bound of the position's rounding error.
     error: vec3<f32>,
+    uv: vec2<f32>,
+    color: vec3<f32>,
     material: u32,
     light: u32,
 }
@@ -147,8 +177,25 @@ fn surface_at(index: u32, u: f32, v: f32) -> Surface {
     let c1 = t.p1.xyz;
     let c2 = t.p2.xyz;
     let w = 1.0 - u - v;
+    let material = bitcast<u32>(t.p0.w);
     let n_g = normalized_or(cross3(c1 - c0, c2 - c0), vec3(0.0));
     var n_s = normalized_or(t.n0.xyz * w + t.n1.xyz * u + t.n2.xyz * v, n_g);
+    var uv = vec2(0.0);
+    var color = vec3(1.0);
+    if params.surface_flags != 0u {
+        let a = attributes[index];
+        if (params.surface_flags & SURFACE_UV) != 0u {
+            uv = a.uv01.xy * w + a.uv01.zw * u + a.uv2.xy * v;
+        }
+        if (params.surface_flags & SURFACE_COLORS) != 0u {
+            let k0 = a.color0.xyz;
+            color = k0 + (a.color1.xyz - k0) * u + (a.color2.xyz - k0) * v;
+        }
+        let inputs = material_inputs[material];
+        if (params.surface_flags & SURFACE_NORMAL_MAPS) != 0u && inputs.refs[REF_NORMAL] != NO_TEXTURE {
+            n_s = normal_mapped(n_s, tangent_space_normal(inputs, uv), a, w, u, v);
+        }
+    }
     if dot3(n_s, n_g) < 0.0 {
         n_s = -n_s;
     }
@@ -157,9 +204,56 @@ fn surface_at(index: u32, u: f32, v: f32) -> Surface {
         n_g,
         n_s,
         barycentric_error(c0, c1, c2, vec3(w, u, v)),
-        bitcast<u32>(t.p0.w),
+        uv,
+        color,
+        material,
         bitcast<u32>(t.p1.w),
     );
+}
+
+// The shading normal `n` bent by the tangent-space normal `m` (zero: none) in the frame
+// of the interpolated tangent (`Mesh::surface_point`).
+fn normal_mapped(
+    n: vec3<f32>,
+    m: vec3<f32>,
+    a: TriangleAttributes,
+    w: f32,
+    u: f32,
+    v: f32,
+) -> vec3<f32> {
+    let tangent = a.tangent0 * w + a.tangent1 * u + a.tangent2 * v;
+    let tan0 = try_normalized(tangent.xyz);
+    if is_zero(m) || is_zero(tan0) {
+        return n;
+    }
+    let sign = select(1.0, -1.0, tangent.w < 0.0);
+    let tan = normalized_or(tan0 - n * dot3(n, tan0), vec3(0.0));
+    let bitangent = cross3(n, tan) * sign;
+    let mapped = tan * m.x + bitangent * m.y + n * m.z;
+    return normalized_or(mapped, n);
+}
+
+// The lobes at surface point `s`: the host's where no texture or vertex colour changes
+// them, else those of the material's inputs there (`Scene::bsdf`).
+fn material_at(s: Surface) -> Material {
+    let uniform_lobes = materials[s.material];
+    let inputs = material_inputs[s.material];
+    if (inputs.flags & UNIFORM_LOBES) != 0u {
+        return uniform_lobes;
+    }
+    var p = bsdf_params(inputs, s.uv);
+    p.base_color *= s.color;
+    return mixture_new(p, (uniform_lobes.flags & DOUBLE_SIDED) != 0u);
+}
+
+// An area light's radiance at barycentrics `b` (`AreaLight::radiance_at`).
+fn area_radiance(light: Light, b: vec3<f32>) -> vec3<f32> {
+    let texture = bitcast<u32>(light.uv2.z);
+    if texture == NO_TEXTURE {
+        return light.emission.xyz;
+    }
+    let uv = light.uv01.xy * b.x + light.uv01.zw * b.y + light.uv2.xy * b.z;
+    return light.emission.xyz * lookup(texture, uv).xyz;
 }
 
 // The next float from x toward the sign of o (`step_toward` of ray_offset.rs).
@@ -212,7 +306,8 @@ fn pick_light(u: f32) -> u32 {
 // Emitted radiance toward a path that hit `s` along `dir` after `t`, MIS-weighted against
 // light sampling when the segment was sampled by a BSDF with pdf `bsdf_pdf` (< 0: by the
 // camera or a delta lobe, full weight).
-fn emission(s: Surface, dir: vec3<f32>, t: f32, bsdf_pdf: f32) -> vec3<f32> {
+fn emission(s: Surface, hit: Hit, dir: vec3<f32>, bsdf_pdf: f32) -> vec3<f32> {
+    let t = hit.t;
     if s.light == NO_LIGHT {
         return vec3(0.0);
     }
@@ -221,7 +316,7 @@ fn emission(s: Surface, dir: vec3<f32>, t: f32, bsdf_pdf: f32) -> vec3<f32> {
     if !(cos_out > 0.0) {
         return vec3(0.0);
     }
-    let radiance = light.emission.xyz;
+    let radiance = area_radiance(light, vec3(1.0 - hit.u - hit.v, hit.u, hit.v));
     if bsdf_pdf < 0.0 {
         return radiance;
     }
@@ -297,7 +392,7 @@ fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
             }
             let inv_area = 1.0 / light.c0.w;
             let pdf = inv_area * distance_sq / cos_at_light;
-            return Illumination(true, direction, distance, light.emission.xyz, pdf);
+            return Illumination(true, direction, distance, area_radiance(light, b), pdf);
         }
         case POINT_LIGHT: {
             return illuminate_delta(light.c0.xyz, receiver, light.emission.xyz);
@@ -425,17 +520,17 @@ fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         start_step(&rng, segments, PAIRS_PER_VERTEX);
         let s = surface_at(hit.prim, hit.u, hit.v);
-        radiance += throughput * emission(s, direction, hit.t, bsdf_pdf);
+        radiance += throughput * emission(s, hit, direction, bsdf_pdf);
         if segments >= params.max_segments {
             break;
         }
-        let b = bsdf_new(s.material, s.n_g, s.n_s);
+        let b = bsdf_new(material_at(s), s.n_g, s.n_s);
         let out = outgoing(b, -direction);
         if !out.valid {
             break;
         }
         var shadow = Shadow(false, vec3(0.0), vec3(0.0), 0.0, vec3(0.0));
-        if has_non_delta(materials[s.material]) {
+        if has_non_delta(b.m) {
             shadow = next_event(&rng, s, b, out, throughput);
         }
         // The continuation (`Walk::scatter`).

@@ -9,11 +9,11 @@
 //! `shaders/sampler.wgsl`) and shades with the same operations, so both backends render the
 //! same image up to floating-point rounding per path, not only in expectation.
 //!
-//! The GPU shades the whole surface model of vcm-scene (every lobe of the glTF
-//! metallic-roughness mixture, smooth and GGX) under every kind of light but environment
-//! maps (emissive triangles of constant radiance, point, spot and directional lights, a
-//! constant environment); not yet textures, normal maps, vertex colours, alpha masks or
-//! absorbing volumes ([`check_scene`] names what a scene needs).
+//! The GPU shades the whole surface model of vcm-scene — every lobe of the glTF
+//! metallic-roughness mixture, smooth and GGX, with its textures (base colour,
+//! metallic-roughness, specular, transmission, emission, normal maps) and vertex colours —
+//! under every kind of light but environment maps; not yet alpha masks, absorbing volumes
+//! and environment maps ([`check_scene`] names what a scene needs).
 
 #![warn(missing_docs)]
 

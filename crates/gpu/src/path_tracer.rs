@@ -9,7 +9,7 @@ use glam::Vec3;
 use vcm::{Film, FrameStats, Integrator, PtSettings, RenderError, Schedule, StopFlag};
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Decision, Scene};
-use vcm_traversal_wgpu::{GpuBvh, GpuDevice, dispatch_shape};
+use vcm_traversal_wgpu::{GpuBvh, GpuDevice, GpuError, dispatch_shape};
 
 use crate::error::GpuRenderError;
 use crate::scene_data::{SceneData, check_scene};
@@ -37,7 +37,8 @@ struct Params {
     independent: u32,
     light_count: u32,
     environment: u32,
-    unused: [u32; 3],
+    surface_flags: u32,
+    unused: [u32; 2],
 }
 
 /// Bytes of one path's radiance in the kernel's output (`vec4<f32>`).
@@ -63,6 +64,8 @@ pub struct GpuPathTracer {
     buffers: DispatchBuffers,
     light_count: u32,
     environment: u32,
+    /// What surface points interpolate (`SURFACE_UV`, … of `path_tracer.wgsl`).
+    surface_flags: u32,
     samples_per_frame: u32,
     stop: StopFlag,
 }
@@ -107,11 +110,16 @@ impl GpuPathTracer {
         });
         let data = SceneData::new(&scene);
         let shading = [
-            gpu.storage_buffer("shading triangles", bytemuck::cast_slice(&data.triangles))?,
-            gpu.storage_buffer("materials", bytemuck::cast_slice(&data.materials))?,
-            gpu.storage_buffer("area lights", bytemuck::cast_slice(&data.lights))?,
-            gpu.storage_buffer("light pick", bytemuck::cast_slice(&data.light_pick))?,
-            gpu.storage_buffer("albedo tables", bytemuck::cast_slice(&data.albedo_tables))?,
+            upload(&gpu, "shading triangles", &data.triangles)?,
+            upload(&gpu, "materials", &data.materials)?,
+            upload(&gpu, "lights", &data.lights)?,
+            upload(&gpu, "light pick", &data.light_pick)?,
+            upload(&gpu, "lookup tables", &data.tables)?,
+            upload(&gpu, "textures", &data.textures)?,
+            upload(&gpu, "texels", &data.texels)?,
+            upload(&gpu, "texture references", &data.texture_refs)?,
+            upload(&gpu, "material inputs", &data.material_inputs)?,
+            upload(&gpu, "triangle attributes", &data.attributes)?,
         ];
         let scene_groups = [
             bind(device, &pipeline, 1, hierarchy.iter()),
@@ -133,6 +141,7 @@ impl GpuPathTracer {
             buffers,
             light_count: data.light_count,
             environment: data.environment,
+            surface_flags: data.surface_flags,
             samples_per_frame: 1,
             stop: StopFlag::new(),
         })
@@ -181,7 +190,8 @@ impl GpuPathTracer {
             independent: u32::from(sequence == SampleSequence::Independent),
             light_count: self.light_count,
             environment: self.environment,
-            unused: [0; 3],
+            surface_flags: self.surface_flags,
+            unused: [0; 2],
         };
         (params, (x, y))
     }
@@ -294,6 +304,18 @@ impl DispatchBuffers {
             group,
         }
     }
+}
+
+/// Uploads `items` as a read-only storage buffer, one zeroed item if there are none (a
+/// binding holds at least one element of its array).
+fn upload<T: Pod>(
+    gpu: &GpuDevice,
+    label: &'static str,
+    items: &[T],
+) -> Result<wgpu::Buffer, GpuError> {
+    let zero = [T::zeroed()];
+    let items = if items.is_empty() { &zero[..] } else { items };
+    gpu.storage_buffer(label, bytemuck::cast_slice(items))
 }
 
 /// Binds `buffers` to bindings 0, 1, … of bind group `group` of `pipeline`.

@@ -2,10 +2,15 @@
 //! which scenes it can shade.
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
+use vcm_scene::Material;
 use vcm_scene::Scene;
-use vcm_scene::bsdf::{FlatLobes, albedo_tables};
+use vcm_scene::bsdf::{ALBEDO_TABLE_SIZE, FlatLobes, albedo_tables};
 use vcm_scene::light::{Light, LightSampler};
+use vcm_scene::mesh::Mesh;
+use vcm_scene::texture::{
+    ColorEncoding, Filter, Texture, TextureRef, UvTransform, WrapMode, srgb_to_linear_table,
+};
 
 /// `ShadeTriangle`: corners with the material and the area light (or `NO_LIGHT`) as bits in
 /// w, then the vertex normals.
@@ -45,13 +50,63 @@ pub(crate) struct GpuMaterial {
 }
 
 /// `Light` of `path_tracer.wgsl`: three points or directions with a number each, a normal
-/// with the kind, and the emission (see there).
+/// with the kind, the emission, and an area light's texture coordinates and texture
+/// reference (see there).
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
 pub(crate) struct GpuLight {
     corners: [[f32; 4]; 3],
     normal: [f32; 4],
     emission: [f32; 4],
+    uv01: [f32; 4],
+    uv2: [f32; 4],
+}
+
+/// `TextureInfo` of `material.wgsl`.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct GpuTexture {
+    offset: u32,
+    width: u32,
+    height: u32,
+    flags: u32,
+}
+
+/// `TextureRef` of `material.wgsl`.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct GpuTextureRef {
+    linear: [f32; 4],
+    offset: [f32; 2],
+    texture: u32,
+    identity: u32,
+}
+
+/// `MaterialInputs` of `material.wgsl`.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct GpuMaterialInputs {
+    base_color: [f32; 4],
+    specular_color: [f32; 3],
+    metallic: f32,
+    roughness: f32,
+    specular: f32,
+    transmission: f32,
+    normal_scale: f32,
+    ior: f32,
+    flags: u32,
+    refs: [u32; 7],
+    unused: [u32; 3],
+}
+
+/// `TriangleAttributes` of `path_tracer.wgsl`.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct GpuAttributes {
+    uv01: [f32; 4],
+    uv2: [f32; 4],
+    colors: [[f32; 4]; 3],
+    tangents: [[f32; 4]; 3],
 }
 
 /// The light kinds of `path_tracer.wgsl`.
@@ -74,6 +129,16 @@ const NO_ROW: u32 = u32::MAX;
 
 /// `NO_LIGHT` of `path_tracer.wgsl`.
 const NO_LIGHT: u32 = u32::MAX;
+/// `TextureInfo::flags` and `MaterialInputs::flags` bits, `NO_TEXTURE` (`material.wgsl`).
+const SRGB_TEXTURE: u32 = 1;
+const NEAREST_TEXTURE: u32 = 2;
+const THIN_WALLED: u32 = 1;
+const UNIFORM_LOBES: u32 = 2;
+const NO_TEXTURE: u32 = u32::MAX;
+/// `Params::surface_flags` bits (`path_tracer.wgsl`).
+pub(crate) const SURFACE_UV: u32 = 1;
+pub(crate) const SURFACE_NORMAL_MAPS: u32 = 2;
+pub(crate) const SURFACE_COLORS: u32 = 4;
 
 /// The scene's shading data, ready to upload.
 pub(crate) struct SceneData {
@@ -86,8 +151,17 @@ pub(crate) struct SceneData {
     pub light_count: u32,
     /// The environment light, or `NO_LIGHT`.
     pub environment: u32,
-    /// The albedo tables A then B, each row by row.
-    pub albedo_tables: Vec<f32>,
+    /// The albedo tables A then B, each row by row, their row averages, the sRGB table.
+    pub tables: Vec<f32>,
+    /// What surface points interpolate (`SURFACE_UV`, …).
+    pub surface_flags: u32,
+    /// Per triangle, its texture coordinates, colours and tangents (empty without any).
+    pub attributes: Vec<GpuAttributes>,
+    pub textures: Vec<GpuTexture>,
+    /// Every texture's texels, RGBA8 packed into a word.
+    pub texels: Vec<u32>,
+    pub texture_refs: Vec<GpuTextureRef>,
+    pub material_inputs: Vec<GpuMaterialInputs>,
 }
 
 fn vec4(v: Vec3, w: f32) -> [f32; 4] {
@@ -99,9 +173,6 @@ fn vec4(v: Vec3, w: f32) -> [f32; 4] {
 pub fn check_scene(scene: &Scene) -> Result<(), String> {
     let features = &scene.features;
     let unsupported = [
-        (features.textures, "textures"),
-        (features.normal_maps, "normal maps"),
-        (features.vertex_colors, "vertex colours"),
         (features.alpha_masks, "alpha masks"),
         (features.absorbing_volumes, "absorbing volumes"),
         (features.triangles == 0, "a scene without triangles"),
@@ -111,24 +182,13 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
     }
     for light in &scene.lights {
         match light {
-            Light::Area(area) if area.texture.is_some() || area.cut_out.is_some() => {
-                return Err("textured or cut-out emitters".into());
+            Light::Area(area) if area.cut_out.is_some() => {
+                return Err("cut-out emitters".into());
             }
             Light::Environment(environment) if environment.map.is_some() => {
                 return Err("environment maps".into());
             }
             _ => {}
-        }
-    }
-    let mut used = vec![false; scene.materials.len()];
-    for &material in &scene.mesh.material_ids {
-        used[material as usize] = true;
-    }
-    let materials = scene.materials.iter().zip(&scene.material_lobes);
-    for ((material, lobes), _) in materials.zip(used).filter(|(_, used)| *used) {
-        if lobes.is_none() {
-            let name = &material.name;
-            return Err(format!("material '{name}' varies over its surface"));
         }
     }
     Ok(())
@@ -166,7 +226,35 @@ impl SceneData {
                 pack_material(flat.as_ref(), material.double_sided)
             })
             .collect();
-        let lights = scene.lights.iter().map(pack_light).collect();
+        let mut refs = Vec::new();
+        let lights = scene
+            .lights
+            .iter()
+            .map(|light| pack_light(light, &mut refs))
+            .collect();
+        let material_inputs = scene
+            .materials
+            .iter()
+            .zip(&scene.material_lobes)
+            .map(|(material, lobes)| pack_inputs(material, lobes.is_some(), &mut refs))
+            .collect();
+        let plan = &scene.shading;
+        let surface_flags = [
+            (plan.texture_coordinates || plan.normal_maps, SURFACE_UV),
+            (plan.normal_maps, SURFACE_NORMAL_MAPS),
+            (!mesh.colors.is_empty(), SURFACE_COLORS),
+        ]
+        .iter()
+        .filter(|(on, _)| *on)
+        .fold(0, |flags, (_, flag)| flags | flag);
+        let attributes = if surface_flags == 0 {
+            Vec::new()
+        } else {
+            (0..mesh.triangle_count())
+                .map(|t| pack_attributes(mesh, t))
+                .collect()
+        };
+        let (textures, texels) = pack_textures(&scene.textures);
         let environment = sampler.environment().map_or(NO_LIGHT, |l| l as u32);
         let light_count = if sampler.sample(0.0).is_some() {
             scene.lights.len() as u32
@@ -183,22 +271,143 @@ impl SceneData {
             light_pick,
             light_count,
             environment,
-            albedo_tables: albedo_tables()
-                .iter()
-                .flat_map(|t| t.iter().flatten())
-                .copied()
-                .collect(),
+            tables: lookup_tables(),
+            surface_flags,
+            attributes,
+            textures,
+            texels,
+            texture_refs: refs,
+            material_inputs,
         }
     }
 }
 
-/// A light as `path_tracer.wgsl` reads it (textured emitters and environment maps, which
-/// [`check_scene`] refuses, without their textures).
-fn pack_light(light: &Light) -> GpuLight {
+/// The albedo tables A and B row by row, their row averages, then the sRGB decoding table:
+/// `tables` of `path_tracer.wgsl` (offsets in [`crate::shader`]).
+fn lookup_tables() -> Vec<f32> {
+    let albedo = albedo_tables();
+    let rows = |table: &[[f32; ALBEDO_TABLE_SIZE.0]; ALBEDO_TABLE_SIZE.1]| {
+        table.iter().flatten().copied().collect::<Vec<_>>()
+    };
+    [
+        rows(albedo.a),
+        rows(albedo.b),
+        albedo.a_average.to_vec(),
+        albedo.b_average.to_vec(),
+        srgb_to_linear_table().to_vec(),
+    ]
+    .concat()
+}
+
+/// Every texture's description and all their texels, one after the other.
+fn pack_textures(textures: &[Texture]) -> (Vec<GpuTexture>, Vec<u32>) {
+    let mut texels = Vec::new();
+    let wrap = |mode: WrapMode| match mode {
+        WrapMode::Repeat => 0,
+        WrapMode::MirroredRepeat => 1,
+        WrapMode::ClampToEdge => 2,
+    };
+    let infos = textures
+        .iter()
+        .map(|texture| {
+            let offset = texels.len() as u32;
+            texels.extend(texture.texels().iter().map(|&t| u32::from_le_bytes(t)));
+            let mut flags = (wrap(texture.wrap_u) << 2) | (wrap(texture.wrap_v) << 4);
+            if texture.encoding() == ColorEncoding::Srgb {
+                flags |= SRGB_TEXTURE;
+            }
+            if texture.filter == Filter::Nearest {
+                flags |= NEAREST_TEXTURE;
+            }
+            GpuTexture {
+                offset,
+                width: texture.width(),
+                height: texture.height(),
+                flags,
+            }
+        })
+        .collect();
+    (infos, texels)
+}
+
+/// Adds `texture` to `refs` and returns its index there (`NO_TEXTURE` for none).
+fn add_ref(refs: &mut Vec<GpuTextureRef>, texture: Option<TextureRef>) -> u32 {
+    let Some(texture) = texture else {
+        return NO_TEXTURE;
+    };
+    let [row0, row1] = texture.transform.linear;
+    refs.push(GpuTextureRef {
+        linear: [row0.x, row0.y, row1.x, row1.y],
+        offset: texture.transform.offset.to_array(),
+        texture: texture.index as u32,
+        identity: u32::from(texture.transform == UvTransform::IDENTITY),
+    });
+    refs.len() as u32 - 1
+}
+
+/// A material's factors and texture references (`uniform`: the host has its lobes).
+fn pack_inputs(
+    material: &Material,
+    uniform: bool,
+    refs: &mut Vec<GpuTextureRef>,
+) -> GpuMaterialInputs {
+    let slots = [
+        material.base_color_texture,
+        material.metallic_roughness_texture,
+        material.normal_texture,
+        material.emissive_texture,
+        material.specular_texture,
+        material.specular_color_texture,
+        material.transmission_texture,
+    ];
+    let mut flags = 0;
+    if material.thin_walled {
+        flags |= THIN_WALLED;
+    }
+    if uniform {
+        flags |= UNIFORM_LOBES;
+    }
+    GpuMaterialInputs {
+        base_color: material.base_color.to_array(),
+        specular_color: material.specular_color.to_array(),
+        metallic: material.metallic,
+        roughness: material.roughness,
+        specular: material.specular,
+        transmission: material.transmission,
+        normal_scale: material.normal_scale,
+        ior: material.ior,
+        flags,
+        refs: slots.map(|slot| add_ref(refs, slot)),
+        unused: [0; 3],
+    }
+}
+
+/// Triangle `t`'s texture coordinates, vertex colours (white without) and tangents.
+fn pack_attributes(mesh: &Mesh, t: usize) -> GpuAttributes {
+    let corners = mesh.triangles[t].map(|i| i as usize);
+    let uv = |k: usize| mesh.uvs.get(corners[k]).copied().unwrap_or(Vec2::ZERO);
+    let color = |k: usize| mesh.colors.get(corners[k]).copied().unwrap_or(Vec3::ONE);
+    let tangent = |k: usize| mesh.tangents.get(corners[k]).copied().unwrap_or(Vec4::ZERO);
+    GpuAttributes {
+        uv01: [uv(0).x, uv(0).y, uv(1).x, uv(1).y],
+        uv2: [uv(2).x, uv(2).y, 0.0, 0.0],
+        colors: [0, 1, 2].map(|k| vec4(color(k), 0.0)),
+        tangents: [0, 1, 2].map(|k| tangent(k).to_array()),
+    }
+}
+
+/// A light as `path_tracer.wgsl` reads it, an area light's emission texture added to `refs`
+/// (environment maps, which [`check_scene`] refuses, left out).
+fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
     let kind =
         |kind: u32, emission: Vec3| (vec4(Vec3::ZERO, f32::from_bits(kind)), vec4(emission, 0.0));
     let point = |p: Vec3, w: f32| vec4(p, w);
     let zero = [0.0; 4];
+    // What a light without texture coordinates holds there.
+    let unlit = GpuLight {
+        uv2: [0.0, 0.0, f32::from_bits(NO_TEXTURE), 0.0],
+        ..GpuLight::zeroed()
+    };
     match light {
         Light::Area(area) => {
             let (mut normal, emission) = kind(AREA_LIGHT, area.emission);
@@ -211,6 +420,13 @@ fn pack_light(light: &Light) -> GpuLight {
                 ],
                 normal,
                 emission,
+                uv01: [area.uvs[0].x, area.uvs[0].y, area.uvs[1].x, area.uvs[1].y],
+                uv2: [
+                    area.uvs[2].x,
+                    area.uvs[2].y,
+                    f32::from_bits(add_ref(refs, area.texture)),
+                    0.0,
+                ],
             }
         }
         Light::Point(l) => {
@@ -219,6 +435,7 @@ fn pack_light(light: &Light) -> GpuLight {
                 corners: [point(l.position, 0.0), zero, zero],
                 normal,
                 emission,
+                ..unlit
             }
         }
         Light::Spot(l) => {
@@ -231,6 +448,7 @@ fn pack_light(light: &Light) -> GpuLight {
                 ],
                 normal,
                 emission,
+                ..unlit
             }
         }
         Light::Directional(l) => {
@@ -239,6 +457,7 @@ fn pack_light(light: &Light) -> GpuLight {
                 corners: [point(l.direction, 0.0), zero, zero],
                 normal,
                 emission,
+                ..unlit
             }
         }
         Light::Environment(l) => {
@@ -247,6 +466,7 @@ fn pack_light(light: &Light) -> GpuLight {
                 corners: [zero; 3],
                 normal,
                 emission,
+                ..unlit
             }
         }
     }
@@ -339,6 +559,10 @@ mod tests {
     fn kernel_structs_have_the_wgsl_sizes() {
         assert_eq!(size_of::<GpuTriangle>(), 96);
         assert_eq!(size_of::<GpuMaterial>(), 160);
-        assert_eq!(size_of::<GpuLight>(), 80);
+        assert_eq!(size_of::<GpuLight>(), 112);
+        assert_eq!(size_of::<GpuTexture>(), 16);
+        assert_eq!(size_of::<GpuTextureRef>(), 32);
+        assert_eq!(size_of::<GpuMaterialInputs>(), 96);
+        assert_eq!(size_of::<GpuAttributes>(), 128);
     }
 }

@@ -2,12 +2,14 @@
 //! the traversal functions of vcm-traversal-wgpu (WGSL has no includes).
 
 use vcm::ray_offset::gamma;
-use vcm_scene::bsdf::ALBEDO_TABLE_SIZE;
+use vcm_scene::bsdf::{ALBEDO_TABLE_SIZE, MIN_ALPHA};
 
 /// The CPU's numbers: keyed hashes and Owen-scrambled Sobol pairs.
 pub const SAMPLER_WGSL: &str = include_str!("../shaders/sampler.wgsl");
-/// The surface scattering model (the lobes the GPU shades so far).
+/// The surface scattering model.
 pub const BSDF_WGSL: &str = include_str!("../shaders/bsdf.wgsl");
+/// Textures, and materials that vary over their surface.
+pub const MATERIAL_WGSL: &str = include_str!("../shaders/material.wgsl");
 /// The path tracing kernel and the scene's shading data.
 pub const PATH_TRACER_WGSL: &str = include_str!("../shaders/path_tracer.wgsl");
 
@@ -22,13 +24,24 @@ pub fn path_tracer_module(traversal: &str) -> String {
     // The CPU's rounding-error factors, written so that they parse to the same f32, and
     // the size of the albedo tables.
     let (columns, rows) = ALBEDO_TABLE_SIZE;
+    // Where each table starts in `tables`: A and B (rows × columns each), their row
+    // averages, the sRGB table.
+    let a_average = 2 * rows * columns;
+    let (b_average, srgb) = (a_average + rows, a_average + 2 * rows);
     let constants = format!(
         "const GAMMA_7: f32 = {:?}f;\nconst GAMMA_16: f32 = {:?}f;\n\
-         const ALBEDO_COLUMNS: u32 = {columns}u;\nconst ALBEDO_ROWS: u32 = {rows}u;\n",
+         const MIN_ALPHA: f32 = {:?}f;\nconst R_MIN: f32 = {:?}f;\n\
+         const ALBEDO_COLUMNS: u32 = {columns}u;\nconst ALBEDO_ROWS: u32 = {rows}u;\n\
+         const TABLE_A_AVG: u32 = {a_average}u;\nconst TABLE_B_AVG: u32 = {b_average}u;\n\
+         const TABLE_SRGB: u32 = {srgb}u;\n",
         gamma(7),
-        gamma(16)
+        gamma(16),
+        MIN_ALPHA,
+        MIN_ALPHA.sqrt(),
     );
-    format!("{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{PATH_TRACER_WGSL}")
+    format!(
+        "{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{PATH_TRACER_WGSL}"
+    )
 }
 
 #[cfg(test)]
@@ -70,13 +83,10 @@ mod tests {
     }
 
     #[test]
-    fn rounding_factors_parse_back_to_the_same_floats() {
-        for n in [7, 16] {
-            let written = format!("{:?}", gamma(n));
-            assert_eq!(
-                written.parse::<f32>().unwrap().to_bits(),
-                gamma(n).to_bits()
-            );
+    fn host_constants_parse_back_to_the_same_floats() {
+        for x in [gamma(7), gamma(16), MIN_ALPHA, MIN_ALPHA.sqrt()] {
+            let written = format!("{x:?}");
+            assert_eq!(written.parse::<f32>().unwrap().to_bits(), x.to_bits());
         }
     }
 }

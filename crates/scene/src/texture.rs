@@ -78,7 +78,7 @@ pub struct Texture {
 }
 
 /// Lookup table from an sRGB-encoded byte to linear intensity (IEC 61966-2-1).
-fn srgb_to_linear_table() -> &'static [f32; 256] {
+pub fn srgb_to_linear_table() -> &'static [f32; 256] {
     static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
     TABLE.get_or_init(|| {
         std::array::from_fn(|i| {
@@ -155,6 +155,11 @@ impl Texture {
     /// How the texels are interpreted.
     pub fn encoding(&self) -> ColorEncoding {
         self.encoding
+    }
+
+    /// The texels as stored, RGBA8, row by row from the top.
+    pub fn texels(&self) -> &[[u8; 4]] {
+        &self.texels
     }
 
     /// One texel as linear RGBA.

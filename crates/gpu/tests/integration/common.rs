@@ -34,6 +34,16 @@ pub fn scene(name: &str) -> Arc<Scene> {
     Arc::new(Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
 }
 
+/// A model of `../shared/scenes/khronos-samples/` (beside the checkout), lit by a point light
+/// and a dim sky.
+pub fn lit_khronos_model(file: &str) -> Arc<Scene> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/scenes/khronos-samples")
+        .join(file);
+    let loaded = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    Arc::new(vcm_scene::testing::lit_by_bulb_and_sky(loaded))
+}
+
 /// A scene of `scenes/` with its glTF changed by `edit` (written to a temporary folder).
 pub fn scene_variant(name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> Arc<Scene> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenes/{name}.gltf"));

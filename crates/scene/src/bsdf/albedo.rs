@@ -179,11 +179,27 @@ pub(super) struct SpecularAlbedo {
 /// Entries of the albedo tables in μ (columns, over √μ) and in roughness (rows).
 pub const ALBEDO_TABLE_SIZE: (usize, usize) = (MU_RES, R_RES);
 
-/// The tabulated A(μ, α) and B(μ, α) of the Schlick GGX albedo, `[row][column]` (rows over
-/// the roughness, columns over √μ), for shading code outside this crate.
-pub fn albedo_tables() -> [&'static [[f32; MU_RES]; R_RES]; 2] {
+/// The tabulated Schlick GGX albedo, for shading code outside this crate.
+pub struct AlbedoTables {
+    /// A(μ, α), `[row][column]`: rows over the roughness, columns over √μ.
+    pub a: &'static [[f32; MU_RES]; R_RES],
+    /// B(μ, α), laid out like `a`.
+    pub b: &'static [[f32; MU_RES]; R_RES],
+    /// The cosine-weighted average of each row of A.
+    pub a_average: &'static [f32; R_RES],
+    /// The cosine-weighted average of each row of B.
+    pub b_average: &'static [f32; R_RES],
+}
+
+/// The albedo tables (computed on first use).
+pub fn albedo_tables() -> AlbedoTables {
     let t = tables();
-    [&t.a, &t.b]
+    AlbedoTables {
+        a: &t.a,
+        b: &t.b,
+        a_average: &t.a_avg,
+        b_average: &t.b_avg,
+    }
 }
 
 impl SpecularAlbedo {

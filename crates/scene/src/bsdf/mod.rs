@@ -70,7 +70,7 @@ mod thin_dielectric;
 #[cfg(test)]
 mod tests;
 
-pub use albedo::{ALBEDO_TABLE_SIZE, albedo_tables};
+pub use albedo::{ALBEDO_TABLE_SIZE, AlbedoTables, albedo_tables};
 pub use flat::{FlatAlbedo, FlatDiffuse, FlatInterface, FlatLobes, FlatSchlick};
 pub use surface::{Bsdf, FixedOutgoing, GRAZING_COS, Lobes};
 

@@ -7,10 +7,9 @@
 
 use std::path::Path;
 
-use glam::Vec3;
 use vcm::{Algorithm, Integrator, MergeRadius, PtSettings, VcmSettings};
 use vcm_scene::Scene;
-use vcm_scene::light::{Light, PointLight};
+use vcm_scene::testing::lit_by_bulb_and_sky;
 
 use crate::common::{self, RegionSeries};
 
@@ -162,16 +161,7 @@ fn lit_khronos_model(file: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/scenes/khronos-samples")
         .join(file);
-    let loaded = Scene::load(&path).unwrap();
-    let bounds = loaded.mesh.bounds();
-    let radius = bounds.radius();
-    let sky = common::sky(Vec3::new(0.3, 0.35, 0.4), None, &loaded.mesh);
-    let bulb = Light::Point(PointLight {
-        position: bounds.center() + Vec3::new(1.0, 1.2, 1.5) * radius,
-        intensity: Vec3::splat(3.0 * radius * radius),
-    });
-    let mesh = loaded.mesh.clone();
-    common::rebuilt(loaded, mesh, vec![bulb, sky])
+    lit_by_bulb_and_sky(Scene::load(&path).unwrap())
 }
 
 /// Real models, with what the Cornell scenes lack: base colour, metallic-roughness, normal
