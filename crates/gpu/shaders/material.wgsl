@@ -22,12 +22,14 @@ struct TextureRef {
 }
 
 // `Material`'s factors and texture references (NO_TEXTURE where a slot has none), in the
-// order of REF_BASE_COLOR … REF_TRANSMISSION; flags: THIN_WALLED, and UNIFORM_LOBES where
-// the host has the lobes in `materials` already.
+// order of REF_BASE_COLOR … REF_TRANSMISSION; flags: THIN_WALLED, UNIFORM_LOBES where the
+// host has the lobes in `materials` already, BOUNDS_VOLUME (`Material::bounds_volume`).
 struct MaterialInputs {
     base_color: vec4<f32>,
     specular_color: vec3<f32>,
     metallic: f32,
+    // The absorption inside the solid a BOUNDS_VOLUME surface encloses.
+    absorption: vec3<f32>,
     roughness: f32,
     specular: f32,
     transmission: f32,
@@ -44,6 +46,7 @@ const WRAP_MIRRORED: u32 = 1u;
 const NO_TEXTURE: u32 = 0xffffffffu;
 const THIN_WALLED: u32 = 1u;
 const UNIFORM_LOBES: u32 = 2u;
+const BOUNDS_VOLUME: u32 = 4u;
 const REF_BASE_COLOR: u32 = 0u;
 const REF_METALLIC_ROUGHNESS: u32 = 1u;
 const REF_NORMAL: u32 = 2u;

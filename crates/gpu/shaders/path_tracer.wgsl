@@ -37,8 +37,7 @@ struct Params {
     light_count: u32,
     // The environment light, or NO_LIGHT.
     environment: u32,
-    // What surface points interpolate: SURFACE_UV, SURFACE_NORMAL_MAPS, SURFACE_COLORS.
-    surface_flags: u32,
+    unused0: u32,
     unused1: u32,
     unused2: u32,
 }
@@ -86,9 +85,20 @@ struct TriangleAttributes {
     tangent2: vec4<f32>,
 }
 
-const SURFACE_UV: u32 = 1u;
-const SURFACE_NORMAL_MAPS: u32 = 2u;
-const SURFACE_COLORS: u32 = 4u;
+// What the scene needs, set per scene by the host (`KernelPlan`) so that the compiler drops
+// the code of what it does not: texture coordinates (for textures or normal maps), normal
+// maps, vertex colours, materials built per hit, absorbing volumes, and which kinds of light
+// exist (bit k for kind k).
+override TEXTURE_COORDINATES: bool = true;
+override NORMAL_MAPS: bool = true;
+override VERTEX_COLORS: bool = true;
+override VARYING_MATERIALS: bool = true;
+override ABSORBING_VOLUMES: bool = true;
+override LIGHT_KINDS: u32 = 31u;
+
+fn has_light_kind(kind: u32) -> bool {
+    return (LIGHT_KINDS & (1u << kind)) != 0u;
+}
 
 const AREA_LIGHT: u32 = 0u;
 const POINT_LIGHT: u32 = 1u;
@@ -182,17 +192,17 @@ fn surface_at(index: u32, u: f32, v: f32) -> Surface {
     var n_s = normalized_or(t.n0.xyz * w + t.n1.xyz * u + t.n2.xyz * v, n_g);
     var uv = vec2(0.0);
     var color = vec3(1.0);
-    if params.surface_flags != 0u {
+    if TEXTURE_COORDINATES || VERTEX_COLORS {
         let a = attributes[index];
-        if (params.surface_flags & SURFACE_UV) != 0u {
+        if TEXTURE_COORDINATES {
             uv = a.uv01.xy * w + a.uv01.zw * u + a.uv2.xy * v;
         }
-        if (params.surface_flags & SURFACE_COLORS) != 0u {
+        if VERTEX_COLORS {
             let k0 = a.color0.xyz;
             color = k0 + (a.color1.xyz - k0) * u + (a.color2.xyz - k0) * v;
         }
         let inputs = material_inputs[material];
-        if (params.surface_flags & SURFACE_NORMAL_MAPS) != 0u && inputs.refs[REF_NORMAL] != NO_TEXTURE {
+        if NORMAL_MAPS && inputs.refs[REF_NORMAL] != NO_TEXTURE {
             n_s = normal_mapped(n_s, tangent_space_normal(inputs, uv), a, w, u, v);
         }
     }
@@ -237,6 +247,9 @@ fn normal_mapped(
 // them, else those of the material's inputs there (`Scene::bsdf`).
 fn material_at(s: Surface) -> Material {
     let uniform_lobes = materials[s.material];
+    if !VARYING_MATERIALS {
+        return uniform_lobes;
+    }
     let inputs = material_inputs[s.material];
     if (inputs.flags & UNIFORM_LOBES) != 0u {
         return uniform_lobes;
@@ -249,7 +262,7 @@ fn material_at(s: Surface) -> Material {
 // An area light's radiance at barycentrics `b` (`AreaLight::radiance_at`).
 fn area_radiance(light: Light, b: vec3<f32>) -> vec3<f32> {
     let texture = bitcast<u32>(light.uv2.z);
-    if texture == NO_TEXTURE {
+    if !TEXTURE_COORDINATES || texture == NO_TEXTURE {
         return light.emission.xyz;
     }
     let uv = light.uv01.xy * b.x + light.uv01.zw * b.y + light.uv2.xy * b.z;
@@ -277,6 +290,28 @@ fn offset_ray_origin(p: vec3<f32>, p_error: vec3<f32>, n_g: vec3<f32>, w: vec3<f
         step_toward(moved.y, offset.y),
         step_toward(moved.z, offset.z),
     );
+}
+
+// The transmittance over `distance` in a medium of absorption `sigma` (Beer–Lambert per
+// channel, `Medium::transmittance`).
+fn transmittance(sigma: vec3<f32>, distance: f32) -> vec3<f32> {
+    if !ABSORBING_VOLUMES || all(sigma == vec3(0.0)) {
+        return vec3(1.0);
+    }
+    return select(exp(-sigma * distance), vec3(1.0), sigma == vec3(0.0));
+}
+
+// The absorption on the side of surface `s` that `w` leaves toward, coming from a medium of
+// absorption `sigma` (`Medium::toward`): a volume boundary's inside, else outside.
+fn medium_toward(sigma: vec3<f32>, s: Surface, w: vec3<f32>) -> vec3<f32> {
+    if !ABSORBING_VOLUMES {
+        return sigma;
+    }
+    let inputs = material_inputs[s.material];
+    if (inputs.flags & BOUNDS_VOLUME) == 0u {
+        return sigma;
+    }
+    return select(vec3(0.0), inputs.absorption, dot3(w, s.n_g) < 0.0);
 }
 
 // Veach's power heuristic for one sample of each technique.
@@ -308,7 +343,7 @@ fn pick_light(u: f32) -> u32 {
 // camera or a delta lobe, full weight).
 fn emission(s: Surface, hit: Hit, dir: vec3<f32>, bsdf_pdf: f32) -> vec3<f32> {
     let t = hit.t;
-    if s.light == NO_LIGHT {
+    if !has_light_kind(AREA_LIGHT) || s.light == NO_LIGHT {
         return vec3(0.0);
     }
     let light = lights[s.light];
@@ -376,6 +411,9 @@ const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
 fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
     switch light_kind(light) {
         case AREA_LIGHT: {
+            if !has_light_kind(AREA_LIGHT) {
+                return no_illumination();
+            }
             // A uniform point on the triangle.
             let su = sqrt(u.x);
             let b0 = 1.0 - su;
@@ -395,9 +433,15 @@ fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
             return Illumination(true, direction, distance, area_radiance(light, b), pdf);
         }
         case POINT_LIGHT: {
+            if !has_light_kind(POINT_LIGHT) {
+                return no_illumination();
+            }
             return illuminate_delta(light.c0.xyz, receiver, light.emission.xyz);
         }
         case SPOT_LIGHT: {
+            if !has_light_kind(SPOT_LIGHT) {
+                return no_illumination();
+            }
             var seen = illuminate_delta(light.c0.xyz, receiver, light.emission.xyz);
             // The falloff between the cones (`SpotLight::falloff`).
             let cos_inner = light.c0.w;
@@ -410,9 +454,15 @@ fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
             return seen;
         }
         case DIRECTIONAL_LIGHT: {
+            if !has_light_kind(DIRECTIONAL_LIGHT) {
+                return no_illumination();
+            }
             return Illumination(true, -light.c0.xyz, infinity(), light.emission.xyz, 1.0);
         }
         default: {
+            if !has_light_kind(ENVIRONMENT_LIGHT) {
+                return no_illumination();
+            }
             let direction = sample_uniform_sphere(u);
             return Illumination(true, direction, infinity(), light.emission.xyz, UNIFORM_SPHERE_PDF);
         }
@@ -422,7 +472,7 @@ fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
 // Radiance from the environment toward a path that left the scene along `dir`, MIS-weighted
 // against light sampling like `emission` (`escaped` of shade.rs).
 fn escaped(dir: vec3<f32>, bsdf_pdf: f32) -> vec3<f32> {
-    if params.environment == NO_LIGHT {
+    if !has_light_kind(ENVIRONMENT_LIGHT) || params.environment == NO_LIGHT {
         return vec3(0.0);
     }
     let radiance = lights[params.environment].emission.xyz;
@@ -440,6 +490,7 @@ fn next_event(
     b: Bsdf,
     out: Outgoing,
     throughput: vec3<f32>,
+    medium: vec3<f32>,
 ) -> Shadow {
     var shadow = Shadow(false, vec3(0.0), vec3(0.0), 0.0, vec3(0.0));
     let u_pick = uniform1(rng);
@@ -462,7 +513,8 @@ fn next_event(
     let kind = light_kind(light);
     let delta = kind == POINT_LIGHT || kind == SPOT_LIGHT || kind == DIRECTIONAL_LIGHT;
     let weight = select(power_heuristic(light_pdf_w, eval.pdf_fwd), 1.0, delta);
-    shadow.contribution = throughput * seen.value * eval.f_cos * (weight / light_pdf_w);
+    let toward_light = transmittance(medium_toward(medium, s, seen.direction), seen.distance);
+    shadow.contribution = throughput * toward_light * seen.value * eval.f_cos * (weight / light_pdf_w);
     shadow.origin = offset_ray_origin(s.position, s.error, s.n_g, seen.direction);
     // To the light's point, off an emitting triangle's surface (`shadow_segment`); toward
     // infinity for lights at infinity.
@@ -497,6 +549,8 @@ fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
     var origin = params.camera_position;
     var direction = camera_direction(raster);
     var throughput = vec3(1.0);
+    // The absorption of the medium the current segment runs through (`Medium`).
+    var medium = vec3(0.0);
     var radiance = vec3(0.0);
     var segments = 1u;
     // The pdf the current segment was sampled with by a non-delta BSDF lobe; −1 for the
@@ -515,10 +569,11 @@ fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
             break;
         }
         if hit.prim == NO_HIT {
-            radiance += throughput * escaped(direction, bsdf_pdf);
+            radiance += throughput * transmittance(medium, infinity()) * escaped(direction, bsdf_pdf);
             break;
         }
         start_step(&rng, segments, PAIRS_PER_VERTEX);
+        throughput *= transmittance(medium, hit.t);
         let s = surface_at(hit.prim, hit.u, hit.v);
         radiance += throughput * emission(s, hit, direction, bsdf_pdf);
         if segments >= params.max_segments {
@@ -531,7 +586,7 @@ fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         var shadow = Shadow(false, vec3(0.0), vec3(0.0), 0.0, vec3(0.0));
         if has_non_delta(b.m) {
-            shadow = next_event(&rng, s, b, out, throughput);
+            shadow = next_event(&rng, s, b, out, throughput, medium);
         }
         // The continuation (`Walk::scatter`).
         let u_lobe = uniform1(&rng);
@@ -568,6 +623,7 @@ fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         origin = offset_ray_origin(s.position, s.error, s.n_g, sample.wi);
         direction = sample.wi;
         segments += 1u;
+        medium = medium_toward(medium, s, sample.wi);
     }
     radiance_out[local] = vec4(radiance, 0.0);
     atomicAdd(&ray_counts[0], closest_rays);

@@ -12,13 +12,17 @@
 //! The GPU shades the whole surface model of vcm-scene — every lobe of the glTF
 //! metallic-roughness mixture, smooth and GGX, with its textures (base colour,
 //! metallic-roughness, specular, transmission, emission, normal maps) and vertex colours —
-//! under every kind of light but environment maps; not yet alpha masks, absorbing volumes
-//! and environment maps ([`check_scene`] names what a scene needs).
+//! — and absorbing volumes, under every kind of light but environment maps; not yet alpha
+//! masks and environment maps ([`check_scene`] names what a scene needs). The kernel is
+//! specialised per scene by override constants: the shader compiler drops the code of what
+//! the scene lacks (textures, vertex colours, kinds of light, …), and
+//! [`Integrator::decisions`](vcm::Integrator::decisions) says which parts run and why.
 
 #![warn(missing_docs)]
 
 mod error;
 mod path_tracer;
+mod plan;
 mod scene_data;
 pub mod shader;
 

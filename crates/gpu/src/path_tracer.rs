@@ -12,6 +12,7 @@ use vcm_scene::{Decision, Scene};
 use vcm_traversal_wgpu::{GpuBvh, GpuDevice, GpuError, dispatch_shape};
 
 use crate::error::GpuRenderError;
+use crate::plan::KernelPlan;
 use crate::scene_data::{SceneData, check_scene};
 use crate::shader::{PATH_TRACER_ENTRY, path_tracer_module};
 
@@ -37,9 +38,13 @@ struct Params {
     independent: u32,
     light_count: u32,
     environment: u32,
-    surface_flags: u32,
-    unused: [u32; 2],
+    unused: [u32; 3],
 }
+
+const _: () = assert!(
+    size_of::<Params>() == 128,
+    "the size of Params in path_tracer.wgsl"
+);
 
 /// Bytes of one path's radiance in the kernel's output (`vec4<f32>`).
 const RADIANCE_BYTES: u64 = 16;
@@ -64,8 +69,8 @@ pub struct GpuPathTracer {
     buffers: DispatchBuffers,
     light_count: u32,
     environment: u32,
-    /// What surface points interpolate (`SURFACE_UV`, … of `path_tracer.wgsl`).
-    surface_flags: u32,
+    /// The parts of the kernel the scene needs.
+    plan: KernelPlan,
     samples_per_frame: u32,
     stop: StopFlag,
 }
@@ -100,15 +105,20 @@ impl GpuPathTracer {
             label: Some("path tracer"),
             source: wgpu::ShaderSource::Wgsl(path_tracer_module(&bvh.traversal_functions()).into()),
         });
+        let plan = KernelPlan::for_scene(&scene);
+        let constants = plan.constants();
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(PATH_TRACER_ENTRY),
             layout: None,
             module: &module,
             entry_point: Some(PATH_TRACER_ENTRY),
-            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            },
             cache: None,
         });
-        let data = SceneData::new(&scene);
+        let data = SceneData::new(&scene, &plan);
         let shading = [
             upload(&gpu, "shading triangles", &data.triangles)?,
             upload(&gpu, "materials", &data.materials)?,
@@ -141,7 +151,7 @@ impl GpuPathTracer {
             buffers,
             light_count: data.light_count,
             environment: data.environment,
-            surface_flags: data.surface_flags,
+            plan,
             samples_per_frame: 1,
             stop: StopFlag::new(),
         })
@@ -190,8 +200,7 @@ impl GpuPathTracer {
             independent: u32::from(sequence == SampleSequence::Independent),
             light_count: self.light_count,
             environment: self.environment,
-            surface_flags: self.surface_flags,
-            unused: [0; 2],
+            unused: [0; 3],
         };
         (params, (x, y))
     }
@@ -419,5 +428,8 @@ impl Integrator for GpuPathTracer {
             Decision::left_out("light paths", reason),
             Decision::left_out("merging and hash grid", reason),
         ]
+        .into_iter()
+        .chain(self.plan.decisions())
+        .collect()
     }
 }

@@ -4,6 +4,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 use vcm_scene::Material;
+
+use crate::plan::KernelPlan;
 use vcm_scene::Scene;
 use vcm_scene::bsdf::{ALBEDO_TABLE_SIZE, FlatLobes, albedo_tables};
 use vcm_scene::light::{Light, LightSampler};
@@ -89,6 +91,7 @@ pub(crate) struct GpuMaterialInputs {
     base_color: [f32; 4],
     specular_color: [f32; 3],
     metallic: f32,
+    absorption: [f32; 3],
     roughness: f32,
     specular: f32,
     transmission: f32,
@@ -96,7 +99,6 @@ pub(crate) struct GpuMaterialInputs {
     ior: f32,
     flags: u32,
     refs: [u32; 7],
-    unused: [u32; 3],
 }
 
 /// `TriangleAttributes` of `path_tracer.wgsl`.
@@ -134,11 +136,8 @@ const SRGB_TEXTURE: u32 = 1;
 const NEAREST_TEXTURE: u32 = 2;
 const THIN_WALLED: u32 = 1;
 const UNIFORM_LOBES: u32 = 2;
+const BOUNDS_VOLUME: u32 = 4;
 const NO_TEXTURE: u32 = u32::MAX;
-/// `Params::surface_flags` bits (`path_tracer.wgsl`).
-pub(crate) const SURFACE_UV: u32 = 1;
-pub(crate) const SURFACE_NORMAL_MAPS: u32 = 2;
-pub(crate) const SURFACE_COLORS: u32 = 4;
 
 /// The scene's shading data, ready to upload.
 pub(crate) struct SceneData {
@@ -153,9 +152,8 @@ pub(crate) struct SceneData {
     pub environment: u32,
     /// The albedo tables A then B, each row by row, their row averages, the sRGB table.
     pub tables: Vec<f32>,
-    /// What surface points interpolate (`SURFACE_UV`, …).
-    pub surface_flags: u32,
-    /// Per triangle, its texture coordinates, colours and tangents (empty without any).
+    /// Per triangle, its texture coordinates, colours and tangents (empty where `plan`
+    /// needs none of them).
     pub attributes: Vec<GpuAttributes>,
     pub textures: Vec<GpuTexture>,
     /// Every texture's texels, RGBA8 packed into a word.
@@ -174,7 +172,6 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
     let features = &scene.features;
     let unsupported = [
         (features.alpha_masks, "alpha masks"),
-        (features.absorbing_volumes, "absorbing volumes"),
         (features.triangles == 0, "a scene without triangles"),
     ];
     if let Some((_, what)) = unsupported.iter().find(|(present, _)| *present) {
@@ -195,8 +192,8 @@ pub fn check_scene(scene: &Scene) -> Result<(), String> {
 }
 
 impl SceneData {
-    /// Packs `scene`, which [`check_scene`] accepts.
-    pub fn new(scene: &Scene) -> SceneData {
+    /// Packs `scene`, which [`check_scene`] accepts, for a kernel with `plan`.
+    pub fn new(scene: &Scene, plan: &KernelPlan) -> SceneData {
         let mesh = &scene.mesh;
         let sampler = &scene.light_sampler;
         let triangles = (0..mesh.triangle_count())
@@ -238,16 +235,7 @@ impl SceneData {
             .zip(&scene.material_lobes)
             .map(|(material, lobes)| pack_inputs(material, lobes.is_some(), &mut refs))
             .collect();
-        let plan = &scene.shading;
-        let surface_flags = [
-            (plan.texture_coordinates || plan.normal_maps, SURFACE_UV),
-            (plan.normal_maps, SURFACE_NORMAL_MAPS),
-            (!mesh.colors.is_empty(), SURFACE_COLORS),
-        ]
-        .iter()
-        .filter(|(on, _)| *on)
-        .fold(0, |flags, (_, flag)| flags | flag);
-        let attributes = if surface_flags == 0 {
+        let attributes = if !(plan.texture_coordinates || plan.vertex_colors) {
             Vec::new()
         } else {
             (0..mesh.triangle_count())
@@ -272,7 +260,6 @@ impl SceneData {
             light_count,
             environment,
             tables: lookup_tables(),
-            surface_flags,
             attributes,
             textures,
             texels,
@@ -367,10 +354,14 @@ fn pack_inputs(
     if uniform {
         flags |= UNIFORM_LOBES;
     }
+    if material.bounds_volume() {
+        flags |= BOUNDS_VOLUME;
+    }
     GpuMaterialInputs {
         base_color: material.base_color.to_array(),
         specular_color: material.specular_color.to_array(),
         metallic: material.metallic,
+        absorption: material.absorption.to_array(),
         roughness: material.roughness,
         specular: material.specular,
         transmission: material.transmission,
@@ -378,7 +369,6 @@ fn pack_inputs(
         ior: material.ior,
         flags,
         refs: slots.map(|slot| add_ref(refs, slot)),
-        unused: [0; 3],
     }
 }
 

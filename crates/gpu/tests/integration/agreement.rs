@@ -48,7 +48,8 @@ fn gpu_paths_are_the_cpu_paths() {
 
 /// The lobes `scenes/` leaves out: on `cornell-specular`, a rough (GGX) conductor and a
 /// rough thick glass sphere; then a rough thin-walled sheet, a plastic (diffuse under a GGX
-/// layer, KHR_materials_specular) and a double-sided wall seen from behind.
+/// layer, KHR_materials_specular) and a double-sided wall seen from behind; and absorbing
+/// water (KHR_materials_volume attenuation) in `cornell-water`.
 #[test]
 fn gpu_paths_are_the_cpu_paths_on_every_lobe() {
     let Some(gpu) = gpu() else { return };
@@ -84,6 +85,19 @@ fn gpu_paths_are_the_cpu_paths_on_every_lobe() {
         "thin cornell-specular",
         &thin,
         (SampleSequence::Independent, None, 2),
+    );
+    let murky = scene_variant("cornell-water", |g| {
+        let water = &mut g["materials"].as_array_mut().unwrap()[4];
+        water["extensions"]["KHR_materials_volume"] = json!({
+            "thicknessFactor": 1.0, "attenuationColor": [0.4, 0.7, 0.9], "attenuationDistance": 0.5
+        });
+    });
+    assert!(murky.features.absorbing_volumes);
+    check_agreement(
+        &gpu,
+        "murky cornell-water",
+        &murky,
+        (SampleSequence::Sobol, None, 2),
     );
 }
 
