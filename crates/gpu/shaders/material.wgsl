@@ -3,7 +3,7 @@
 // point (`Material::bsdf_params`) and the mixture they make (`Mixture::new`), which the
 // lobes of bsdf.wgsl then shade as they do the host's precomputed uniform materials.
 
-// `Texture`: its texels' offset in `texels` and its size; flags: SRGB_TEXTURE,
+// `Texture`: its texels' offset in `material_texels` and its size; flags: SRGB_TEXTURE,
 // NEAREST_TEXTURE and the wrap modes of u (bits 2–3) and v (bits 4–5).
 struct TextureInfo {
     offset: u32,
@@ -57,7 +57,7 @@ const REF_TRANSMISSION: u32 = 6u;
 
 // Texel (x, y), decoded: sRGB channels through the CPU's table, alpha linear.
 fn texel(t: TextureInfo, x: u32, y: u32) -> vec4<f32> {
-    let p = texels[t.offset + y * t.width + x];
+    let p = material_texels[t.offset + y * t.width + x];
     let c = vec4(p & 0xffu, (p >> 8u) & 0xffu, (p >> 16u) & 0xffu, p >> 24u);
     if (t.flags & SRGB_TEXTURE) == 0u {
         return vec4<f32>(c) / 255.0;
@@ -67,7 +67,7 @@ fn texel(t: TextureInfo, x: u32, y: u32) -> vec4<f32> {
 }
 
 // `WrapMode::apply`.
-fn wrap(i: i32, size: u32, mode: u32) -> u32 {
+fn wrap_texel(i: i32, size: u32, mode: u32) -> u32 {
     let n = i32(size);
     if mode == WRAP_REPEAT {
         return u32(((i % n) + n) % n);
@@ -82,7 +82,7 @@ fn wrap(i: i32, size: u32, mode: u32) -> u32 {
 fn wrapped_texel(t: TextureInfo, x: i32, y: i32) -> vec4<f32> {
     let wrap_u = (t.flags >> 2u) & 3u;
     let wrap_v = (t.flags >> 4u) & 3u;
-    return texel(t, wrap(x, t.width, wrap_u), wrap(y, t.height, wrap_v));
+    return texel(t, wrap_texel(x, t.width, wrap_u), wrap_texel(y, t.height, wrap_v));
 }
 
 // glam's `Vec4::lerp`.

@@ -53,9 +53,11 @@ struct ShadeTriangle {
     n2: vec4<f32>,
 }
 
-// A light (`Light`), its kind in `normal.w` (as bits) and its radiance, intensity or
-// irradiance in `emission`:
-// - AREA_LIGHT, an emitting triangle of constant radiance: corners c0..c2, c0.w its area;
+// A light (`Light`), its kind in `normal.w` (as bits, with CUT_OUT) and its radiance,
+// intensity or irradiance in `emission`:
+// - AREA_LIGHT, an emitting triangle: corners c0..c2, c0.w its area; where an alpha mask
+//   cuts it out (CUT_OUT), c1.w its alpha factor, c2.w its cutoff and uv2.w (as bits) the
+//   mask's texture reference;
 // - POINT_LIGHT at c0;
 // - SPOT_LIGHT at c0 toward c1, c0.w and c1.w the cosines of its inner and outer cones;
 // - DIRECTIONAL_LIGHT shining along c0;
@@ -105,6 +107,7 @@ const POINT_LIGHT: u32 = 1u;
 const SPOT_LIGHT: u32 = 2u;
 const DIRECTIONAL_LIGHT: u32 = 3u;
 const ENVIRONMENT_LIGHT: u32 = 4u;
+const CUT_OUT: u32 = 0x100u;
 
 const NO_LIGHT: u32 = 0xffffffffu;
 const WORKGROUP: u32 = 64u;
@@ -130,7 +133,7 @@ const CAPPED_CONTINUATION: f32 = 0.95;
 @group(2) @binding(4) var<storage, read> tables: array<f32>;
 @group(2) @binding(5) var<storage, read> texture_infos: array<TextureInfo>;
 // RGBA8 texels, red in the low byte.
-@group(2) @binding(6) var<storage, read> texels: array<u32>;
+@group(2) @binding(6) var<storage, read> material_texels: array<u32>;
 @group(2) @binding(7) var<storage, read> texture_refs: array<TextureRef>;
 @group(2) @binding(8) var<storage, read> material_inputs: array<MaterialInputs>;
 @group(2) @binding(9) var<storage, read> attributes: array<TriangleAttributes>;
@@ -394,7 +397,17 @@ fn illuminate_delta(position: vec3<f32>, receiver: vec3<f32>, value: vec3<f32>) 
 }
 
 fn light_kind(light: Light) -> u32 {
-    return bitcast<u32>(light.normal.w);
+    return bitcast<u32>(light.normal.w) & 0xffu;
+}
+
+// Whether an area light is there at barycentrics `b`, not cut out by its alpha mask
+// (`AreaLight::present_at`).
+fn present_at(light: Light, b: vec3<f32>) -> bool {
+    if (bitcast<u32>(light.normal.w) & CUT_OUT) == 0u {
+        return true;
+    }
+    let uv = light.uv01.xy * b.x + light.uv01.zw * b.y + light.uv2.xy * b.z;
+    return light.c1.w * lookup(bitcast<u32>(light.uv2.w), uv).w >= light.c2.w;
 }
 
 // A uniform direction on the sphere (`sample_uniform_sphere`).
@@ -419,6 +432,9 @@ fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
             let b0 = 1.0 - su;
             let b1 = u.y * su;
             let b = vec3(b0, b1, 1.0 - b0 - b1);
+            if !present_at(light, b) {
+                return no_illumination();
+            }
             let point = light.c0.xyz * b.x + light.c1.xyz * b.y + light.c2.xyz * b.z;
             let to_light = point - receiver;
             let distance_sq = dot3(to_light, to_light);

@@ -12,8 +12,8 @@
 //! The GPU shades the whole surface model of vcm-scene — every lobe of the glTF
 //! metallic-roughness mixture, smooth and GGX, with its textures (base colour,
 //! metallic-roughness, specular, transmission, emission, normal maps) and vertex colours —
-//! — and absorbing volumes, under every kind of light but environment maps; not yet alpha
-//! masks and environment maps ([`check_scene`] names what a scene needs). The kernel is
+//! — absorbing volumes and alpha masks (the traversal's own mask test), under every kind of
+//! light but environment maps ([`check_scene`] names what a scene needs). The kernel is
 //! specialised per scene by override constants: the shader compiler drops the code of what
 //! the scene lacks (textures, vertex colours, kinds of light, …), and
 //! [`Integrator::decisions`](vcm::Integrator::decisions) says which parts run and why.

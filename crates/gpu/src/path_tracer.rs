@@ -14,7 +14,7 @@ use vcm_traversal_wgpu::{GpuBvh, GpuDevice, GpuError, dispatch_shape};
 use crate::error::GpuRenderError;
 use crate::plan::KernelPlan;
 use crate::scene_data::{SceneData, check_scene};
-use crate::shader::{PATH_TRACER_ENTRY, path_tracer_module};
+use crate::shader::{PATH_TRACER_ENTRY, path_tracer_module, shading_group};
 
 /// `Params` of `path_tracer.wgsl`.
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -64,8 +64,9 @@ pub struct GpuPathTracer {
     scene: Arc<Scene>,
     settings: PtSettings,
     pipeline: wgpu::ComputePipeline,
-    /// Bind groups 1 (hierarchy) and 2 (shading data).
-    scene_groups: [wgpu::BindGroup; 2],
+    /// The scene's bind groups with their indices: 1 the hierarchy, 2 the alpha masks where
+    /// there are any, then the shading data ([`shading_group`]).
+    scene_groups: Vec<(u32, wgpu::BindGroup)>,
     buffers: DispatchBuffers,
     light_count: u32,
     environment: u32,
@@ -96,6 +97,11 @@ impl GpuPathTracer {
     ) -> Result<GpuPathTracer, GpuRenderError> {
         vcm::check_image_size(settings.width, settings.height)?;
         check_scene(&scene).map_err(GpuRenderError::Unsupported)?;
+        if scene.features.alpha_masks && !bvh.has_alpha_masks() {
+            return Err(GpuRenderError::Unsupported(
+                "a hierarchy built without the scene's alpha masks".into(),
+            ));
+        }
         let hierarchy = bvh
             .hierarchy_buffers()
             .ok_or_else(|| GpuRenderError::Unsupported("a scene without triangles".into()))?;
@@ -103,7 +109,9 @@ impl GpuPathTracer {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("path tracer"),
-            source: wgpu::ShaderSource::Wgsl(path_tracer_module(&bvh.traversal_functions()).into()),
+            source: wgpu::ShaderSource::Wgsl(
+                path_tracer_module(&bvh.traversal_functions(), bvh.has_alpha_masks()).into(),
+            ),
         });
         let plan = KernelPlan::for_scene(&scene);
         let constants = plan.constants();
@@ -131,10 +139,12 @@ impl GpuPathTracer {
             upload(&gpu, "material inputs", &data.material_inputs)?,
             upload(&gpu, "triangle attributes", &data.attributes)?,
         ];
-        let scene_groups = [
-            bind(device, &pipeline, 1, hierarchy.iter()),
-            bind(device, &pipeline, 2, shading.iter()),
-        ];
+        let mut scene_groups = vec![(1, bind(device, &pipeline, 1, hierarchy.iter()))];
+        if let Some(masks) = bvh.alpha_mask_buffers() {
+            scene_groups.push((2, bind(device, &pipeline, 2, masks.iter())));
+        }
+        let group = shading_group(bvh.has_alpha_masks());
+        scene_groups.push((group, bind(device, &pipeline, group, shading.iter())));
         let paths = if gpu.is_software() {
             PATHS_PER_SOFTWARE_DISPATCH
         } else {
@@ -226,8 +236,9 @@ impl GpuPathTracer {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &b.group, &[]);
-            pass.set_bind_group(1, &self.scene_groups[0], &[]);
-            pass.set_bind_group(2, &self.scene_groups[1], &[]);
+            for (index, group) in &self.scene_groups {
+                pass.set_bind_group(*index, group, &[]);
+            }
             pass.dispatch_workgroups(x, y, 1);
         }
         let radiance_bytes = count * RADIANCE_BYTES;

@@ -117,6 +117,8 @@ const POINT_LIGHT: u32 = 1;
 const SPOT_LIGHT: u32 = 2;
 const DIRECTIONAL_LIGHT: u32 = 3;
 const ENVIRONMENT_LIGHT: u32 = 4;
+/// Set beside the kind of an area light that an alpha mask cuts out.
+const CUT_OUT: u32 = 0x100;
 
 /// `Material::flags` bits (`bsdf.wgsl`).
 const HAS_SPECULAR: u32 = 1;
@@ -170,22 +172,14 @@ fn vec4(v: Vec3, w: f32) -> [f32; 4] {
 /// shade yet (a texture, a rough lobe, a point light, …).
 pub fn check_scene(scene: &Scene) -> Result<(), String> {
     let features = &scene.features;
-    let unsupported = [
-        (features.alpha_masks, "alpha masks"),
-        (features.triangles == 0, "a scene without triangles"),
-    ];
-    if let Some((_, what)) = unsupported.iter().find(|(present, _)| *present) {
-        return Err((*what).to_owned());
+    if features.triangles == 0 {
+        return Err("a scene without triangles".into());
     }
     for light in &scene.lights {
-        match light {
-            Light::Area(area) if area.cut_out.is_some() => {
-                return Err("cut-out emitters".into());
-            }
-            Light::Environment(environment) if environment.map.is_some() => {
-                return Err("environment maps".into());
-            }
-            _ => {}
+        if let Light::Environment(environment) = light
+            && environment.map.is_some()
+        {
+            return Err("environment maps".into());
         }
     }
     Ok(())
@@ -400,13 +394,24 @@ fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
     };
     match light {
         Light::Area(area) => {
-            let (mut normal, emission) = kind(AREA_LIGHT, area.emission);
+            // An alpha mask's factor, cutoff and texture; a mask that keeps everything
+            // where there is none.
+            let (alpha, cutoff, mask_texture, flag) = match area.cut_out {
+                Some(mask) => (
+                    mask.alpha,
+                    mask.cutoff,
+                    add_ref(refs, mask.texture),
+                    CUT_OUT,
+                ),
+                None => (1.0, 0.0, NO_TEXTURE, 0),
+            };
+            let (mut normal, emission) = kind(AREA_LIGHT | flag, area.emission);
             normal[..3].copy_from_slice(&area.normal.to_array());
             GpuLight {
                 corners: [
                     point(area.corners[0], area.area),
-                    point(area.corners[1], 0.0),
-                    point(area.corners[2], 0.0),
+                    point(area.corners[1], alpha),
+                    point(area.corners[2], cutoff),
                 ],
                 normal,
                 emission,
@@ -415,7 +420,7 @@ fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
                     area.uvs[2].x,
                     area.uvs[2].y,
                     f32::from_bits(add_ref(refs, area.texture)),
-                    0.0,
+                    f32::from_bits(mask_texture),
                 ],
             }
         }

@@ -18,9 +18,16 @@ pub const PATH_TRACER_ENTRY: &str = "render_paths";
 /// Invocations per workgroup (`WORKGROUP` in `path_tracer.wgsl`).
 pub const WORKGROUP_SIZE: u32 = 64;
 
+/// The bind group of the scene's shading data: 2, or 3 where the traversal functions test
+/// alpha masks, whose buffers are their group 2.
+pub fn shading_group(alpha_masks: bool) -> u32 {
+    if alpha_masks { 3 } else { 2 }
+}
+
 /// The path tracing module over `traversal` (the traversal functions of the scene's
-/// hierarchy, [`vcm_traversal_wgpu::GpuBvh::traversal_functions`]).
-pub fn path_tracer_module(traversal: &str) -> String {
+/// hierarchy, [`vcm_traversal_wgpu::GpuBvh::traversal_functions`], with or without
+/// `alpha_masks`).
+pub fn path_tracer_module(traversal: &str, alpha_masks: bool) -> String {
     // The CPU's rounding-error factors, written so that they parse to the same f32, and
     // the size of the albedo tables.
     let (columns, rows) = ALBEDO_TABLE_SIZE;
@@ -39,9 +46,10 @@ pub fn path_tracer_module(traversal: &str) -> String {
         MIN_ALPHA,
         MIN_ALPHA.sqrt(),
     );
-    format!(
-        "{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{PATH_TRACER_WGSL}"
-    )
+    // The shading data's bindings are written as group 2 in path_tracer.wgsl.
+    let group = shading_group(alpha_masks);
+    let kernel = PATH_TRACER_WGSL.replace("@group(2)", &format!("@group({group})"));
+    format!("{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{kernel}")
 }
 
 #[cfg(test)]
@@ -70,9 +78,12 @@ mod tests {
     }
 
     #[test]
-    fn the_kernel_validates_over_both_node_layouts() {
+    fn the_kernel_validates_over_both_node_layouts_with_and_without_alpha_masks() {
         for layout in [NodeLayout::Binary, NodeLayout::Wide] {
-            validate(&path_tracer_module(&traversal_functions(layout, 32, false)));
+            for masks in [false, true] {
+                let traversal = traversal_functions(layout, 32, masks);
+                validate(&path_tracer_module(&traversal, masks));
+            }
         }
     }
 

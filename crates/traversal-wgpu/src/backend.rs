@@ -54,6 +54,8 @@ struct Inner {
     scene_groups: Option<Vec<[wgpu::BindGroup; 2]>>,
     /// The buffers of bind group 1: nodes, triangles in leaf order, triangle ids.
     hierarchy: Option<[wgpu::Buffer; 3]>,
+    /// The buffers of bind group 2 where some triangles are alpha-masked.
+    mask_buffers: Option<[wgpu::Buffer; 4]>,
     slots: Mutex<Vec<Slot>>,
     max_rays_per_slot: u64,
 }
@@ -126,6 +128,7 @@ impl GpuBvh {
         };
         let pipelines = [pipeline(CLOSEST_HIT_ENTRY), pipeline(ANY_HIT_ENTRY)];
         let mut scene_bytes = layout.memory_bytes();
+        let mut mask_buffers = None;
         let (scene_groups, hierarchy) = if layout.nodes.is_empty() {
             (None, None)
         } else {
@@ -145,6 +148,7 @@ impl GpuBvh {
                 ];
                 scene_bytes += buffers.iter().map(|b| b.size() as usize).sum::<usize>();
                 groups.push(bind_buffers(&gpu, &pipelines, 2, &buffers));
+                mask_buffers = Some(buffers);
             }
             (Some(groups), Some(hierarchy))
         };
@@ -160,6 +164,7 @@ impl GpuBvh {
                 pipelines,
                 scene_groups,
                 hierarchy,
+                mask_buffers,
                 slots: Mutex::new(Vec::new()),
                 max_rays_per_slot,
             }),
@@ -216,6 +221,12 @@ impl GpuBvh {
     /// for kernels that trace rays of their own. `None` for a scene without triangles.
     pub fn hierarchy_buffers(&self) -> Option<&[wgpu::Buffer; 3]> {
         self.inner.hierarchy.as_ref()
+    }
+
+    /// The alpha masks' buffers as the traversal functions read them, bindings 0 to 3 of
+    /// bind group 2 (leaf masks, masks, mask textures, their texels); `None` without masks.
+    pub fn alpha_mask_buffers(&self) -> Option<&[wgpu::Buffer; 4]> {
+        self.inner.mask_buffers.as_ref()
     }
 
     /// The WGSL of `trace(ray, any_hit) -> Hit` over this hierarchy (no entry points, see

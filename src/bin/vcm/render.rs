@@ -168,7 +168,7 @@ pub struct RenderArgs {
     setup: RenderSetup,
     /// Where paths are shaded: `gpu` follows each whole path in one WGSL kernel on the GPU
     /// backend's device and brings back only radiances (needs --backend gpu; path tracing
-    /// only, and scenes without alpha masks or environment maps so far; see
+    /// only, and scenes without environment maps so far; see
     /// docs/gpu.md).
     #[arg(long, value_enum, default_value_t = Shading::Cpu)]
     shading: Shading,

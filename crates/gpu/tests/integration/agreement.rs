@@ -151,7 +151,8 @@ fn gpu_paths_are_the_cpu_paths_under_every_light() {
 }
 
 /// Textured models: base colour, metallic-roughness, normal and emissive textures, authored
-/// tangents with mirrored texture coordinates (`../shared/scenes/khronos-samples/`, lit by a
+/// tangents with mirrored texture coordinates (alpha masks, which need the traversal's mask
+/// test, are tested from the root package: `gpu_shading_tests_alpha_masks_as_the_cpu_does`) (`../shared/scenes/khronos-samples/`, lit by a
 /// point light and a sky). The GPU scales texture coordinates in f32 where the CPU uses f64,
 /// so a texel lookup may differ in its last bits; the pixels still agree within 10⁻⁴.
 #[test]
