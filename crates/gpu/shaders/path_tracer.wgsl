@@ -61,7 +61,9 @@ struct ShadeTriangle {
 // - POINT_LIGHT at c0;
 // - SPOT_LIGHT at c0 toward c1, c0.w and c1.w the cosines of its inner and outer cones;
 // - DIRECTIONAL_LIGHT shining along c0;
-// - ENVIRONMENT_LIGHT, constant radiance from every direction.
+// - ENVIRONMENT_LIGHT, radiance from every direction: constant, or that times its map's
+//   texels, the map's width and height in c0.xy (as bits) and in c0.z 1 where it has a
+//   map, in c0.w 1 where the map has a sampling distribution (some texel is not black).
 struct Light {
     c0: vec4<f32>,
     c1: vec4<f32>,
@@ -97,6 +99,7 @@ override VERTEX_COLORS: bool = true;
 override VARYING_MATERIALS: bool = true;
 override ABSORBING_VOLUMES: bool = true;
 override LIGHT_KINDS: u32 = 31u;
+override ENVIRONMENT_MAP: bool = true;
 
 fn has_light_kind(kind: u32) -> bool {
     return (LIGHT_KINDS & (1u << kind)) != 0u;
@@ -137,6 +140,11 @@ const CAPPED_CONTINUATION: f32 = 0.95;
 @group(2) @binding(7) var<storage, read> texture_refs: array<TextureRef>;
 @group(2) @binding(8) var<storage, read> material_inputs: array<MaterialInputs>;
 @group(2) @binding(9) var<storage, read> attributes: array<TriangleAttributes>;
+// The environment map's texels, and its sampling distribution: per row, then per texel
+// within its row, the first number that picks it and its probability (`first_numbers`).
+@group(2) @binding(10) var<storage, read> environment_texels: array<vec4<f32>>;
+@group(2) @binding(11) var<storage, read> environment_rows: array<vec2<f32>>;
+@group(2) @binding(12) var<storage, read> environment_columns: array<vec2<f32>>;
 
 fn infinity() -> f32 {
     return bitcast<f32>(0x7f800000u);
@@ -420,6 +428,124 @@ fn sample_uniform_sphere(u: vec2<f32>) -> vec3<f32> {
 
 const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
 
+fn environment_size(light: Light) -> vec2<u32> {
+    return vec2(bitcast<u32>(light.c0.x), bitcast<u32>(light.c0.y));
+}
+
+fn has_environment_map(light: Light) -> bool {
+    return ENVIRONMENT_MAP && light.c0.z != 0.0;
+}
+
+// The map's texture coordinates of a direction (`direction_to_uv`).
+fn direction_to_uv(d: vec3<f32>) -> vec2<f32> {
+    let u = 0.5 + atan2(d.z, d.x) / (2.0 * PI);
+    let v = acos(clamp(d.y, -1.0, 1.0)) / PI;
+    return vec2(u, v);
+}
+
+// The texel a point of [0, 1]² falls in (`image_cell`).
+fn image_cell(size: vec2<u32>, point: vec2<f32>) -> vec2<u32> {
+    let cell = max(point * vec2<f32>(size), vec2(0.0));
+    return min(vec2<u32>(cell), size - vec2(1u));
+}
+
+// The environment's radiance from direction `d` (`EnvironmentLight::radiance_from`).
+fn environment_radiance(light: Light, d: vec3<f32>) -> vec3<f32> {
+    if !has_environment_map(light) {
+        return light.emission.xyz;
+    }
+    let size = environment_size(light);
+    let cell = image_cell(size, direction_to_uv(d));
+    return light.emission.xyz * environment_texels[cell.y * size.x + cell.x].xyz;
+}
+
+// Where a number falls within the span of the entry it picked, from the entry's first
+// number to the next one's (`Distribution1D::sample_remapped`, here in f32).
+fn remapped(u: f32, start: f32, next: f32) -> f32 {
+    let end = min(next, 1.0);
+    if end > start {
+        return min(max((u - start) / (end - start), 0.0), ONE_MINUS_EPSILON);
+    }
+    return 0.0;
+}
+
+// The row `u` picks: the last whose first number is at most `u`.
+fn pick_environment_row(height: u32, u: f32) -> u32 {
+    var lo = 0u;
+    var hi = height;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if environment_rows[mid].x <= u {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// The column `u` picks within the row starting at texel `first`.
+fn pick_environment_column(first: u32, width: u32, u: f32) -> u32 {
+    var lo = 0u;
+    var hi = width;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if environment_columns[first + mid].x <= u {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// A direction toward the map drawn by its texels' weights (`EnvironmentMap::sample`).
+fn sample_environment_map(light: Light, u: vec2<f32>) -> Illumination {
+    if light.c0.w == 0.0 {
+        return no_illumination();
+    }
+    let size = environment_size(light);
+    let row = pick_environment_row(size.y, u.y);
+    var next_row = 1.0;
+    if row + 1u < size.y {
+        next_row = environment_rows[row + 1u].x;
+    }
+    let v_in_row = remapped(u.y, environment_rows[row].x, next_row);
+    let first = row * size.x;
+    let column = pick_environment_column(first, size.x, u.x);
+    var next_column = 1.0;
+    if column + 1u < size.x {
+        next_column = environment_columns[first + column + 1u].x;
+    }
+    let u_in_column = remapped(u.x, environment_columns[first + column].x, next_column);
+    let cell = vec2(f32(column) + u_in_column, f32(row) + v_in_row);
+    let point = min(cell / vec2<f32>(size), vec2(ONE_MINUS_EPSILON));
+    let pdf_uv = environment_rows[row].y * environment_columns[first + column].y * f32(size.x * size.y);
+    let phi = (point.x - 0.5) * 2.0 * PI;
+    let sin_theta = sin(point.y * PI);
+    let cos_theta = cos(point.y * PI);
+    let direction = vec3(sin_theta * cos(phi), cos_theta, sin_theta * sin(phi));
+    if !(sin_theta > 0.0) {
+        return no_illumination();
+    }
+    let pdf = pdf_uv / (2.0 * PI * PI * sin_theta);
+    return Illumination(true, direction, infinity(), environment_radiance(light, direction), pdf);
+}
+
+// The solid-angle pdf of `sample_environment_map` for direction `d` (`EnvironmentMap::pdf`).
+fn environment_map_pdf(light: Light, d: vec3<f32>) -> f32 {
+    let sin_theta = sqrt(d.x * d.x + d.z * d.z);
+    if light.c0.w == 0.0 || !(sin_theta > 0.0) {
+        return 0.0;
+    }
+    let size = environment_size(light);
+    let cell = image_cell(size, direction_to_uv(d));
+    let row_pmf = environment_rows[cell.y].y;
+    let column_pmf = environment_columns[cell.y * size.x + cell.x].y;
+    let pdf_uv = row_pmf * column_pmf * f32(size.x * size.y);
+    return pdf_uv / (2.0 * PI * PI * sin_theta);
+}
+
 // `Light::illuminate`: the light seen from `receiver`, at a point (or direction) `u` picks.
 fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
     switch light_kind(light) {
@@ -479,6 +605,9 @@ fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
             if !has_light_kind(ENVIRONMENT_LIGHT) {
                 return no_illumination();
             }
+            if has_environment_map(light) {
+                return sample_environment_map(light, u);
+            }
             let direction = sample_uniform_sphere(u);
             return Illumination(true, direction, infinity(), light.emission.xyz, UNIFORM_SPHERE_PDF);
         }
@@ -491,11 +620,16 @@ fn escaped(dir: vec3<f32>, bsdf_pdf: f32) -> vec3<f32> {
     if !has_light_kind(ENVIRONMENT_LIGHT) || params.environment == NO_LIGHT {
         return vec3(0.0);
     }
-    let radiance = lights[params.environment].emission.xyz;
+    let light = lights[params.environment];
+    let radiance = environment_radiance(light, dir);
     if bsdf_pdf < 0.0 {
         return radiance;
     }
-    let light_pdf_w = light_pick[params.environment].y * UNIFORM_SPHERE_PDF;
+    var direction_pdf = UNIFORM_SPHERE_PDF;
+    if has_environment_map(light) {
+        direction_pdf = environment_map_pdf(light, dir);
+    }
+    let light_pdf_w = light_pick[params.environment].y * direction_pdf;
     return radiance * power_heuristic(bsdf_pdf, light_pdf_w);
 }
 

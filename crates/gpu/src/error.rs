@@ -6,10 +6,8 @@ use vcm_traversal_wgpu::GpuError;
 /// Why a [`GpuPathTracer`](crate::GpuPathTracer) cannot render a scene.
 #[derive(Debug, thiserror::Error)]
 pub enum GpuRenderError {
-    /// The scene needs shading the GPU kernels do not have yet.
-    #[error(
-        "the GPU path tracer cannot shade this scene yet: {0} (render it with the CPU shading)"
-    )]
+    /// The scene (or the hierarchy given) is one the GPU kernel cannot shade.
+    #[error("the GPU path tracer cannot shade this scene: {0} (render it with the CPU shading)")]
     Unsupported(String),
     /// The settings are invalid (image size, memory).
     #[error(transparent)]

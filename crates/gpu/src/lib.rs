@@ -9,11 +9,12 @@
 //! `shaders/sampler.wgsl`) and shades with the same operations, so both backends render the
 //! same image up to floating-point rounding per path, not only in expectation.
 //!
-//! The GPU shades the whole surface model of vcm-scene — every lobe of the glTF
+//! The GPU shades the whole scene model of vcm-scene — every lobe of the glTF
 //! metallic-roughness mixture, smooth and GGX, with its textures (base colour,
 //! metallic-roughness, specular, transmission, emission, normal maps) and vertex colours —
 //! — absorbing volumes and alpha masks (the traversal's own mask test), under every kind of
-//! light but environment maps ([`check_scene`] names what a scene needs). The kernel is
+//! light: emissive triangles, point, spot and directional lights, a constant or image
+//! environment. [`check_scene`] refuses only a scene without triangles. The kernel is
 //! specialised per scene by override constants: the shader compiler drops the code of what
 //! the scene lacks (textures, vertex colours, kinds of light, …), and
 //! [`Integrator::decisions`](vcm::Integrator::decisions) says which parts run and why.

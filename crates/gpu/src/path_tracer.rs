@@ -138,6 +138,9 @@ impl GpuPathTracer {
             upload(&gpu, "texture references", &data.texture_refs)?,
             upload(&gpu, "material inputs", &data.material_inputs)?,
             upload(&gpu, "triangle attributes", &data.attributes)?,
+            upload(&gpu, "environment texels", &data.environment_texels)?,
+            upload(&gpu, "environment rows", &data.environment_rows)?,
+            upload(&gpu, "environment columns", &data.environment_columns)?,
         ];
         let mut scene_groups = vec![(1, bind(device, &pipeline, 1, hierarchy.iter()))];
         if let Some(masks) = bvh.alpha_mask_buffers() {

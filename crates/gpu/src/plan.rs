@@ -20,6 +20,8 @@ pub(crate) struct KernelPlan {
     pub absorbing_volumes: bool,
     /// The kinds of light the scene has, bit k for `path_tracer.wgsl`'s kind k.
     pub light_kinds: u32,
+    /// An environment map (else a constant environment, if any).
+    pub environment_map: bool,
 }
 
 /// Light kinds of `path_tracer.wgsl`, and the parts they name.
@@ -62,6 +64,10 @@ impl KernelPlan {
             varying_materials,
             absorbing_volumes: scene.features.absorbing_volumes,
             light_kinds,
+            environment_map: scene
+                .lights
+                .iter()
+                .any(|light| matches!(light, Light::Environment(e) if e.map.is_some())),
         }
     }
 
@@ -75,6 +81,7 @@ impl KernelPlan {
             ("VARYING_MATERIALS", flag(self.varying_materials)),
             ("ABSORBING_VOLUMES", flag(self.absorbing_volumes)),
             ("LIGHT_KINDS", f64::from(self.light_kinds)),
+            ("ENVIRONMENT_MAP", flag(self.environment_map)),
         ]
     }
 
@@ -128,6 +135,12 @@ impl KernelPlan {
                 "the scene has none",
             ));
         }
+        decisions.push(decide(
+            "environment map in the kernel",
+            self.environment_map,
+            "the environment has an image (VCM_environment)",
+            "the scene has no environment image",
+        ));
         decisions
     }
 }
@@ -146,6 +159,7 @@ mod tests {
             varying_materials: true,
             absorbing_volumes: false,
             light_kinds: 3,
+            environment_map: false,
         };
         for (name, _) in plan.constants() {
             assert!(

@@ -8,8 +8,9 @@ use vcm_scene::Material;
 use crate::plan::KernelPlan;
 use vcm_scene::Scene;
 use vcm_scene::bsdf::{ALBEDO_TABLE_SIZE, FlatLobes, albedo_tables};
-use vcm_scene::light::{Light, LightSampler};
+use vcm_scene::light::{EnvironmentMap, Light};
 use vcm_scene::mesh::Mesh;
+use vcm_scene::sampling::Distribution1D;
 use vcm_scene::texture::{
     ColorEncoding, Filter, Texture, TextureRef, UvTransform, WrapMode, srgb_to_linear_table,
 };
@@ -154,6 +155,11 @@ pub(crate) struct SceneData {
     pub environment: u32,
     /// The albedo tables A then B, each row by row, their row averages, the sRGB table.
     pub tables: Vec<f32>,
+    /// The environment map's texels (empty without one).
+    pub environment_texels: Vec<[f32; 4]>,
+    /// Its rows' and then each row's texels' first numbers and probabilities.
+    pub environment_rows: Vec<[f32; 2]>,
+    pub environment_columns: Vec<[f32; 2]>,
     /// Per triangle, its texture coordinates, colours and tangents (empty where `plan`
     /// needs none of them).
     pub attributes: Vec<GpuAttributes>,
@@ -168,19 +174,12 @@ fn vec4(v: Vec3, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
 }
 
-/// Whether the GPU path tracer can shade `scene`: `Err` names the first thing it cannot
-/// shade yet (a texture, a rough lobe, a point light, …).
+/// Whether the GPU path tracer can shade `scene`: `Err` says what it cannot shade. The
+/// kernel has the whole scene model; it needs a hierarchy to trace, which a scene without
+/// triangles does not have.
 pub fn check_scene(scene: &Scene) -> Result<(), String> {
-    let features = &scene.features;
-    if features.triangles == 0 {
+    if scene.features.triangles == 0 {
         return Err("a scene without triangles".into());
-    }
-    for light in &scene.lights {
-        if let Light::Environment(environment) = light
-            && environment.map.is_some()
-        {
-            return Err("environment maps".into());
-        }
     }
     Ok(())
 }
@@ -237,15 +236,17 @@ impl SceneData {
                 .collect()
         };
         let (textures, texels) = pack_textures(&scene.textures);
+        let map = scene.lights.iter().find_map(|light| match light {
+            Light::Environment(environment) => environment.map.as_deref(),
+            _ => None,
+        });
+        let (environment_texels, environment_rows, environment_columns) =
+            map.map_or_else(Default::default, pack_environment_map);
         let environment = sampler.environment().map_or(NO_LIGHT, |l| l as u32);
-        let light_count = if sampler.sample(0.0).is_some() {
-            scene.lights.len() as u32
-        } else {
-            0
-        };
-        let light_pick = (0..light_count as usize)
-            .map(|i| [first_number_picking(sampler, i), sampler.pmf(i)])
+        let light_pick: Vec<[f32; 2]> = (sampler.first_numbers().into_iter().enumerate())
+            .map(|(i, first)| [first, sampler.pmf(i)])
             .collect();
+        let light_count = light_pick.len() as u32;
         SceneData {
             triangles,
             materials,
@@ -259,6 +260,9 @@ impl SceneData {
             texels,
             texture_refs: refs,
             material_inputs,
+            environment_texels,
+            environment_rows,
+            environment_columns,
         }
     }
 }
@@ -278,6 +282,37 @@ fn lookup_tables() -> Vec<f32> {
         srgb_to_linear_table().to_vec(),
     ]
     .concat()
+}
+
+/// An environment map's texels, and its rows' and each row's texels' first numbers and
+/// probabilities (empty where the map is black and has no distribution).
+#[allow(clippy::type_complexity)]
+fn pack_environment_map(map: &EnvironmentMap) -> (Vec<[f32; 4]>, Vec<[f32; 2]>, Vec<[f32; 2]>) {
+    let texels = map
+        .texels()
+        .iter()
+        .map(|t| t.extend(0.0).to_array())
+        .collect();
+    let Some(distribution) = map.distribution() else {
+        return (texels, Vec::new(), Vec::new());
+    };
+    let picks = |d: &Distribution1D| {
+        let numbers = d.first_numbers();
+        (0..d.len())
+            .map(|i| [numbers[i], d.pmf(i)])
+            .collect::<Vec<_>>()
+    };
+    let width = distribution.size().x as usize;
+    let columns = distribution
+        .columns()
+        .iter()
+        .flat_map(|row| match row {
+            Some(row) => picks(row),
+            // A row without weight, never picked.
+            None => vec![[f32::INFINITY, 0.0]; width],
+        })
+        .collect();
+    (texels, picks(distribution.rows()), columns)
 }
 
 /// Every texture's description and all their texels, one after the other.
@@ -380,8 +415,9 @@ fn pack_attributes(mesh: &Mesh, t: usize) -> GpuAttributes {
     }
 }
 
-/// A light as `path_tracer.wgsl` reads it, an area light's emission texture added to `refs`
-/// (environment maps, which [`check_scene`] refuses, left out).
+/// A light as `path_tracer.wgsl` reads it, an area light's emission and mask textures added
+/// to `refs` (an environment map's texels and distribution are packed apart:
+/// [`pack_environment_map`]).
 fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
     let kind =
         |kind: u32, emission: Vec3| (vec4(Vec3::ZERO, f32::from_bits(kind)), vec4(emission, 0.0));
@@ -457,8 +493,15 @@ fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
         }
         Light::Environment(l) => {
             let (normal, emission) = kind(ENVIRONMENT_LIGHT, l.radiance);
+            // The map's size (as bits), whether there is one, and whether it has a
+            // sampling distribution.
+            let description = l.map.as_ref().map_or([0.0; 4], |map| {
+                let size = map.size();
+                let sampled = f32::from(u8::from(map.distribution().is_some()));
+                [f32::from_bits(size.x), f32::from_bits(size.y), 1.0, sampled]
+            });
             GpuLight {
-                corners: [zero; 3],
+                corners: [description, zero, zero],
                 normal,
                 emission,
                 ..unlit
@@ -518,32 +561,6 @@ fn pack_material(lobes: Option<&FlatLobes>, double_sided: bool) -> GpuMaterial {
 /// An albedo's table row and fraction as the kernel reads them.
 fn table_row(row: Option<(usize, f32)>) -> (u32, f32) {
     row.map_or((NO_ROW, 0.0), |(k, t)| (k as u32, t))
-}
-
-/// The smallest number in [0, 1) for which `sampler` picks light `light` or a later one
-/// (infinity if none does): the kernel picks the last light whose number is at most its
-/// own, which is the light the CPU's f64 search picks for every f32.
-fn first_number_picking(sampler: &LightSampler, light: usize) -> f32 {
-    let picks_it_or_later = |bits: u32| {
-        sampler
-            .sample(f32::from_bits(bits))
-            .is_some_and(|(i, _)| i >= light)
-    };
-    // Non-negative floats order as their bits; the numbers lie in [0, 1).
-    let (mut lo, mut hi) = (0u32, 1f32.to_bits());
-    while lo < hi {
-        let mid = lo + (hi - lo) / 2;
-        if picks_it_or_later(mid) {
-            hi = mid;
-        } else {
-            lo = mid + 1;
-        }
-    }
-    if lo == 1f32.to_bits() {
-        f32::INFINITY
-    } else {
-        f32::from_bits(lo)
-    }
 }
 
 #[cfg(test)]

@@ -168,8 +168,7 @@ pub struct RenderArgs {
     setup: RenderSetup,
     /// Where paths are shaded: `gpu` follows each whole path in one WGSL kernel on the GPU
     /// backend's device and brings back only radiances (needs --backend gpu; path tracing
-    /// only, and scenes without environment maps so far; see
-    /// docs/gpu.md).
+    /// only so far; see docs/gpu.md).
     #[arg(long, value_enum, default_value_t = Shading::Cpu)]
     shading: Shading,
     /// Output EXR (linear radiance); a tone-mapped PNG is written beside it (default out.exr,

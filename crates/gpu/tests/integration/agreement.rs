@@ -9,7 +9,9 @@ use vcm_scene::sampling::SampleSequence;
 
 use serde_json::json;
 
-use crate::common::{cpu_image, gpu, gpu_image, lit_khronos_model, scene, scene_variant};
+use crate::common::{
+    cpu_image, gpu, gpu_image, lit_khronos_model, scene, scene_variant, scene_variant_with,
+};
 
 /// The share of pixels whose channels all agree within `RELATIVE` (or `ABSOLUTE` near
 /// black) in two images of the same paths.
@@ -102,7 +104,8 @@ fn gpu_paths_are_the_cpu_paths_on_every_lobe() {
 }
 
 /// Every kind of light: `cornell-specular` with a point light, a spot light, a directional
-/// light through its open front and a constant environment beside its area light.
+/// light through its open front and a constant environment beside its area light; then
+/// with an environment map.
 #[test]
 fn gpu_paths_are_the_cpu_paths_under_every_light() {
     let Some(gpu) = gpu() else { return };
@@ -148,6 +151,34 @@ fn gpu_paths_are_the_cpu_paths_under_every_light() {
         &lit,
         (SampleSequence::Sobol, None, 2),
     );
+
+    // An environment map: 4 × 2 texels of different colours (Radiance RGBE, uncompressed),
+    // one black, seen through the box's open front and sampled by its texels' weights.
+    let mut sky = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 4\n".to_vec();
+    for rgbe in [
+        [128, 64, 32, 130],
+        [32, 64, 128, 129],
+        [0, 0, 0, 0],
+        [128, 128, 128, 128],
+        [64, 128, 64, 131],
+        [128, 32, 32, 129],
+        [96, 96, 128, 130],
+        [128, 128, 64, 127],
+    ] {
+        sky.extend(rgbe);
+    }
+    let mapped = scene_variant_with(
+        "cornell-specular",
+        |g| {
+            let used = g["extensionsUsed"].as_array_mut().unwrap();
+            used.push(json!("VCM_environment"));
+            g["extensions"] = json!({"VCM_environment": {"image": "sky.hdr", "strength": 0.8}});
+        },
+        &[("sky.hdr", &sky)],
+    );
+    assert_eq!(mapped.features.lights.environment, 1);
+    let settings = (SampleSequence::Independent, None, 2);
+    check_agreement(&gpu, "mapped cornell-specular", &mapped, settings);
 }
 
 /// Textured models: base colour, metallic-roughness, normal and emissive textures, authored

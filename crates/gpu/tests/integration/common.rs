@@ -46,11 +46,23 @@ pub fn lit_khronos_model(file: &str) -> Arc<Scene> {
 
 /// A scene of `scenes/` with its glTF changed by `edit` (written to a temporary folder).
 pub fn scene_variant(name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> Arc<Scene> {
+    scene_variant_with(name, edit, &[])
+}
+
+/// [`scene_variant`] with `files` (name, bytes) beside the glTF, for it to refer to.
+pub fn scene_variant_with(
+    name: &str,
+    edit: impl FnOnce(&mut serde_json::Value),
+    files: &[(&str, &[u8])],
+) -> Arc<Scene> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenes/{name}.gltf"));
     let mut gltf: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     edit(&mut gltf);
     let dir = tempfile::tempdir().unwrap();
+    for (file, bytes) in files {
+        std::fs::write(dir.path().join(file), bytes).unwrap();
+    }
     let changed = dir.path().join(format!("{name}.gltf"));
     std::fs::write(&changed, gltf.to_string()).unwrap();
     Arc::new(Scene::load(&changed).unwrap_or_else(|e| panic!("{name} variant: {e}")))

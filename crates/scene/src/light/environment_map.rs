@@ -73,6 +73,21 @@ impl EnvironmentMap {
         self.texels[(cell.y * self.size.x + cell.x) as usize]
     }
 
+    /// The image's width and height in texels.
+    pub fn size(&self) -> UVec2 {
+        self.size
+    }
+
+    /// The texels, row by row from the top (linear RGB radiance factors).
+    pub fn texels(&self) -> &[Vec3] {
+        &self.texels
+    }
+
+    /// The distribution [`sample`](Self::sample) draws texels from (`None` for a black map).
+    pub fn distribution(&self) -> Option<&ImageDistribution> {
+        self.distribution.as_ref()
+    }
+
     /// Mean radiance over the sphere.
     pub fn mean(&self) -> Vec3 {
         self.mean

@@ -42,6 +42,14 @@ impl LightSampler {
         self.distribution.as_ref().map(|d| d.sample(u))
     }
 
+    /// Per light, the smallest number in [0, 1) that [`sample`](Self::sample) maps to it or
+    /// a later light (see [`Distribution1D::first_numbers`]); empty without lights to pick.
+    pub fn first_numbers(&self) -> Vec<f32> {
+        self.distribution
+            .as_ref()
+            .map_or_else(Vec::new, Distribution1D::first_numbers)
+    }
+
     /// Probability of picking light `index`.
     #[inline]
     pub fn pmf(&self, index: usize) -> f32 {

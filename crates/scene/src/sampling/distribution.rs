@@ -54,6 +54,28 @@ impl Distribution1D {
         self.pmf.get(i).copied().unwrap_or(0.0)
     }
 
+    /// Per entry, the smallest number in [0, 1) that [`sample`](Self::sample) maps to it or
+    /// a later entry (infinity where none does): an entry is picked by the numbers from its
+    /// own to the next entry's. For code that samples without f64 (the GPU), which then picks
+    /// the last entry whose number is at most its own, as this f64 search does.
+    pub fn first_numbers(&self) -> Vec<f32> {
+        let total = self.total();
+        // `find` picks entry ≥ i exactly where u · total reaches cdf[i].
+        let reaches = |u: f32, i: usize| f64::from(u) * total >= self.cdf[i];
+        (0..self.len())
+            .map(|i| {
+                let mut u = ((self.cdf[i] / total) as f32).clamp(0.0, 1.0);
+                while u > 0.0 && reaches(u.next_down(), i) {
+                    u = u.next_down();
+                }
+                while u < 1.0 && !reaches(u, i) {
+                    u = u.next_up();
+                }
+                if u < 1.0 { u } else { f32::INFINITY }
+            })
+            .collect()
+    }
+
     /// Selects an entry with `u` in [0, 1) (clamped into it) and returns it with its
     /// probability. An entry with zero weight is never selected: the result is the first
     /// entry whose cumulative sum exceeds `u · total`.
@@ -101,6 +123,25 @@ impl Distribution1D {
 mod tests {
     use super::*;
     use crate::sampling::{Rng, Sampler};
+
+    /// Picking the last entry whose first number is at most u is `sample`, for every u:
+    /// weights with zeros inside and at both ends, tiny and huge ones.
+    #[test]
+    fn first_numbers_pick_what_sample_picks() {
+        let mut rng = Rng::from_key(&[41]);
+        let weights = [0.0, 3.0, 0.0, 0.0, 1e-6, 7.5, 1e6, 0.0, 2.0, 0.0];
+        let d = Distribution1D::new(&weights).unwrap();
+        let first = d.first_numbers();
+        let picked = |u: f32| first.iter().rposition(|&f| f <= u).unwrap();
+        let edges = first
+            .iter()
+            .filter(|f| f.is_finite())
+            .flat_map(|&f| [f.next_down().max(0.0), f, f.next_up()]);
+        let random = (0..100_000).map(|_| rng.uniform());
+        for u in edges.chain(random).chain([0.0, 1.0f32.next_down()]) {
+            assert_eq!(picked(u), d.sample(u).0, "u = {u:e}");
+        }
+    }
 
     #[test]
     fn rejects_empty_and_zero() {

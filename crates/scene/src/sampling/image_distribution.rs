@@ -50,6 +50,21 @@ impl ImageDistribution {
         (point, row_pmf * column_pmf * self.cells())
     }
 
+    /// The image's width and height in cells.
+    pub fn size(&self) -> UVec2 {
+        self.size
+    }
+
+    /// The distribution of the rows (by their total weight).
+    pub fn rows(&self) -> &Distribution1D {
+        &self.rows
+    }
+
+    /// Per row, the distribution of its cells (`None` for a row without weight).
+    pub fn columns(&self) -> &[Option<Distribution1D>] {
+        &self.columns
+    }
+
     /// The density at `point` of [0, 1]².
     #[inline]
     pub fn pdf(&self, point: Vec2) -> f32 {
