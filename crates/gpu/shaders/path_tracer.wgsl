@@ -37,9 +37,10 @@ struct Params {
     light_count: u32,
     // The environment light, or NO_LIGHT.
     environment: u32,
-    unused0: u32,
-    unused1: u32,
-    unused2: u32,
+    // Where the environment map's rows, and its rows' texels, start in `picks`.
+    environment_rows: u32,
+    environment_columns: u32,
+    unused: u32,
 }
 
 // A triangle as shading sees it: corners (w: the material, the area light or NO_LIGHT, as
@@ -130,8 +131,11 @@ const CAPPED_CONTINUATION: f32 = 0.95;
 @group(2) @binding(0) var<storage, read> triangles: array<ShadeTriangle>;
 @group(2) @binding(1) var<storage, read> materials: array<Material>;
 @group(2) @binding(2) var<storage, read> lights: array<Light>;
-// Per light: the smallest number that picks it or a later one, and its pick probability.
-@group(2) @binding(3) var<storage, read> light_pick: array<vec2<f32>>;
+// Discrete distributions as the kernel samples them: per entry, the smallest number that
+// picks it or a later entry (`first_numbers`), and its probability. The lights' come first
+// (`light_count`), then the environment map's rows and each row's texels, at the offsets in
+// `params`.
+@group(2) @binding(3) var<storage, read> picks: array<vec2<f32>>;
 // The albedo tables A and B (rows over the roughness), their averages, the sRGB table.
 @group(2) @binding(4) var<storage, read> tables: array<f32>;
 @group(2) @binding(5) var<storage, read> texture_infos: array<TextureInfo>;
@@ -140,11 +144,8 @@ const CAPPED_CONTINUATION: f32 = 0.95;
 @group(2) @binding(7) var<storage, read> texture_refs: array<TextureRef>;
 @group(2) @binding(8) var<storage, read> material_inputs: array<MaterialInputs>;
 @group(2) @binding(9) var<storage, read> attributes: array<TriangleAttributes>;
-// The environment map's texels, and its sampling distribution: per row, then per texel
-// within its row, the first number that picks it and its probability (`first_numbers`).
+// The environment map's texels.
 @group(2) @binding(10) var<storage, read> environment_texels: array<vec4<f32>>;
-@group(2) @binding(11) var<storage, read> environment_rows: array<vec2<f32>>;
-@group(2) @binding(12) var<storage, read> environment_columns: array<vec2<f32>>;
 
 fn infinity() -> f32 {
     return bitcast<f32>(0x7f800000u);
@@ -334,13 +335,14 @@ fn power_heuristic(f: f32, g: f32) -> f32 {
     return select(weight, 1.0, abs(f) == infinity());
 }
 
-// The light a number picks (`LightSampler::sample`): the last whose first number is ≤ u.
-fn pick_light(u: f32) -> u32 {
+// The entry a number picks from the `count` entries of `picks` from `first` on (as
+// `Distribution1D::sample` does): the last whose first number is at most `u`.
+fn pick(first: u32, count: u32, u: f32) -> u32 {
     var lo = 0u;
-    var hi = params.light_count;
+    var hi = count;
     while hi - lo > 1u {
         let mid = (lo + hi) / 2u;
-        if light_pick[mid].x <= u {
+        if picks[first + mid].x <= u {
             lo = mid;
         } else {
             hi = mid;
@@ -368,7 +370,7 @@ fn emission(s: Surface, hit: Hit, dir: vec3<f32>, bsdf_pdf: f32) -> vec3<f32> {
     }
     let direct_pdf_a = 1.0 / light.c0.w;
     let cos_at_light = abs(dot3(s.n_g, -dir));
-    let light_pdf_w = light_pick[s.light].y * direct_pdf_a * t * t / cos_at_light;
+    let light_pdf_w = picks[s.light].y * direct_pdf_a * t * t / cos_at_light;
     return radiance * power_heuristic(bsdf_pdf, light_pdf_w);
 }
 
@@ -459,44 +461,19 @@ fn environment_radiance(light: Light, d: vec3<f32>) -> vec3<f32> {
     return light.emission.xyz * environment_texels[cell.y * size.x + cell.x].xyz;
 }
 
-// Where a number falls within the span of the entry it picked, from the entry's first
-// number to the next one's (`Distribution1D::sample_remapped`, here in f32).
-fn remapped(u: f32, start: f32, next: f32) -> f32 {
-    let end = min(next, 1.0);
+// Where `u` falls within the span of the entry `i` it picked (of the `count` from `first`
+// on), from the entry's first number to the next one's (`Distribution1D::sample_remapped`,
+// here in f32).
+fn remapped_in(first: u32, count: u32, i: u32, u: f32) -> f32 {
+    let start = picks[first + i].x;
+    var end = 1.0;
+    if i + 1u < count {
+        end = min(picks[first + i + 1u].x, 1.0);
+    }
     if end > start {
         return min(max((u - start) / (end - start), 0.0), ONE_MINUS_EPSILON);
     }
     return 0.0;
-}
-
-// The row `u` picks: the last whose first number is at most `u`.
-fn pick_environment_row(height: u32, u: f32) -> u32 {
-    var lo = 0u;
-    var hi = height;
-    while hi - lo > 1u {
-        let mid = (lo + hi) / 2u;
-        if environment_rows[mid].x <= u {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
-}
-
-// The column `u` picks within the row starting at texel `first`.
-fn pick_environment_column(first: u32, width: u32, u: f32) -> u32 {
-    var lo = 0u;
-    var hi = width;
-    while hi - lo > 1u {
-        let mid = (lo + hi) / 2u;
-        if environment_columns[first + mid].x <= u {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
 }
 
 // A direction toward the map drawn by its texels' weights (`EnvironmentMap::sample`).
@@ -505,22 +482,15 @@ fn sample_environment_map(light: Light, u: vec2<f32>) -> Illumination {
         return no_illumination();
     }
     let size = environment_size(light);
-    let row = pick_environment_row(size.y, u.y);
-    var next_row = 1.0;
-    if row + 1u < size.y {
-        next_row = environment_rows[row + 1u].x;
-    }
-    let v_in_row = remapped(u.y, environment_rows[row].x, next_row);
-    let first = row * size.x;
-    let column = pick_environment_column(first, size.x, u.x);
-    var next_column = 1.0;
-    if column + 1u < size.x {
-        next_column = environment_columns[first + column + 1u].x;
-    }
-    let u_in_column = remapped(u.x, environment_columns[first + column].x, next_column);
+    let rows = params.environment_rows;
+    let row = pick(rows, size.y, u.y);
+    let v_in_row = remapped_in(rows, size.y, row, u.y);
+    let columns = params.environment_columns + row * size.x;
+    let column = pick(columns, size.x, u.x);
+    let u_in_column = remapped_in(columns, size.x, column, u.x);
     let cell = vec2(f32(column) + u_in_column, f32(row) + v_in_row);
     let point = min(cell / vec2<f32>(size), vec2(ONE_MINUS_EPSILON));
-    let pdf_uv = environment_rows[row].y * environment_columns[first + column].y * f32(size.x * size.y);
+    let pdf_uv = picks[rows + row].y * picks[columns + column].y * f32(size.x * size.y);
     let phi = (point.x - 0.5) * 2.0 * PI;
     let sin_theta = sin(point.y * PI);
     let cos_theta = cos(point.y * PI);
@@ -540,8 +510,8 @@ fn environment_map_pdf(light: Light, d: vec3<f32>) -> f32 {
     }
     let size = environment_size(light);
     let cell = image_cell(size, direction_to_uv(d));
-    let row_pmf = environment_rows[cell.y].y;
-    let column_pmf = environment_columns[cell.y * size.x + cell.x].y;
+    let row_pmf = picks[params.environment_rows + cell.y].y;
+    let column_pmf = picks[params.environment_columns + cell.y * size.x + cell.x].y;
     let pdf_uv = row_pmf * column_pmf * f32(size.x * size.y);
     return pdf_uv / (2.0 * PI * PI * sin_theta);
 }
@@ -629,7 +599,7 @@ fn escaped(dir: vec3<f32>, bsdf_pdf: f32) -> vec3<f32> {
     if has_environment_map(light) {
         direction_pdf = environment_map_pdf(light, dir);
     }
-    let light_pdf_w = light_pick[params.environment].y * direction_pdf;
+    let light_pdf_w = picks[params.environment].y * direction_pdf;
     return radiance * power_heuristic(bsdf_pdf, light_pdf_w);
 }
 
@@ -648,8 +618,8 @@ fn next_event(
     if params.light_count == 0u {
         return shadow;
     }
-    let index = pick_light(u_pick);
-    let pick_pmf = light_pick[index].y;
+    let index = pick(0u, params.light_count, u_pick);
+    let pick_pmf = picks[index].y;
     let light = lights[index];
     let seen = illuminate(light, s.position, u_light);
     if !seen.valid {

@@ -38,7 +38,9 @@ struct Params {
     independent: u32,
     light_count: u32,
     environment: u32,
-    unused: [u32; 3],
+    environment_rows: u32,
+    environment_columns: u32,
+    unused: u32,
 }
 
 const _: () = assert!(
@@ -70,6 +72,8 @@ pub struct GpuPathTracer {
     buffers: DispatchBuffers,
     light_count: u32,
     environment: u32,
+    /// Where the environment map's rows and its rows' texels start in the picks buffer.
+    environment_offsets: [u32; 2],
     /// The parts of the kernel the scene needs.
     plan: KernelPlan,
     samples_per_frame: u32,
@@ -131,7 +135,7 @@ impl GpuPathTracer {
             upload(&gpu, "shading triangles", &data.triangles)?,
             upload(&gpu, "materials", &data.materials)?,
             upload(&gpu, "lights", &data.lights)?,
-            upload(&gpu, "light pick", &data.light_pick)?,
+            upload(&gpu, "picks", &data.picks)?,
             upload(&gpu, "lookup tables", &data.tables)?,
             upload(&gpu, "textures", &data.textures)?,
             upload(&gpu, "texels", &data.texels)?,
@@ -139,8 +143,6 @@ impl GpuPathTracer {
             upload(&gpu, "material inputs", &data.material_inputs)?,
             upload(&gpu, "triangle attributes", &data.attributes)?,
             upload(&gpu, "environment texels", &data.environment_texels)?,
-            upload(&gpu, "environment rows", &data.environment_rows)?,
-            upload(&gpu, "environment columns", &data.environment_columns)?,
         ];
         let mut scene_groups = vec![(1, bind(device, &pipeline, 1, hierarchy.iter()))];
         if let Some(masks) = bvh.alpha_mask_buffers() {
@@ -164,6 +166,7 @@ impl GpuPathTracer {
             buffers,
             light_count: data.light_count,
             environment: data.environment,
+            environment_offsets: data.environment_offsets,
             plan,
             samples_per_frame: 1,
             stop: StopFlag::new(),
@@ -213,7 +216,9 @@ impl GpuPathTracer {
             independent: u32::from(sequence == SampleSequence::Independent),
             light_count: self.light_count,
             environment: self.environment,
-            unused: [0; 3],
+            environment_rows: self.environment_offsets[0],
+            environment_columns: self.environment_offsets[1],
+            unused: 0,
         };
         (params, (x, y))
     }

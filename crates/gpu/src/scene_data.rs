@@ -147,19 +147,20 @@ pub(crate) struct SceneData {
     pub triangles: Vec<GpuTriangle>,
     pub materials: Vec<GpuMaterial>,
     pub lights: Vec<GpuLight>,
-    /// Per light: the smallest number that picks it or a later one, and its probability.
-    pub light_pick: Vec<[f32; 2]>,
+    /// Discrete distributions, per entry the smallest number that picks it or a later one
+    /// and its probability: the lights' (`light_count` of them), then the environment map's
+    /// rows and each row's texels, from `environment_offsets`.
+    pub picks: Vec<[f32; 2]>,
     /// Lights the light sampler picks from (0 when it has none to pick).
     pub light_count: u32,
+    /// Where the environment map's rows and its rows' texels start in `picks`.
+    pub environment_offsets: [u32; 2],
     /// The environment light, or `NO_LIGHT`.
     pub environment: u32,
     /// The albedo tables A then B, each row by row, their row averages, the sRGB table.
     pub tables: Vec<f32>,
     /// The environment map's texels (empty without one).
     pub environment_texels: Vec<[f32; 4]>,
-    /// Its rows' and then each row's texels' first numbers and probabilities.
-    pub environment_rows: Vec<[f32; 2]>,
-    pub environment_columns: Vec<[f32; 2]>,
     /// Per triangle, its texture coordinates, colours and tangents (empty where `plan`
     /// needs none of them).
     pub attributes: Vec<GpuAttributes>,
@@ -242,17 +243,21 @@ impl SceneData {
         });
         let (environment_texels, environment_rows, environment_columns) =
             map.map_or_else(Default::default, pack_environment_map);
-        let environment = sampler.environment().map_or(NO_LIGHT, |l| l as u32);
-        let light_pick: Vec<[f32; 2]> = (sampler.first_numbers().into_iter().enumerate())
+        let mut picks: Vec<[f32; 2]> = (sampler.first_numbers().into_iter().enumerate())
             .map(|(i, first)| [first, sampler.pmf(i)])
             .collect();
-        let light_count = light_pick.len() as u32;
+        let light_count = picks.len() as u32;
+        let environment_offsets = [light_count, light_count + environment_rows.len() as u32];
+        picks.extend(environment_rows);
+        picks.extend(environment_columns);
+        let environment = sampler.environment().map_or(NO_LIGHT, |l| l as u32);
         SceneData {
             triangles,
             materials,
             lights,
-            light_pick,
+            picks,
             light_count,
+            environment_offsets,
             environment,
             tables: lookup_tables(),
             attributes,
@@ -261,8 +266,6 @@ impl SceneData {
             texture_refs: refs,
             material_inputs,
             environment_texels,
-            environment_rows,
-            environment_columns,
         }
     }
 }

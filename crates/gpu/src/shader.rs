@@ -56,25 +56,13 @@ pub fn path_tracer_module(traversal: &str, alpha_masks: bool) -> String {
 mod tests {
     use super::*;
     use vcm_traversal_wgpu::NodeLayout;
-    use vcm_traversal_wgpu::shader::traversal_functions;
+    use vcm_traversal_wgpu::shader::{traversal_functions, validate_module};
 
-    /// Parses and validates the module with naga and writes SPIR-V, as wgpu does on Vulkan.
+    /// Validates a module (panics with naga's message).
     fn validate(source: &str) {
-        let module = naga::front::wgsl::parse_str(source)
-            .unwrap_or_else(|e| panic!("WGSL parse error:\n{}", e.emit_to_string(source)));
-        let info = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        )
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("WGSL validation error:\n{}", e.emit_to_string(source)));
-        let stage = Some((naga::ShaderStage::Compute, PATH_TRACER_ENTRY));
-        let constants = naga::back::PipelineConstants::default();
-        let (module, info) =
-            naga::back::pipeline_constants::process_overrides(&module, &info, stage, &constants)
-                .unwrap_or_else(|e| panic!("overrides: {e}"));
-        naga::back::spv::write_vec(&module, &info, &Default::default(), None)
-            .unwrap_or_else(|e| panic!("SPIR-V: {e}"));
+        if let Err(error) = validate_module(source, &[PATH_TRACER_ENTRY]) {
+            panic!("{error}");
+        }
     }
 
     #[test]

@@ -57,31 +57,41 @@ pub fn traversal_functions(layout: NodeLayout, stack_size: u32, alpha_masks: boo
     )
 }
 
+/// Parses and validates a WGSL module with naga, then resolves its pipeline overrides (at
+/// their defaults) for each of `entries` and writes SPIR-V, as wgpu does on Vulkan: a check
+/// of kernels that needs no GPU, for tests (feature `testing`). The error names the stage
+/// that failed, with naga's message.
+#[cfg(any(test, feature = "testing"))]
+pub fn validate_module(source: &str, entries: &[&str]) -> Result<(), String> {
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| format!("WGSL parse error:\n{}", e.emit_to_string(source)))?;
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .map_err(|e| format!("WGSL validation error:\n{}", e.emit_to_string(source)))?;
+    for &entry in entries {
+        let stage = Some((naga::ShaderStage::Compute, entry));
+        let constants = naga::back::PipelineConstants::default();
+        let (module, info) =
+            naga::back::pipeline_constants::process_overrides(&module, &info, stage, &constants)
+                .map_err(|e| format!("{entry}: overrides: {e}"))?;
+        let options = naga::back::spv::Options::default();
+        naga::back::spv::write_vec(&module, &info, &options, None)
+            .map_err(|e| format!("{entry}: SPIR-V: {e}"))?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Parses and validates a composed module with naga, then resolves its pipeline
-    /// overrides per entry point and writes SPIR-V, as wgpu does on Vulkan.
+    /// Validates a composed module (panics with naga's message).
     fn validate(source: &str) {
-        let module = naga::front::wgsl::parse_str(source)
-            .unwrap_or_else(|e| panic!("WGSL parse error:\n{}", e.emit_to_string(source)));
-        let info = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        )
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("WGSL validation error:\n{}", e.emit_to_string(source)));
-        for entry in [CLOSEST_HIT_ENTRY, ANY_HIT_ENTRY] {
-            let stage = Some((naga::ShaderStage::Compute, entry));
-            let constants = naga::back::PipelineConstants::default();
-            let (module, info) = naga::back::pipeline_constants::process_overrides(
-                &module, &info, stage, &constants,
-            )
-            .unwrap_or_else(|e| panic!("{entry}: overrides: {e}"));
-            let options = naga::back::spv::Options::default();
-            naga::back::spv::write_vec(&module, &info, &options, None)
-                .unwrap_or_else(|e| panic!("{entry}: SPIR-V: {e}"));
+        if let Err(error) = validate_module(source, &[CLOSEST_HIT_ENTRY, ANY_HIT_ENTRY]) {
+            panic!("{error}");
         }
     }
 
