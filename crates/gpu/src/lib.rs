@@ -21,6 +21,8 @@
 
 #![warn(missing_docs)]
 
+#[cfg(test)]
+mod bsdf_probe;
 mod error;
 mod path_tracer;
 mod plan;

@@ -272,7 +272,7 @@ impl SceneData {
 
 /// The albedo tables A and B row by row, their row averages, then the sRGB decoding table:
 /// `tables` of `path_tracer.wgsl` (offsets in [`crate::shader`]).
-fn lookup_tables() -> Vec<f32> {
+pub(crate) fn lookup_tables() -> Vec<f32> {
     let albedo = albedo_tables();
     let rows = |table: &[[f32; ALBEDO_TABLE_SIZE.0]; ALBEDO_TABLE_SIZE.1]| {
         table.iter().flatten().copied().collect::<Vec<_>>()
@@ -515,7 +515,7 @@ fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
 
 /// The material's lobes as `bsdf.wgsl` reads them; a material without lobes (one
 /// [`check_scene`] refuses) is black.
-fn pack_material(lobes: Option<&FlatLobes>, double_sided: bool) -> GpuMaterial {
+pub(crate) fn pack_material(lobes: Option<&FlatLobes>, double_sided: bool) -> GpuMaterial {
     let mut m = GpuMaterial::zeroed();
     m.ior = 1.5;
     if double_sided {

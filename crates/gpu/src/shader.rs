@@ -28,14 +28,23 @@ pub fn shading_group(alpha_masks: bool) -> u32 {
 /// hierarchy, [`vcm_traversal_wgpu::GpuBvh::traversal_functions`], with or without
 /// `alpha_masks`).
 pub fn path_tracer_module(traversal: &str, alpha_masks: bool) -> String {
-    // The CPU's rounding-error factors, written so that they parse to the same f32, and
-    // the size of the albedo tables.
+    let constants = host_constants();
+    // The shading data's bindings are written as group 2 in path_tracer.wgsl.
+    let group = shading_group(alpha_masks);
+    let kernel = PATH_TRACER_WGSL.replace("@group(2)", &format!("@group({group})"));
+    format!("{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{kernel}")
+}
+
+/// The constants the host defines for the shaders: the CPU's rounding-error factors and
+/// GGX width floor, written so that they parse to the same f32, and the layout of the
+/// lookup tables.
+pub fn host_constants() -> String {
     let (columns, rows) = ALBEDO_TABLE_SIZE;
     // Where each table starts in `tables`: A and B (rows × columns each), their row
     // averages, the sRGB table.
     let a_average = 2 * rows * columns;
     let (b_average, srgb) = (a_average + rows, a_average + 2 * rows);
-    let constants = format!(
+    format!(
         "const GAMMA_7: f32 = {:?}f;\nconst GAMMA_16: f32 = {:?}f;\n\
          const MIN_ALPHA: f32 = {:?}f;\nconst R_MIN: f32 = {:?}f;\n\
          const ALBEDO_COLUMNS: u32 = {columns}u;\nconst ALBEDO_ROWS: u32 = {rows}u;\n\
@@ -45,11 +54,7 @@ pub fn path_tracer_module(traversal: &str, alpha_masks: bool) -> String {
         gamma(16),
         MIN_ALPHA,
         MIN_ALPHA.sqrt(),
-    );
-    // The shading data's bindings are written as group 2 in path_tracer.wgsl.
-    let group = shading_group(alpha_masks);
-    let kernel = PATH_TRACER_WGSL.replace("@group(2)", &format!("@group({group})"));
-    format!("{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{kernel}")
+    )
 }
 
 #[cfg(test)]

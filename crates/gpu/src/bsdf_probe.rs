@@ -1,0 +1,269 @@
+//! The GPU's BSDF sampling checked with the shared chi-square harness: bsdf.wgsl samples a
+//! batch of directions on the GPU (`shaders/bsdf_probe.wgsl`), the CPU histograms them
+//! against the CPU's pdf, and each sample's pdf and f·|cos| are compared with the CPU's.
+//! Skipped without a graphics adapter unless `VCM_REQUIRE_GPU=1`.
+
+use std::sync::mpsc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use vcm_scene::bsdf::{Bsdf, BsdfParams, Lobes, Pdfs, TransportMode};
+use vcm_scene::frame::Frame;
+use vcm_scene::sampling::{Rng, Sampler};
+use vcm_scene::testing::{Chi2Config, chi2_test};
+use vcm_traversal_wgpu::GpuDevice;
+use wgpu::util::DeviceExt;
+
+use crate::scene_data::{lookup_tables, pack_material};
+use crate::shader::{BSDF_WGSL, host_constants};
+
+const PROBE_WGSL: &str = include_str!("../shaders/bsdf_probe.wgsl");
+
+/// `ProbeInput` of `bsdf_probe.wgsl`.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct ProbeInput {
+    n_g: [f32; 4],
+    n_s: [f32; 4],
+    wo: [f32; 4],
+    u: [f32; 4],
+}
+
+/// `ProbeOutput` of `bsdf_probe.wgsl`.
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+#[repr(C)]
+struct ProbeOutput {
+    wi: [f32; 4],
+    f_cos: [f32; 4],
+    valid: [u32; 4],
+}
+
+/// `KIND_SPECULAR` of `bsdf.wgsl`.
+const KIND_SPECULAR: u32 = 2;
+
+/// Samples `material` (one side unless `double_sided`) at the surface with normal `n_g`
+/// from `wo` with each of `numbers` (u_lobe, u) on the GPU.
+fn sample_on_gpu(
+    gpu: &GpuDevice,
+    (params, double_sided): (&BsdfParams, bool),
+    (n_g, wo): (Vec3, Vec3),
+    numbers: &[[f32; 3]],
+) -> Vec<ProbeOutput> {
+    let device = &gpu.device;
+    let source = format!("{}{BSDF_WGSL}\n{PROBE_WGSL}", host_constants());
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("bsdf probe"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("bsdf probe"),
+        layout: None,
+        module: &module,
+        entry_point: Some("probe_bsdf"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let material = pack_material(Some(&Lobes::new(params).flat()), double_sided);
+    let inputs: Vec<ProbeInput> = numbers
+        .iter()
+        .map(|&[u_lobe, ux, uy]| ProbeInput {
+            n_g: n_g.extend(0.0).to_array(),
+            n_s: n_g.extend(0.0).to_array(),
+            wo: wo.extend(0.0).to_array(),
+            u: [u_lobe, ux, uy, 0.0],
+        })
+        .collect();
+    let storage = |label, bytes: &[u8]| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+    };
+    let output_bytes = (numbers.len() * size_of::<ProbeOutput>()) as u64;
+    let buffer = |label, usage| {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: output_bytes,
+            usage,
+            mapped_at_creation: false,
+        })
+    };
+    use wgpu::BufferUsages as U;
+    let buffers = [
+        storage("material", bytemuck::bytes_of(&material)),
+        storage("tables", bytemuck::cast_slice(&lookup_tables())),
+        storage("inputs", bytemuck::cast_slice(&inputs)),
+        buffer("outputs", U::STORAGE | U::COPY_SRC),
+    ];
+    let readback = buffer("read-back", U::MAP_READ | U::COPY_DST);
+    let entries: Vec<_> = (0u32..)
+        .zip(&buffers)
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("bsdf probe"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups((numbers.len() as u32).div_ceil(64), 1, 1);
+    }
+    encoder.copy_buffer_to_buffer(&buffers[3], 0, &readback, 0, output_bytes);
+    let submission = gpu.queue.submit([encoder.finish()]);
+    let (sender, mapped) = mpsc::channel();
+    readback
+        .slice(..)
+        .map_async(wgpu::MapMode::Read, move |result| {
+            let _ = sender.send(result);
+        });
+    let poll = wgpu::PollType::Wait {
+        submission_index: Some(submission),
+        timeout: None,
+    };
+    device.poll(poll).unwrap();
+    mapped.recv().unwrap().unwrap();
+    let bytes = readback.slice(..).get_mapped_range().unwrap();
+    bytemuck::pod_collect_to_vec(&bytes)
+}
+
+/// Chi-square tests in this module (Šidák-corrected together).
+const FAMILY: usize = 24;
+/// Samples per test.
+const SAMPLES: usize = 200_000;
+
+/// The GPU's samples of `params` from `wo` follow the CPU's pdf (chi-square over the
+/// sphere), and each sampled direction's pdf and f·|cos| are the CPU's up to rounding.
+fn check(gpu: &GpuDevice, name: &str, params: &BsdfParams, wo: Vec3) {
+    let n_g = Vec3::new(0.2, 0.3, 0.93).normalize();
+    let config = Chi2Config {
+        frame: Frame::from_z(n_g),
+        sample_count: SAMPLES,
+        ..Chi2Config::default()
+    };
+    // The numbers the harness would draw, in its order.
+    let mut rng = Rng::new(config.seed, 0);
+    let numbers: Vec<[f32; 3]> = (0..SAMPLES)
+        .map(|_| {
+            let (u_lobe, u) = (rng.uniform(), rng.uniform2());
+            [u_lobe, u.x, u.y]
+        })
+        .collect();
+    let samples = sample_on_gpu(gpu, (params, false), (n_g, wo), &numbers);
+    let cpu = Bsdf::new(params, n_g, n_g, false);
+    let glossy = |s: &ProbeOutput| s.valid[0] == 1 && s.wi[3].to_bits() != KIND_SPECULAR;
+    let mut differing = 0;
+    for s in samples.iter().filter(|s| glossy(s)) {
+        let wi = Vec3::from_slice(&s.wi[..3]);
+        let eval = cpu.eval_with(wo, wi, TransportMode::Radiance, Pdfs::Forward);
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-7;
+        let f_cos = Vec3::from_slice(&s.f_cos[..3]);
+        let same =
+            close(eval.pdf_fwd, s.f_cos[3]) && (0..3).all(|k| close(eval.f_cos[k], f_cos[k]));
+        differing += usize::from(!same);
+    }
+    assert!(
+        differing * 1000 <= SAMPLES,
+        "{name}, wo = {wo}: {differing} samples' pdf or f·cos differ from the CPU's"
+    );
+    let mut next = samples.iter();
+    let result = chi2_test(
+        |_| {
+            let s = next.next().expect("one sample per call");
+            glossy(s).then(|| Vec3::from_slice(&s.wi[..3]))
+        },
+        |wi| f64::from(cpu.pdf(wo, wi)),
+        &config,
+        FAMILY,
+    );
+    assert!(result.passed, "{name}, wo = {wo}: {result:?}");
+}
+
+#[test]
+fn gpu_bsdf_sampling_follows_the_cpu_pdf() {
+    let gpu = match GpuDevice::open() {
+        Ok(gpu) => gpu,
+        Err(error) if std::env::var("VCM_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("VCM_REQUIRE_GPU=1 but no GPU adapter: {error}")
+        }
+        Err(error) => {
+            eprintln!("skipping GPU test ({error})");
+            return;
+        }
+    };
+    let base = BsdfParams {
+        base_color: Vec3::new(0.8, 0.5, 0.3),
+        metallic: 0.0,
+        ..BsdfParams::default()
+    };
+    let materials = [
+        (
+            "plastic r=0.4",
+            BsdfParams {
+                roughness: 0.4,
+                ..base
+            },
+        ),
+        (
+            "smooth coat over diffuse",
+            BsdfParams {
+                roughness: 0.0,
+                ..base
+            },
+        ),
+        (
+            "gold r=0.3",
+            BsdfParams {
+                metallic: 1.0,
+                roughness: 0.3,
+                ..base
+            },
+        ),
+        (
+            "rough glass r=0.3",
+            BsdfParams {
+                transmission: 1.0,
+                roughness: 0.3,
+                thin_walled: false,
+                ..base
+            },
+        ),
+        (
+            "rough sheet r=0.4",
+            BsdfParams {
+                transmission: 1.0,
+                roughness: 0.4,
+                thin_walled: true,
+                ..base
+            },
+        ),
+        (
+            "mixture",
+            BsdfParams {
+                metallic: 0.3,
+                transmission: 0.4,
+                roughness: 0.5,
+                ..base
+            },
+        ),
+    ];
+    let n_g = Vec3::new(0.2, 0.3, 0.93).normalize();
+    let frame = Frame::from_z(n_g);
+    for (name, params) in &materials {
+        for (cos, back) in [(0.1, false), (0.6, false), (1.0, false), (0.5, true)] {
+            if back && params.transmission == 0.0 {
+                continue;
+            }
+            let sin = (1.0f32 - cos * cos).sqrt();
+            let local = Vec3::new(sin * 0.6, sin * 0.8, if back { -cos } else { cos });
+            check(&gpu, name, params, frame.to_world(local));
+        }
+    }
+}
