@@ -39,6 +39,7 @@ pub enum BackendError {
 }
 
 /// A built backend with a one-line description of what it runs on.
+#[derive(Clone)]
 pub struct BuiltTraversal {
     /// The backend.
     pub traversal: Arc<dyn Traversal>,
@@ -106,7 +107,7 @@ impl Backend {
 /// every later render of the scene (`vcm experiment`'s runs, the Python package's renders).
 pub struct Traversals {
     scene: Arc<Scene>,
-    built: Vec<(Backend, Arc<dyn Traversal>)>,
+    built: Vec<(Backend, BuiltTraversal)>,
 }
 
 impl Traversals {
@@ -125,12 +126,25 @@ impl Traversals {
         backend: Backend,
         on_build: impl FnOnce(&BuiltTraversal),
     ) -> Result<Arc<dyn Traversal>, BackendError> {
-        if let Some((_, traversal)) = self.built.iter().find(|(b, _)| *b == backend) {
-            return Ok(Arc::clone(traversal));
-        }
-        let built = backend.build(&self.scene)?;
-        on_build(&built);
-        self.built.push((backend, Arc::clone(&built.traversal)));
-        Ok(built.traversal)
+        Ok(Arc::clone(&self.built(backend, on_build)?.traversal))
+    }
+
+    /// [`get`](Self::get), with what the backend offers besides traversal (the GPU
+    /// backend's hierarchy, for shading on the GPU).
+    pub fn built(
+        &mut self,
+        backend: Backend,
+        on_build: impl FnOnce(&BuiltTraversal),
+    ) -> Result<&BuiltTraversal, BackendError> {
+        let index = match self.built.iter().position(|(b, _)| *b == backend) {
+            Some(index) => index,
+            None => {
+                let built = backend.build(&self.scene)?;
+                on_build(&built);
+                self.built.push((backend, built));
+                self.built.len() - 1
+            }
+        };
+        Ok(&self.built[index].1)
     }
 }

@@ -14,6 +14,7 @@ use vcm_rs::render_loop::{self, Budget, Frames};
 use vcm_rs::state::RenderSettings;
 use vcm_rs::state::RenderState as State;
 use vcm_rs::vcm::{Film, StopFlag};
+use vcm_rs::{BuiltTraversal, Shading};
 
 use crate::images;
 use crate::released::run_released;
@@ -43,6 +44,8 @@ use crate::vcm_error;
 ///     alpha: the merge radius's reduction exponent (ppm, bpm, vcm).
 ///     no_prune: run every part of the algorithm, even those the scene does not need.
 ///     backend: "cpu" (default) or "gpu" (WGSL compute shaders through wgpu).
+///     shading: "cpu" (default) or "gpu": whole paths in one WGSL kernel on the GPU
+///         backend's device (needs backend="gpu"; path tracing only, "auto" means it).
 ///     spp_per_frame, scheduler ("none", "tile", "queue"), tile_size: how work is scheduled
 ///         (the image does not depend on them).
 ///     progress: a function called as progress(done, total) while rendering: samples per
@@ -147,7 +150,11 @@ fn run(
     let settings = &request.settings;
     let size = (settings.width, settings.height);
     let samples_left = budget.remaining(0, Duration::ZERO).samples;
-    let traversal = py
+    let BuiltTraversal {
+        traversal,
+        gpu: gpu_hierarchy,
+        ..
+    } = py
         .detach(|| scene.traversal(request.backend))
         .map_err(vcm_error)?;
     let started = Instant::now();
@@ -164,16 +171,21 @@ fn run(
         }
     };
     let mut frames = Frames::new(request.schedule, request.backend).starting_at(first);
-    let mut integrator = frames
-        .integrator(
-            algorithm,
-            &scene.data,
-            traversal,
-            size,
-            &settings.options,
-            samples_left,
-        )
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let mut integrator = match (&gpu_hierarchy, request.shading) {
+        (Some(bvh), Shading::Gpu) => frames
+            .gpu_integrator(&scene.data, bvh, size, &settings.options, samples_left)
+            .map_err(vcm_error)?,
+        _ => frames
+            .integrator(
+                algorithm,
+                &scene.data,
+                traversal,
+                size,
+                &settings.options,
+                samples_left,
+            )
+            .map_err(|e| PyValueError::new_err(e.to_string()))?,
+    };
     // (samples per pixel, seconds) after the latest frame, and what was last reported.
     let latest = Mutex::new((0, 0.0));
     let mut reported = (0, 0.0);

@@ -5,21 +5,22 @@ use clap::ValueEnum;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vcm_rs::Backend;
 use vcm_rs::integrators::{
     Algorithm, AlgorithmOption, IntegratorOptions, MergeRadius, SamplerKind, image_size,
 };
 use vcm_rs::render_loop::{Budget, ScheduleOptions};
 use vcm_rs::state::{RenderSettings, SETTING_OPTIONS};
+use vcm_rs::{Backend, Shading};
 
 use crate::scene::Scene;
 
 /// The keyword arguments of `render` and `render_state` besides the settings' own
 /// ([`SETTING_OPTIONS`] but the camera, which the scene carries).
-const OTHER_KEYWORDS: [&str; 7] = [
+const OTHER_KEYWORDS: [&str; 8] = [
     "spp",
     "time",
     "backend",
+    "shading",
     "spp_per_frame",
     "scheduler",
     "tile_size",
@@ -43,6 +44,8 @@ pub struct Request {
     pub schedule: ScheduleOptions,
     /// Where rays are traced.
     pub backend: Backend,
+    /// Where paths are shaded.
+    pub shading: Shading,
     /// `spp`, if given.
     pub spp: Option<u32>,
     /// `time` in seconds, if given.
@@ -62,6 +65,7 @@ impl Request {
         let mut options = IntegratorOptions::default();
         let mut schedule = ScheduleOptions::default();
         let mut backend = Backend::Cpu;
+        let mut shading = Shading::Cpu;
         let (mut spp, mut time, mut progress) = (None, None, None);
         for (key, value) in kwargs.into_iter().flatten() {
             let key: String = key.extract()?;
@@ -81,6 +85,7 @@ impl Request {
                 "alpha" => options.alpha = value_as(key, value)?,
                 "no_prune" => options.no_prune = value_as(key, value)?,
                 "backend" => backend = choice(key, value)?,
+                "shading" => shading = choice(key, value)?,
                 "spp_per_frame" => schedule.spp_per_frame = optional(value, |v| positive(key, v))?,
                 "scheduler" => schedule.scheduler = optional(value, |v| choice(key, v))?,
                 "tile_size" => schedule.tile_size = optional(value, |v| positive(key, v))?,
@@ -105,6 +110,25 @@ impl Request {
                 "give spp (samples per pixel) or time (seconds), not both",
             ));
         }
+        if shading == Shading::Gpu {
+            if backend != Backend::Gpu {
+                return Err(PyValueError::new_err(
+                    "shading: \"gpu\" shades on the GPU backend's device: give backend=\"gpu\" too",
+                ));
+            }
+            // The GPU shades path tracing only so far; "auto" means it there.
+            algorithm = match algorithm {
+                AlgorithmOption::Auto | AlgorithmOption::Fixed(Algorithm::Pt) => {
+                    AlgorithmOption::Fixed(Algorithm::Pt)
+                }
+                AlgorithmOption::Fixed(other) => {
+                    return Err(PyValueError::new_err(format!(
+                        "shading: \"gpu\" renders path tracing only so far (algo \"pt\" or \"auto\"), not \"{}\"",
+                        other.name()
+                    )));
+                }
+            };
+        }
         let (width, height) = image_size(&scene.data, width, height);
         Ok(Request {
             algorithm,
@@ -117,6 +141,7 @@ impl Request {
             },
             schedule,
             backend,
+            shading,
             spp,
             time,
             progress,

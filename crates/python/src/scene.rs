@@ -8,8 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use vcm_rs::scene::{LoadOptions, Scene as SceneData};
 use vcm_rs::state::scene_hash;
-use vcm_rs::traversal::Traversal;
-use vcm_rs::{Backend, Traversals};
+use vcm_rs::{Backend, BuiltTraversal, Traversals};
 
 use crate::vcm_error;
 
@@ -35,10 +34,11 @@ impl Scene {
         *self.hash.get_or_init(|| scene_hash(&self.data))
     }
 
-    /// The traversal structure of `backend` for this scene, built on first use.
-    pub fn traversal(&self, backend: Backend) -> anyhow::Result<Arc<dyn Traversal>> {
-        let mut built = self.traversals.lock().unwrap_or_else(|e| e.into_inner());
-        Ok(built.get(backend, |_| ())?)
+    /// The traversal structure of `backend` for this scene, built on first use, with the GPU
+    /// backend's hierarchy (for shading on the GPU).
+    pub fn traversal(&self, backend: Backend) -> anyhow::Result<BuiltTraversal> {
+        let mut traversals = self.traversals.lock().unwrap_or_else(|e| e.into_inner());
+        Ok(traversals.built(backend, |_| ())?.clone())
     }
 }
 

@@ -1,6 +1,7 @@
 """The Python API: shapes and values (equal to the command line's), states, errors, the
 interpreter released while rendering, Ctrl-C and progress."""
 
+import os
 import pickle
 import signal
 import subprocess
@@ -144,6 +145,8 @@ def test_merging_refuses_shared_samples_and_other_settings(water):
         (dict(algo="mlt"), ValueError, "one of auto, pt, lt, bpt, ppm, bpm, vcm"),
         (dict(sampler="halton"), ValueError, "sampler"),
         (dict(backend="tpu"), ValueError, "backend"),
+        (dict(shading="gpu"), ValueError, 'give backend="gpu" too'),
+        (dict(shading="gpu", backend="gpu", algo="vcm"), ValueError, "path tracing only"),
         (dict(progress=3), TypeError, "progress"),
         (dict(colour="red"), TypeError, "unexpected keyword argument 'colour'"),
         (dict(connections=0, algo="bpt"), ValueError, "connections"),
@@ -155,6 +158,29 @@ def test_merging_refuses_shared_samples_and_other_settings(water):
 def test_bad_arguments_raise_python_errors_naming_them(box, options, error, words):
     with pytest.raises(error, match=words):
         vcm_rs.render(box, **{"width": 8, **options})
+
+
+def test_gpu_shading_renders_the_command_lines_image(water, vcm_cli, tmp_path):
+    """shading="gpu" is `vcm render --backend gpu --shading gpu`, bit for bit (the same
+    kernel on the same adapter), and the CPU path tracer's image up to rounding. Skipped
+    without a graphics adapter unless VCM_REQUIRE_GPU=1 (lavapipe is one)."""
+    try:
+        image = vcm_rs.render(water, backend="gpu", shading="gpu", spp=4, width=32, seed=3)
+    except vcm_rs.VcmError as error:
+        if os.environ.get("VCM_REQUIRE_GPU") == "1" or "adapter" not in str(error):
+            raise
+        pytest.skip(f"no GPU adapter: {error}")
+    exr = tmp_path / "cli.exr"
+    subprocess.run(
+        [vcm_cli, "render", water.path, "--backend", "gpu", "--shading", "gpu",
+         "--spp", "4", "--width", "32", "--seed", "3", "-o", exr],
+        check=True,
+        capture_output=True,
+    )
+    assert np.array_equal(image, vcm_rs.read_exr(exr))
+    cpu = vcm_rs.render(water, algo="pt", spp=4, width=32, seed=3)
+    close = np.abs(image - cpu).max(axis=2) <= 1e-4 * np.maximum(cpu.max(axis=2), 1e-2)
+    assert close.mean() >= 0.99
 
 
 def test_bad_sample_ranges_are_refused(box):
