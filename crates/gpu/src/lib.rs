@@ -4,7 +4,8 @@
 //! and the scene's shading data uploaded once: each kernel invocation follows one camera path
 //! to its end (camera ray, closest hits, emission with MIS, one light sample with its shadow
 //! ray, BSDF sampling, Russian roulette) and writes its radiance; only those radiances come
-//! back, and the host adds them to the film in the CPU path tracer's order. The kernel draws
+//! back, and the host adds them to the film (a frame at a time: an interrupted frame adds
+//! nothing; the film's exact sums make the order irrelevant). The kernel draws
 //! the same numbers as the CPU for the same path ([`vcm_scene::sampling::SobolSampler`] in
 //! `shaders/sampler.wgsl`) and shades with the same operations, so both backends render the
 //! same image up to floating-point rounding per path, not only in expectation.

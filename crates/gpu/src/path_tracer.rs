@@ -369,7 +369,7 @@ fn bind<'a>(
 
 impl Integrator for GpuPathTracer {
     /// Renders samples `first_sample …` (`samples_per_frame` per pixel) on the GPU, in
-    /// dispatches of consecutive paths, and adds them to `film` in pixel and sample order.
+    /// dispatches of consecutive paths, and adds them to `film`.
     fn render_frame(&mut self, film: &mut Film, first_sample: u32) -> FrameStats {
         let PtSettings { width, height, .. } = self.settings;
         assert_eq!(
@@ -380,21 +380,24 @@ impl Integrator for GpuPathTracer {
         let start = Instant::now();
         let samples = u64::from(self.samples_per_frame);
         let paths = u64::from(width) * u64::from(height) * samples;
-        let mut radiance = Vec::with_capacity(paths as usize);
+        // The frame's samples, added to `film` once the frame is whole (an interrupted one
+        // leaves it as it was); the host holds one dispatch's radiances at a time.
+        let mut frame = Film::new(width, height);
         let mut rays = [0u64; 2];
         for first in (0..paths).step_by(self.buffers.paths as usize) {
             if self.stop.is_raised() {
                 return FrameStats::INTERRUPTED;
             }
             let count = self.buffers.paths.min(paths - first);
-            let (part, counts) = self.dispatch(first_sample, (first, count));
-            radiance.extend(part);
+            let (radiance, counts) = self.dispatch(first_sample, (first, count));
+            for (path, rgb) in (first..).zip(radiance) {
+                frame.add((path / samples) as usize, rgb);
+            }
             rays[0] += counts[0];
             rays[1] += counts[1];
         }
-        for (path, rgb) in (0u64..).zip(radiance) {
-            film.add((path / samples) as usize, rgb);
-        }
+        // Exact sums: the same film as adding each sample to `film` directly.
+        film.merge(&frame);
         let camera_rays = paths;
         FrameStats {
             camera_rays,
