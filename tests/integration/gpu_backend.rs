@@ -315,6 +315,29 @@ fn gpu_shading_renders_the_cpu_path_tracers_image() {
         );
         assert!(!dir.path().join("refused.exr").exists());
     }
+    // An image whose films would not fit in memory is refused before they are allocated.
+    let out = path("huge.exr");
+    let args = [
+        "render",
+        "--backend",
+        "gpu",
+        "--shading",
+        "gpu",
+        "--width",
+        "60000",
+        "--height",
+        "60000",
+        "-o",
+        &out,
+    ];
+    let output = vcm(&args, &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && stderr.contains("lower --width or --height"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("huge.exr").exists());
+
     // With an environment map (a 2×1 Radiance image) around the Cornell box it renders.
     let mut gltf: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string("scenes/cornell-box.gltf").unwrap()).unwrap();

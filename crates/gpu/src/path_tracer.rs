@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+use vcm::memory::{AvailableMemory, MemoryEstimate, check_budget};
 use vcm::{Film, FrameStats, Integrator, PtSettings, RenderError, Schedule, StopFlag};
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Decision, Scene};
@@ -100,6 +101,7 @@ impl GpuPathTracer {
         settings: PtSettings,
     ) -> Result<GpuPathTracer, GpuRenderError> {
         vcm::check_image_size(settings.width, settings.height)?;
+        check_host_memory((settings.width, settings.height))?;
         check_scene(&scene).map_err(GpuRenderError::Unsupported)?;
         if scene.features.alpha_masks && !bvh.has_alpha_masks() {
             return Err(GpuRenderError::Unsupported(
@@ -332,6 +334,25 @@ impl DispatchBuffers {
             group,
         }
     }
+}
+
+/// Fails when a render of `width` × `height` pixels needs more host memory than this process
+/// may allocate: the film, the frame's film and one dispatch's radiances (at most
+/// [`PATHS_PER_DISPATCH`]), whatever the samples per frame.
+fn check_host_memory((width, height): (u32, u32)) -> Result<(), RenderError> {
+    let pixels = u64::from(width) * u64::from(height);
+    let films = pixels.saturating_mul(Film::BYTES_PER_PIXEL);
+    let estimate = MemoryEstimate::default()
+        .with("film", films)
+        .with("frame film", films)
+        .with("path radiances", PATHS_PER_DISPATCH * RADIANCE_BYTES);
+    // Only the image size changes it.
+    let shortfall = check_budget(
+        |cause| cause.is_none().then(|| estimate.clone()),
+        AvailableMemory::of_this_process(),
+        0,
+    );
+    Ok(shortfall?)
 }
 
 /// Uploads `items` as a read-only storage buffer, one zeroed item if there are none (a

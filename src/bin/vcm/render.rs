@@ -15,9 +15,11 @@ use vcm::atomic_write::{writable_target, write_atomically};
 use vcm::image_io::RgbImage;
 use vcm::memory::MemoryCause;
 use vcm::{Film, Integrator, RenderError, StopFlag};
+use vcm_rs::gpu::GpuRenderError;
 use vcm_rs::scene::{LoadOptions, Scene, ShadingPlan};
 use vcm_rs::state::{RenderSettings, RenderState, SETTINGS, parse_range, scene_hash};
 use vcm_rs::traversal::Traversal;
+use vcm_rs::traversal_wgpu::GpuBvh;
 use vcm_rs::{Backend, BuiltTraversal, Shading};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic, Watch};
@@ -97,6 +99,25 @@ impl RenderSetup {
         self.frames()
             .integrator(algorithm, scene, traversal, size, options, samples_left)
             .map_err(|error| self.explain(error, size))
+    }
+
+    /// [`integrator`](Self::integrator) for the path tracer shaded on the GPU, on the GPU
+    /// backend's hierarchy `bvh`.
+    pub fn gpu_integrator(
+        &self,
+        scene: &Arc<Scene>,
+        bvh: &GpuBvh,
+        size: (u32, u32),
+        options: &IntegratorOptions,
+        samples_left: Option<u32>,
+    ) -> anyhow::Result<Box<dyn Integrator>> {
+        let integrator = self
+            .frames()
+            .gpu_integrator(scene, bvh, size, options, samples_left);
+        integrator.map_err(|error| match error {
+            GpuRenderError::Render(error) => self.explain(error, size),
+            other => other.into(),
+        })
     }
 
     /// `error`, and where it is a memory shortfall, the options that would lower it for a
@@ -371,17 +392,13 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     let mut state = prepare_state(&mut plan, &scene, args)?;
     let samples_left = plan.budget.remaining(0, Duration::ZERO).samples;
     let mut integrator = match &built.gpu {
-        Some(bvh) if args.shading == Shading::Gpu => args
-            .setup
-            .frames()
-            .gpu_integrator(
-                &scene,
-                bvh,
-                (width, height),
-                &plan.settings.options,
-                samples_left,
-            )
-            .context("shading on the GPU")?,
+        Some(bvh) if args.shading == Shading::Gpu => args.setup.gpu_integrator(
+            &scene,
+            bvh,
+            (width, height),
+            &plan.settings.options,
+            samples_left,
+        )?,
         _ => args.setup.integrator(
             plan.settings.algorithm,
             &scene,
