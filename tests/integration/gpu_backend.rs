@@ -420,3 +420,36 @@ fn gpu_shading_tests_alpha_masks_as_the_cpu_does() {
         a.len()
     );
 }
+
+/// `vcm experiment` runs with `--shading gpu` too: PT shaded on the GPU and on the CPU render
+/// the same paths, so their errors against the same reference agree to rounding.
+#[test]
+fn experiments_take_gpu_shading() {
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-water.gltf");
+    let toml = format!(
+        "title = \"GPU shading\"\nwidth = 24\nspp = 4\n\
+         [reference]\noptions = \"--algo pt --seed 1000\"\nspp = 8\n\
+         [[scenes]]\npath = \"{scene}\"\n\
+         [[runs]]\nname = \"cpu\"\noptions = \"--algo pt\"\n\
+         [[runs]]\nname = \"gpu\"\noptions = \"--backend gpu --shading gpu\"\n"
+    );
+    let file = dir.path().join("gpu.toml");
+    std::fs::write(&file, toml).unwrap();
+    let output = vcm(&["experiment", file.to_str().unwrap()], &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let table = std::fs::read_to_string(dir.path().join("gpu/table.csv")).unwrap();
+    let relmse = |run: &str| -> f64 {
+        let line = table
+            .lines()
+            .find(|l| l.contains(&format!(",{run},")))
+            .unwrap();
+        line.split(',').nth(6).unwrap().parse().unwrap()
+    };
+    let (cpu, gpu) = (relmse("cpu"), relmse("gpu"));
+    assert!((cpu - gpu).abs() <= 1e-3 * cpu, "{table}");
+}

@@ -20,11 +20,12 @@ use vcm_rs::integrators::{AlgorithmOption, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
 use vcm_rs::scene::Scene;
-use vcm_rs::{Backend, Traversals};
+use vcm_rs::{Backend, Shading, Traversals};
 
 use crate::progressive::{self, Budget, Checkpoint, Watch};
 use crate::render::{
-    SceneLimits, load_scene, relmse_points, stop_flag, tell_traversal, write_report, write_text,
+    SceneLimits, gpu_shaded_algorithm, load_scene, relmse_points, stop_flag, tell_traversal,
+    write_report, write_text,
 };
 
 /// Arguments of `vcm experiment`.
@@ -108,6 +109,8 @@ struct RunOptions {
     algo: AlgorithmOption,
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     backend: Backend,
+    #[arg(long, value_enum, default_value_t = Shading::Cpu)]
+    shading: Shading,
     #[command(flatten)]
     integrator: IntegratorOptions,
     #[command(flatten)]
@@ -384,27 +387,39 @@ fn render(
         size,
         label,
     } = setup;
-    let traversal = traversals
-        .get(options.backend, tell_traversal)
+    let built = traversals
+        .built(options.backend, tell_traversal)
         .context("building the ray traversal backend")?;
+    let (traversal, gpu_hierarchy) = (Arc::clone(&built.traversal), built.gpu.clone());
     let started = std::time::Instant::now();
-    let algorithm = crate::render::settle_algorithm(
-        options.algo,
-        (scene, &traversal),
-        size,
-        &options.integrator,
-        (stop, false),
-    )?;
     let frames = Frames::new(options.schedule, options.backend);
     let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
-    let mut integrator = frames.integrator(
-        algorithm,
-        scene,
-        traversal,
-        size,
-        &options.integrator,
-        samples_left,
-    )?;
+    let mut integrator = match (options.shading, &gpu_hierarchy) {
+        (Shading::Cpu, _) => {
+            let algorithm = crate::render::settle_algorithm(
+                options.algo,
+                (scene, &traversal),
+                size,
+                &options.integrator,
+                (stop, false),
+            )?;
+            frames.integrator(
+                algorithm,
+                scene,
+                traversal,
+                size,
+                &options.integrator,
+                samples_left,
+            )?
+        }
+        (Shading::Gpu, Some(bvh)) => {
+            gpu_shaded_algorithm(options.algo)?;
+            frames.gpu_integrator(scene, bvh, size, &options.integrator, samples_left)?
+        }
+        (Shading::Gpu, None) => {
+            bail!("--shading gpu shades on the GPU backend's device: give --backend gpu too")
+        }
+    };
     let mut film = Film::new(size.0, size.1);
     let outcome = progressive::render(
         integrator.as_mut(),

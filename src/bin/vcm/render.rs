@@ -639,7 +639,7 @@ fn build_backend(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<BuiltTr
 
 /// The algorithm `--shading gpu` renders for `--algo`: path tracing, the only one its kernels
 /// have so far.
-fn gpu_shaded_algorithm(algorithm: AlgorithmOption) -> anyhow::Result<Algorithm> {
+pub fn gpu_shaded_algorithm(algorithm: AlgorithmOption) -> anyhow::Result<Algorithm> {
     match algorithm {
         AlgorithmOption::Auto | AlgorithmOption::Fixed(Algorithm::Pt) => Ok(Algorithm::Pt),
         AlgorithmOption::Fixed(other) => bail!(
