@@ -3,10 +3,10 @@
 use std::path::PathBuf;
 
 use clap::Parser;
-use vcm_rs::Backend;
 use vcm_rs::integrators::{Algorithm, IntegratorOptions};
 use vcm_rs::render_loop::ScheduleOptions;
 use vcm_rs::state::SETTING_OPTIONS;
+use vcm_rs::{Backend, Shading};
 
 use crate::settings::RenderSettings;
 
@@ -32,6 +32,10 @@ pub struct Options {
     /// Ray traversal backend.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     pub backend: Backend,
+    /// Where paths are shaded: `gpu` follows whole paths in one WGSL kernel on the GPU
+    /// backend's device (with --backend gpu and --algo pt).
+    #[arg(long, value_enum, default_value_t = Shading::Cpu)]
+    pub shading: Shading,
     /// Image width in pixels at full resolution.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub width: u32,
@@ -64,6 +68,7 @@ impl Options {
         RenderSettings {
             algorithm: self.algo,
             backend: self.backend,
+            shading: self.shading,
             integrator: self.integrator.clone(),
             schedule: self.schedule,
         }
@@ -95,7 +100,10 @@ mod tests {
         assert_eq!(options.resume, None);
         assert_eq!(options.settings().algorithm, Algorithm::Pt);
         assert_eq!(options.settings().schedule, ScheduleOptions::default());
+        assert_eq!(options.settings().shading, Shading::Cpu);
         assert_eq!(options.screenshot(), None);
+        let gpu = parse(&["--backend", "gpu", "--shading", "gpu"]).unwrap();
+        assert_eq!(gpu.settings().shading, Shading::Gpu);
     }
 
     #[test]

@@ -8,9 +8,9 @@ use clap::ValueEnum;
 use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
 use vcm::{DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MergeRadius, Scheduler};
-use vcm_rs::Backend;
 use vcm_rs::integrators::Algorithm;
 use vcm_rs::render_loop::{Frames, ScheduleOptions, SchedulerKind};
+use vcm_rs::{Backend, Shading};
 
 use crate::app::{LoadedScene, STATE_EXTENSION, ViewerApp};
 use crate::camera_controller::CameraController;
@@ -130,6 +130,8 @@ fn render_section(settings: &mut RenderSettings, ui: &mut egui::Ui) {
                 });
             ui.end_row();
 
+            shading_row(settings, ui);
+
             ui.label("Max depth");
             ui.horizontal(|ui| {
                 let options = &mut settings.integrator;
@@ -178,6 +180,25 @@ fn radius_row(radius: &mut MergeRadius, ui: &mut egui::Ui) {
             }
         };
     });
+}
+
+/// Where paths are shaded: on the GPU only for path tracing on the GPU backend (else back to
+/// the CPU).
+fn shading_row(settings: &mut RenderSettings, ui: &mut egui::Ui) {
+    let possible = settings.backend == Backend::Gpu && settings.algorithm == Algorithm::Pt;
+    if !possible {
+        settings.shading = Shading::Cpu;
+    }
+    ui.label("Shading");
+    ui.add_enabled_ui(possible, |ui| {
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut settings.shading, Shading::Cpu, "cpu");
+            ui.selectable_value(&mut settings.shading, Shading::Gpu, "gpu");
+        })
+        .response
+        .on_disabled_hover_text("whole paths on the GPU: path tracing on the gpu backend");
+    });
+    ui.end_row();
 }
 
 /// The scheduler (its backend's choice unless picked), the tile size where tiles are used,

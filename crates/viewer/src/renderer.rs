@@ -12,11 +12,11 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use vcm::image_io::RgbImage;
 use vcm::{Film, FrameStats, Integrator};
-use vcm_rs::Backend;
+use vcm_rs::integrators::Algorithm;
 use vcm_rs::render_loop::{Frames, Remaining};
 use vcm_rs::state::SampleRanges;
+use vcm_rs::{Backend, BuiltTraversal, Shading};
 use vcm_scene::Scene;
-use vcm_traversal::Traversal;
 
 use crate::session::View;
 
@@ -178,7 +178,7 @@ impl Drop for Renderer {
 struct CachedTraversal {
     scene: Arc<Scene>,
     backend: Backend,
-    traversal: Arc<dyn Traversal>,
+    built: BuiltTraversal,
 }
 
 /// The worker thread's state.
@@ -217,7 +217,7 @@ impl Worker {
     /// Builds (or reuses) the BVH and the integrator of `job`.
     fn start(&mut self, job: &Job) -> Result<Box<dyn Integrator>, String> {
         let settings = &job.view.settings;
-        let traversal = self.traversal(&job.scene, settings.backend)?;
+        let built = self.traversal(&job.scene, settings.backend)?;
         let scene = if job.scene.camera == job.view.camera {
             Arc::clone(&job.scene)
         } else {
@@ -227,31 +227,42 @@ impl Worker {
             })
         };
         let name = settings.algorithm.name();
-        Frames::new(settings.schedule, settings.backend)
-            .integrator(
-                settings.algorithm,
-                &scene,
-                traversal,
-                job.view.size,
-                &settings.integrator,
-                None,
-            )
-            .map_err(|e| format!("cannot start {name}: {e}"))
+        let frames = Frames::new(settings.schedule, settings.backend);
+        match (settings.shading, &built.gpu) {
+            (Shading::Cpu, _) => frames
+                .integrator(
+                    settings.algorithm,
+                    &scene,
+                    built.traversal,
+                    job.view.size,
+                    &settings.integrator,
+                    None,
+                )
+                .map_err(|e| format!("cannot start {name}: {e}")),
+            (Shading::Gpu, Some(bvh)) if settings.algorithm == Algorithm::Pt => frames
+                .gpu_integrator(&scene, bvh, job.view.size, &settings.integrator, None)
+                .map_err(|e| format!("cannot start {name} on the GPU: {e}")),
+            (Shading::Gpu, _) => Err(format!(
+                "cannot start {name} shaded on the GPU: it shades path tracing on the gpu \
+                 backend only"
+            )),
+        }
     }
 
+    /// The scene's BVH on `backend` (with the GPU backend's hierarchy), built or kept.
     fn traversal(
         &mut self,
         scene: &Arc<Scene>,
         backend: Backend,
-    ) -> Result<Arc<dyn Traversal>, String> {
+    ) -> Result<BuiltTraversal, String> {
         if let Some(cached) = &self.traversal
             && Arc::ptr_eq(&cached.scene, scene)
             && cached.backend == backend
         {
-            return Ok(Arc::clone(&cached.traversal));
+            return Ok(cached.built.clone());
         }
         self.traversal = None;
-        let traversal = backend.traversal(scene).map_err(|e| {
+        let built = backend.build(scene).map_err(|e| {
             format!(
                 "{}: cannot build the {} BVH: {e}",
                 scene.path.display(),
@@ -261,9 +272,9 @@ impl Worker {
         self.traversal = Some(CachedTraversal {
             scene: Arc::clone(scene),
             backend,
-            traversal: Arc::clone(&traversal),
+            built: built.clone(),
         });
-        Ok(traversal)
+        Ok(built)
     }
 
     /// Renders frames of `job` until another job arrives or the renderer is dropped; once the
@@ -424,6 +435,7 @@ pub(crate) mod tests {
         RenderSettings {
             algorithm,
             backend: Backend::Cpu,
+            shading: Shading::Cpu,
             integrator: IntegratorOptions {
                 seed: 3,
                 max_depth: Some(6),
@@ -610,6 +622,56 @@ pub(crate) mod tests {
             2 * 8 * 8,
             "accumulation restarted"
         );
+    }
+
+    /// With GPU shading the worker renders the GPU path tracer's film (exact sums: bit for
+    /// bit, whatever the frames), and refuses another algorithm with the reason. Skipped
+    /// without a graphics adapter unless VCM_REQUIRE_GPU=1.
+    #[test]
+    fn the_worker_shades_on_the_gpu_when_asked() {
+        let scene = cornell_box();
+        let bvh = match vcm_rs::gpu_traversal(&scene) {
+            Ok(bvh) => bvh,
+            Err(error) if std::env::var("VCM_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+                panic!("VCM_REQUIRE_GPU=1 but no GPU adapter: {error}")
+            }
+            Err(error) => {
+                eprintln!("skipping GPU test ({error})");
+                return;
+            }
+        };
+        let size = (16, 12);
+        let (renderer, woken) = spawn(None);
+        let mut gpu_job = job(1, &scene, size, Some(2));
+        gpu_job.view.settings = RenderSettings {
+            backend: Backend::Gpu,
+            shading: Shading::Gpu,
+            ..settings(Algorithm::Pt)
+        };
+        renderer.submit(gpu_job);
+        wait_for(&renderer, &woken, |u| frames(u, 1, 4));
+        let copy = film_copy(&renderer);
+        let settings = settings(Algorithm::Pt);
+        let mut direct =
+            integrators::build_on_gpu(&scene, &bvh, size, &settings.integrator).unwrap();
+        let mut film = Film::new(size.0, size.1);
+        for sample in 0..copy.samples.count() as u32 {
+            direct.render_frame(&mut film, sample);
+        }
+        assert_eq!(copy.film, film);
+
+        let mut vcm_job = job(2, &scene, size, Some(1));
+        vcm_job.view.settings.backend = Backend::Gpu;
+        vcm_job.view.settings.shading = Shading::Gpu;
+        renderer.submit(vcm_job);
+        let message = wait_for(&renderer, &woken, |u| match u {
+            Update::Failed {
+                generation: 2,
+                message,
+            } => Some(message),
+            _ => None,
+        });
+        assert!(message.contains("path tracing"), "{message}");
     }
 
     #[test]

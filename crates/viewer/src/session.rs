@@ -51,9 +51,9 @@ impl Session {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vcm_rs::Backend;
     use vcm_rs::integrators::{Algorithm, IntegratorOptions, MergeRadius};
     use vcm_rs::render_loop::{ScheduleOptions, SchedulerKind};
+    use vcm_rs::{Backend, Shading};
     use vcm_scene::Bounds;
 
     fn view() -> View {
@@ -66,6 +66,7 @@ mod tests {
             settings: RenderSettings {
                 algorithm: Algorithm::Pt,
                 backend: Backend::Cpu,
+                shading: Shading::Cpu,
                 integrator: IntegratorOptions {
                     seed: 0,
                     max_depth: None,

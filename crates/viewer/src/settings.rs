@@ -1,9 +1,9 @@
-//! What the user picks for a render besides the camera: algorithm, backend, integrator options
-//! and the schedule (scheduler, tile size, samples per pixel per frame). Any change restarts the accumulation (see [`crate::session`]).
+//! What the user picks for a render besides the camera: algorithm, backend, shading,
+//! integrator options and the schedule (scheduler, tile size, samples per pixel per frame). Any change restarts the accumulation (see [`crate::session`]).
 
-use vcm_rs::Backend;
 use vcm_rs::integrators::{Algorithm, IntegratorOptions};
 use vcm_rs::render_loop::ScheduleOptions;
+use vcm_rs::{Backend, Shading};
 
 /// The render settings the viewer's controls edit.
 #[derive(Clone, Debug, PartialEq)]
@@ -12,6 +12,8 @@ pub struct RenderSettings {
     pub algorithm: Algorithm,
     /// The ray traversal backend.
     pub backend: Backend,
+    /// Where paths are shaded (on the GPU: path tracing on the GPU backend only).
+    pub shading: Shading,
     /// Seed, maximum path length, connections, merge radius and its reduction.
     pub integrator: IntegratorOptions,
     /// Scheduler, tile size and samples per pixel per frame (the displayed image is updated
