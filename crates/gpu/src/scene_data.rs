@@ -241,15 +241,15 @@ impl SceneData {
             Light::Environment(environment) => environment.map.as_deref(),
             _ => None,
         });
-        let (environment_texels, environment_rows, environment_columns) =
-            map.map_or_else(Default::default, pack_environment_map);
+        let environment_map = map.map_or_else(PackedEnvironment::default, pack_environment_map);
         let mut picks: Vec<[f32; 2]> = (sampler.first_numbers().into_iter().enumerate())
             .map(|(i, first)| [first, sampler.pmf(i)])
             .collect();
         let light_count = picks.len() as u32;
-        let environment_offsets = [light_count, light_count + environment_rows.len() as u32];
-        picks.extend(environment_rows);
-        picks.extend(environment_columns);
+        let rows = environment_map.rows.len() as u32;
+        let environment_offsets = [light_count, light_count + rows];
+        picks.extend(environment_map.rows);
+        picks.extend(environment_map.columns);
         let environment = sampler.environment().map_or(NO_LIGHT, |l| l as u32);
         SceneData {
             triangles,
@@ -265,7 +265,7 @@ impl SceneData {
             texels,
             texture_refs: refs,
             material_inputs,
-            environment_texels,
+            environment_texels: environment_map.texels,
         }
     }
 }
@@ -287,17 +287,28 @@ pub(crate) fn lookup_tables() -> Vec<f32> {
     .concat()
 }
 
-/// An environment map's texels, and its rows' and each row's texels' first numbers and
-/// probabilities (empty where the map is black and has no distribution).
-#[allow(clippy::type_complexity)]
-fn pack_environment_map(map: &EnvironmentMap) -> (Vec<[f32; 4]>, Vec<[f32; 2]>, Vec<[f32; 2]>) {
+/// An environment map as the kernel reads it.
+#[derive(Default)]
+struct PackedEnvironment {
+    texels: Vec<[f32; 4]>,
+    /// Per row, then per texel of each row: the first number that picks it and its
+    /// probability (empty where the map is black and has no distribution).
+    rows: Vec<[f32; 2]>,
+    columns: Vec<[f32; 2]>,
+}
+
+/// The environment map's texels and its sampling distribution.
+fn pack_environment_map(map: &EnvironmentMap) -> PackedEnvironment {
     let texels = map
         .texels()
         .iter()
         .map(|t| t.extend(0.0).to_array())
         .collect();
     let Some(distribution) = map.distribution() else {
-        return (texels, Vec::new(), Vec::new());
+        return PackedEnvironment {
+            texels,
+            ..PackedEnvironment::default()
+        };
     };
     let picks = |d: &Distribution1D| {
         let numbers = d.first_numbers();
@@ -315,7 +326,11 @@ fn pack_environment_map(map: &EnvironmentMap) -> (Vec<[f32; 4]>, Vec<[f32; 2]>, 
             None => vec![[f32::INFINITY, 0.0]; width],
         })
         .collect();
-    (texels, picks(distribution.rows()), columns)
+    PackedEnvironment {
+        texels,
+        rows: picks(distribution.rows()),
+        columns,
+    }
 }
 
 /// Every texture's description and all their texels, one after the other.
