@@ -1,12 +1,13 @@
 // The path tracer as one kernel: an invocation follows one path from the camera to its end,
 // tracing its rays with `trace` (the traversal functions of vcm-traversal-wgpu), shading each
 // vertex as the CPU's `shade` does (vcm's shade.rs, walk.rs, roulette.rs, shadow.rs), and
-// writes the path's radiance. Paths are numbered pixel · samples + sample, the CPU's key, so
-// that the host adds them to the film in the CPU's order.
+// writes the path's radiance. Paths are numbered pixel · samples + sample, the CPU's key:
+// path k draws the CPU's numbers for that pixel and sample.
 //
 // Bind groups: 0 this dispatch (parameters, radiance out, ray counts), 1 the hierarchy
-// (traversal functions), 2 the scene's shading data. The host defines GAMMA_7 and GAMMA_16
-// (`gamma(n)` of vcm's ray_offset.rs, as the CPU rounds them) and the albedo tables' size.
+// (traversal functions), 2 the scene's shading data (3 where the traversal's alpha masks
+// take 2: the host renumbers them). The host defines the constants of `host_constants`
+// (shader.rs): the CPU's rounding factors, the GGX width floor, the tables' layout.
 
 struct Params {
     camera_position: vec3<f32>,
