@@ -3,8 +3,6 @@
 //! against the CPU's pdf, and each sample's pdf and f·|cos| are compared with the CPU's.
 //! Skipped without a graphics adapter unless `VCM_REQUIRE_GPU=1`.
 
-use std::sync::mpsc;
-
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use vcm_scene::bsdf::{Bsdf, BsdfParams, Lobes, Pdfs, TransportMode};
@@ -117,21 +115,12 @@ fn sample_on_gpu(
         pass.dispatch_workgroups((numbers.len() as u32).div_ceil(64), 1, 1);
     }
     encoder.copy_buffer_to_buffer(&buffers[3], 0, &readback, 0, output_bytes);
-    let submission = gpu.queue.submit([encoder.finish()]);
-    let (sender, mapped) = mpsc::channel();
-    readback
-        .slice(..)
-        .map_async(wgpu::MapMode::Read, move |result| {
-            let _ = sender.send(result);
-        });
-    let poll = wgpu::PollType::Wait {
-        submission_index: Some(submission),
-        timeout: None,
-    };
-    device.poll(poll).unwrap();
-    mapped.recv().unwrap().unwrap();
-    let bytes = readback.slice(..).get_mapped_range().unwrap();
-    bytemuck::pod_collect_to_vec(&bytes)
+    gpu.read_back(
+        encoder,
+        (&readback, output_bytes),
+        bytemuck::pod_collect_to_vec,
+    )
+    .unwrap()
 }
 
 /// Chi-square tests in this module (Šidák-corrected together).

@@ -1,7 +1,6 @@
 //! [`GpuPathTracer`]: the path tracing kernel as an [`Integrator`].
 
 use std::sync::Arc;
-use std::sync::mpsc;
 use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
@@ -254,39 +253,20 @@ impl GpuPathTracer {
         let radiance_bytes = count * RADIANCE_BYTES;
         encoder.copy_buffer_to_buffer(&b.radiance, 0, &b.readback, 0, radiance_bytes);
         encoder.copy_buffer_to_buffer(&b.counts, 0, &b.readback, radiance_bytes, COUNT_BYTES);
-        let submission = queue.submit([encoder.finish()]);
-        let (sender, mapped) = mpsc::channel();
-        let used = b.readback.slice(..radiance_bytes + COUNT_BYTES);
-        used.map_async(wgpu::MapMode::Read, move |result| {
-            // The receiver waits below.
-            let _ = sender.send(result);
-        });
-        let poll = wgpu::PollType::Wait {
-            submission_index: Some(submission),
-            timeout: None,
-        };
-        device.poll(poll).expect("the GPU device was lost");
-        mapped
-            .recv()
-            .expect("the mapping callback ran")
-            .expect("the read-back buffer maps");
-        let (radiance, counts) = {
-            let bytes = used
-                .get_mapped_range()
-                .expect("the read-back buffer is mapped");
+        let read = |bytes: &[u8]| {
             let (radiance, counts) = bytes.split_at(radiance_bytes as usize);
             let radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(radiance);
             let counts: Vec<u32> = bytemuck::pod_collect_to_vec(counts);
-            (
-                radiance
-                    .iter()
-                    .map(|r| Vec3::new(r[0], r[1], r[2]))
-                    .collect(),
-                [u64::from(counts[0]), u64::from(counts[1])],
-            )
+            let radiance = radiance
+                .iter()
+                .map(|r| Vec3::new(r[0], r[1], r[2]))
+                .collect();
+            (radiance, [u64::from(counts[0]), u64::from(counts[1])])
         };
-        b.readback.unmap();
-        (radiance, counts)
+        let bytes = radiance_bytes + COUNT_BYTES;
+        self.gpu
+            .read_back(encoder, (&b.readback, bytes), read)
+            .unwrap_or_else(|error| panic!("path tracing on the GPU: {error}"))
     }
 }
 

@@ -415,21 +415,10 @@ impl Inner {
         }
         encoder.resolve_query_set(&stamps, 0..2 * repeats, &resolved, 0);
         encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, bytes);
-        let submission = self.gpu.queue.submit([encoder.finish()]);
-        let (sender, mapped) = mpsc::channel();
-        readback
-            .slice(..)
-            .map_async(wgpu::MapMode::Read, move |result| {
-                let _ = sender.send(result);
-            });
-        let poll = wgpu::PollType::Wait {
-            submission_index: Some(submission),
-            timeout: None,
-        };
-        device.poll(poll).ok()?;
-        mapped.recv().ok()?.ok()?;
-        let ticks: Vec<u64> =
-            bytemuck::pod_collect_to_vec(&readback.slice(..).get_mapped_range().ok()?);
+        let ticks: Vec<u64> = self
+            .gpu
+            .read_back(encoder, (&readback, bytes), bytemuck::pod_collect_to_vec)
+            .ok()?;
         self.slots.lock().expect("slot pool poisoned").push(slot);
         let period_ns = f64::from(self.gpu.queue.get_timestamp_period());
         let mut times: Vec<f64> = ticks

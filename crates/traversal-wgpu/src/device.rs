@@ -1,6 +1,8 @@
 //! Headless device selection: the best hardware adapter when there is one, else a software
 //! one (Mesa lavapipe), with the adapter's own limits rather than WebGPU's defaults.
 
+use std::sync::mpsc;
+
 use wgpu::util::DeviceExt;
 
 use crate::error::GpuError;
@@ -109,6 +111,43 @@ impl GpuDevice {
                 contents,
                 usage: wgpu::BufferUsages::STORAGE,
             }))
+    }
+
+    /// Submits `encoder`, whose commands copy results into the first `bytes` of `buffer`
+    /// (`MAP_READ`), waits for them, and returns what `read` makes of those bytes; the buffer
+    /// is unmapped again. Fails, saying why, where the device is lost or the mapping fails.
+    pub fn read_back<T>(
+        &self,
+        encoder: wgpu::CommandEncoder,
+        (buffer, bytes): (&wgpu::Buffer, u64),
+        read: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T, String> {
+        let submission = self.queue.submit([encoder.finish()]);
+        let slice = buffer.slice(..bytes);
+        let (sender, mapped) = mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |result| {
+            // The receiver waits below.
+            let _ = sender.send(result);
+        });
+        let poll = wgpu::PollType::Wait {
+            submission_index: Some(submission),
+            timeout: None,
+        };
+        self.device
+            .poll(poll)
+            .map_err(|e| format!("the GPU device was lost: {e}"))?;
+        mapped
+            .recv()
+            .map_err(|_| "wgpu dropped a buffer mapping callback".to_owned())?
+            .map_err(|e| format!("mapping a read-back buffer failed: {e}"))?;
+        let result = {
+            let view = slice
+                .get_mapped_range()
+                .map_err(|e| format!("reading a mapped buffer failed: {e}"))?;
+            read(&view)
+        };
+        buffer.unmap();
+        Ok(result)
     }
 
     /// The largest storage buffer binding the device accepts, in bytes.
