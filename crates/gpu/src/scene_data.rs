@@ -437,15 +437,15 @@ fn pack_attributes(mesh: &Mesh, t: usize) -> GpuAttributes {
 /// to `refs` (an environment map's texels and distribution are packed apart:
 /// [`pack_environment_map`]).
 fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
-    let kind =
-        |kind: u32, emission: Vec3| (vec4(Vec3::ZERO, f32::from_bits(kind)), vec4(emission, 0.0));
-    let point = |p: Vec3, w: f32| vec4(p, w);
-    let zero = [0.0; 4];
-    // What a light without texture coordinates holds there.
-    let unlit = GpuLight {
+    // A light without texture coordinates: its kind, its emission and its numbers.
+    let unlit = |kind: u32, emission: Vec3, corners: [[f32; 4]; 3]| GpuLight {
+        corners,
+        normal: vec4(Vec3::ZERO, f32::from_bits(kind)),
+        emission: vec4(emission, 0.0),
+        uv01: [0.0; 4],
         uv2: [0.0, 0.0, f32::from_bits(NO_TEXTURE), 0.0],
-        ..GpuLight::zeroed()
     };
+    let zero = [0.0; 4];
     match light {
         Light::Area(area) => {
             // An alpha mask's factor, cutoff and texture; a mask that keeps everything
@@ -459,16 +459,14 @@ fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
                 ),
                 None => (1.0, 0.0, NO_TEXTURE, 0),
             };
-            let (mut normal, emission) = kind(AREA_LIGHT | flag, area.emission);
-            normal[..3].copy_from_slice(&area.normal.to_array());
             GpuLight {
                 corners: [
-                    point(area.corners[0], area.area),
-                    point(area.corners[1], alpha),
-                    point(area.corners[2], cutoff),
+                    vec4(area.corners[0], area.area),
+                    vec4(area.corners[1], alpha),
+                    vec4(area.corners[2], cutoff),
                 ],
-                normal,
-                emission,
+                normal: vec4(area.normal, f32::from_bits(AREA_LIGHT | flag)),
+                emission: vec4(area.emission, 0.0),
                 uv01: [area.uvs[0].x, area.uvs[0].y, area.uvs[1].x, area.uvs[1].y],
                 uv2: [
                     area.uvs[2].x,
@@ -478,52 +476,33 @@ fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
                 ],
             }
         }
-        Light::Point(l) => {
-            let (normal, emission) = kind(POINT_LIGHT, l.intensity);
-            GpuLight {
-                corners: [point(l.position, 0.0), zero, zero],
-                normal,
-                emission,
-                ..unlit
-            }
-        }
+        Light::Point(l) => unlit(
+            POINT_LIGHT,
+            l.intensity,
+            [vec4(l.position, 0.0), zero, zero],
+        ),
         Light::Spot(l) => {
-            let (normal, emission) = kind(SPOT_LIGHT, l.intensity);
-            GpuLight {
-                corners: [
-                    point(l.position, l.cos_inner),
-                    point(l.direction, l.cos_outer),
-                    zero,
-                ],
-                normal,
-                emission,
-                ..unlit
-            }
+            let corners = [
+                vec4(l.position, l.cos_inner),
+                vec4(l.direction, l.cos_outer),
+                zero,
+            ];
+            unlit(SPOT_LIGHT, l.intensity, corners)
         }
-        Light::Directional(l) => {
-            let (normal, emission) = kind(DIRECTIONAL_LIGHT, l.irradiance);
-            GpuLight {
-                corners: [point(l.direction, 0.0), zero, zero],
-                normal,
-                emission,
-                ..unlit
-            }
-        }
+        Light::Directional(l) => unlit(
+            DIRECTIONAL_LIGHT,
+            l.irradiance,
+            [vec4(l.direction, 0.0), zero, zero],
+        ),
         Light::Environment(l) => {
-            let (normal, emission) = kind(ENVIRONMENT_LIGHT, l.radiance);
             // The map's size (as bits), whether there is one, and whether it has a
             // sampling distribution.
-            let description = l.map.as_ref().map_or([0.0; 4], |map| {
+            let description = l.map.as_ref().map_or(zero, |map| {
                 let size = map.size();
                 let sampled = f32::from(u8::from(map.distribution().is_some()));
                 [f32::from_bits(size.x), f32::from_bits(size.y), 1.0, sampled]
             });
-            GpuLight {
-                corners: [description, zero, zero],
-                normal,
-                emission,
-                ..unlit
-            }
+            unlit(ENVIRONMENT_LIGHT, l.radiance, [description, zero, zero])
         }
     }
 }
