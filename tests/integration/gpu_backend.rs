@@ -9,7 +9,7 @@ use vcm::image_io::RgbImage;
 use vcm_rs::scene::texture::ColorEncoding;
 use vcm_rs::scene::{Filter, Texture, UvTransform};
 use vcm_rs::traversal::{HitBatch, RayBatch, Traversal};
-use vcm_rs::traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
+use vcm_rs::traversal_wgpu::{GpuBvh, GpuBvhOptions};
 
 fn vcm(args: &[&str], env: &[(&str, &str)]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_vcm"))
@@ -21,16 +21,7 @@ fn vcm(args: &[&str], env: &[(&str, &str)]) -> Output {
 }
 
 fn have_gpu() -> bool {
-    match GpuDevice::open() {
-        Ok(_) => true,
-        Err(error) if std::env::var("VCM_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
-            panic!("VCM_REQUIRE_GPU=1 but no GPU adapter: {error}")
-        }
-        Err(error) => {
-            eprintln!("skipping GPU test ({error})");
-            false
-        }
-    }
+    vcm_rs::traversal_wgpu::device_or_skip().is_some()
 }
 
 /// Both backends find the same triangle for every ray (the parity test in

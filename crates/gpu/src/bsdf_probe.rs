@@ -9,7 +9,7 @@ use vcm_scene::bsdf::{Bsdf, BsdfParams, Lobes, Pdfs, TransportMode};
 use vcm_scene::frame::Frame;
 use vcm_scene::sampling::{Rng, Sampler};
 use vcm_scene::testing::{Chi2Config, chi2_test};
-use vcm_traversal_wgpu::GpuDevice;
+use vcm_traversal_wgpu::{GpuDevice, device_or_skip};
 use wgpu::util::DeviceExt;
 
 use crate::scene_data::{lookup_tables, pack_material};
@@ -177,16 +177,7 @@ fn check(gpu: &GpuDevice, name: &str, params: &BsdfParams, wo: Vec3) {
 
 #[test]
 fn gpu_bsdf_sampling_follows_the_cpu_pdf() {
-    let gpu = match GpuDevice::open() {
-        Ok(gpu) => gpu,
-        Err(error) if std::env::var("VCM_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
-            panic!("VCM_REQUIRE_GPU=1 but no GPU adapter: {error}")
-        }
-        Err(error) => {
-            eprintln!("skipping GPU test ({error})");
-            return;
-        }
-    };
+    let Some(gpu) = device_or_skip() else { return };
     let base = BsdfParams {
         base_color: Vec3::new(0.8, 0.5, 0.3),
         metallic: 0.0,

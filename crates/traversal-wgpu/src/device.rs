@@ -159,6 +159,25 @@ impl GpuDevice {
     }
 }
 
+/// Set to `1` (as `.ci/run` does) to make a missing adapter fail the tests that need one
+/// instead of skipping them.
+pub const REQUIRE_GPU: &str = "VCM_REQUIRE_GPU";
+
+/// For test suites: the preferred adapter ([`GpuDevice::open`]), or `None` with a note on
+/// stderr when there is none; with [`REQUIRE_GPU`] set to `1` a missing adapter panics.
+pub fn device_or_skip() -> Option<GpuDevice> {
+    match GpuDevice::open() {
+        Ok(gpu) => Some(gpu),
+        Err(error) if std::env::var(REQUIRE_GPU).is_ok_and(|v| v == "1") => {
+            panic!("{REQUIRE_GPU}=1 but no GPU adapter: {error}")
+        }
+        Err(error) => {
+            eprintln!("skipping GPU test ({error}); set {REQUIRE_GPU}=1 to make this an error");
+            None
+        }
+    }
+}
+
 /// Lower is preferred: real GPUs first, software rasterizers last.
 fn preference(kind: wgpu::DeviceType) -> u8 {
     match kind {

@@ -17,7 +17,7 @@ mod slot;
 
 pub use alpha::{AlphaMasks, AlphaTexture, Filter, MaskedTriangle, Wrap};
 pub use backend::{GpuBvh, GpuBvhOptions};
-pub use device::GpuDevice;
+pub use device::{GpuDevice, REQUIRE_GPU, device_or_skip};
 pub use error::{GpuError, NO_ADAPTER_HELP};
 pub use layout::NodeLayout;
 pub use slot::dispatch_shape;

@@ -10,22 +10,10 @@ use vcm_scene::Scene;
 use vcm_traversal::{CpuBvh, CpuBvhOptions};
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
 
-/// Set to `1` (as `.ci/run` does) to make a missing adapter a test failure instead of a skip.
-pub const REQUIRE_GPU: &str = "VCM_REQUIRE_GPU";
-
 /// The preferred adapter, or `None` (with a note on stderr) when there is none and
-/// [`REQUIRE_GPU`] is not set.
+/// `VCM_REQUIRE_GPU` is not set.
 pub fn gpu() -> Option<Arc<GpuDevice>> {
-    match GpuDevice::open() {
-        Ok(gpu) => Some(Arc::new(gpu)),
-        Err(error) if std::env::var(REQUIRE_GPU).is_ok_and(|v| v == "1") => {
-            panic!("{REQUIRE_GPU}=1 but no GPU adapter: {error}")
-        }
-        Err(error) => {
-            eprintln!("skipping GPU test ({error}); set {REQUIRE_GPU}=1 to make this an error");
-            None
-        }
-    }
+    vcm_traversal_wgpu::device_or_skip().map(Arc::new)
 }
 
 /// A scene of the repository's `scenes/`.

@@ -6,22 +6,10 @@ use vcm_scene::sampling::{Rng, Sampler, sample_uniform_sphere};
 use vcm_traversal::{HitBatch, RayBatch};
 use vcm_traversal_wgpu::GpuDevice;
 
-/// Set to `1` (as `.ci/run` does) to make a missing adapter a test failure instead of a skip.
-pub const REQUIRE_GPU: &str = "VCM_REQUIRE_GPU";
-
 /// The preferred adapter, or `None` (with a note on stderr) when there is none and
-/// [`REQUIRE_GPU`] is not set.
+/// `VCM_REQUIRE_GPU` is not set.
 pub fn gpu() -> Option<GpuDevice> {
-    match GpuDevice::open() {
-        Ok(gpu) => Some(gpu),
-        Err(error) if std::env::var(REQUIRE_GPU).is_ok_and(|v| v == "1") => {
-            panic!("{REQUIRE_GPU}=1 but no GPU adapter: {error}")
-        }
-        Err(error) => {
-            eprintln!("skipping GPU test ({error}); set {REQUIRE_GPU}=1 to make this an error");
-            None
-        }
-    }
+    vcm_traversal_wgpu::device_or_skip()
 }
 
 /// Random rays through a box: origins inside it, directions uniform, not normalised.
