@@ -16,12 +16,11 @@ use vcm::{Film, FrameStats, Integrator, RenderError};
 use vcm_gpu::GpuRenderError;
 use vcm_scene::Scene;
 use vcm_traversal::Traversal;
-use vcm_traversal_wgpu::GpuBvh;
 
 use super::pacer::{Pacer, Remaining};
 use super::schedule::ScheduleOptions;
-use crate::Backend;
 use crate::integrators::{self, Algorithm, IntegratorOptions};
+use crate::{Backend, BuiltTraversal, Shading};
 
 /// Renders an integrator frame by frame, choosing each frame's size and schedule.
 pub struct Frames {
@@ -90,16 +89,44 @@ impl Frames {
         Ok(integrator)
     }
 
-    /// [`integrator`](Self::integrator) for the path tracer with every path shaded on the
-    /// GPU, on the GPU backend's hierarchy `bvh` ([`integrators::build_on_gpu`]).
-    pub fn gpu_integrator(
+    /// [`integrator`](Self::integrator) with its paths shaded where `shading` says: on the
+    /// GPU, the path tracer with every path shaded in one kernel on the GPU backend's
+    /// hierarchy in `built` ([`integrators::build_on_gpu`]). GPU shading of another
+    /// algorithm, or on the CPU backend, is [`GpuRenderError::Refused`].
+    pub fn shaded_integrator(
         &self,
+        (algorithm, shading): (Algorithm, Shading),
         scene: &Arc<Scene>,
-        bvh: &GpuBvh,
+        built: &BuiltTraversal,
         size: (u32, u32),
         options: &IntegratorOptions,
         samples_left: Option<u32>,
     ) -> Result<Box<dyn Integrator>, GpuRenderError> {
+        let traversal = Arc::clone(&built.traversal);
+        let bvh = match (shading, &built.gpu) {
+            (Shading::Cpu, _) => {
+                return Ok(self.integrator(
+                    algorithm,
+                    scene,
+                    traversal,
+                    size,
+                    options,
+                    samples_left,
+                )?);
+            }
+            (Shading::Gpu, None) => {
+                return Err(GpuRenderError::Refused(
+                    "needs the gpu backend, whose hierarchy it traces".into(),
+                ));
+            }
+            (Shading::Gpu, Some(_)) if algorithm != Algorithm::Pt => {
+                return Err(GpuRenderError::Refused(format!(
+                    "renders path tracing only so far, not {}",
+                    algorithm.name()
+                )));
+            }
+            (Shading::Gpu, Some(bvh)) => bvh,
+        };
         let mut integrator = integrators::build_on_gpu(scene, bvh, size, options)?;
         let schedule = self.options.first_schedule_on(self.backend, samples_left);
         integrator.set_schedule(schedule)?;

@@ -9,12 +9,12 @@ use numpy::PyArray3;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use vcm_rs::gpu::GpuRenderError;
 use vcm_rs::integrators::{Algorithm, choice};
 use vcm_rs::render_loop::{self, Budget, Frames};
 use vcm_rs::state::RenderSettings;
 use vcm_rs::state::RenderState as State;
 use vcm_rs::vcm::{Film, StopFlag};
-use vcm_rs::{BuiltTraversal, Shading};
 
 use crate::images;
 use crate::released::run_released;
@@ -150,13 +150,10 @@ fn run(
     let settings = &request.settings;
     let size = (settings.width, settings.height);
     let samples_left = budget.remaining(0, Duration::ZERO).samples;
-    let BuiltTraversal {
-        traversal,
-        gpu: gpu_hierarchy,
-        ..
-    } = py
+    let built = py
         .detach(|| scene.traversal(request.backend))
         .map_err(vcm_error)?;
+    let traversal = &built.traversal;
     let started = Instant::now();
     let stop = StopFlag::new();
     let algorithm = match request.algorithm.fixed() {
@@ -164,28 +161,25 @@ fn run(
         // Pilots, stopped by Ctrl-C as a render is.
         None => {
             let options = &settings.options;
-            let choose = || choice::choose(&scene.data, &traversal, size, options, &stop);
+            let choose = || choice::choose(&scene.data, traversal, size, options, &stop);
             run_released(py, &stop, |_| Ok(()), choose)?
                 .map_err(vcm_error)?
                 .algorithm
         }
     };
     let mut frames = Frames::new(request.schedule, request.backend).starting_at(first);
-    let mut integrator = match (&gpu_hierarchy, request.shading) {
-        (Some(bvh), Shading::Gpu) => frames
-            .gpu_integrator(&scene.data, bvh, size, &settings.options, samples_left)
-            .map_err(vcm_error)?,
-        _ => frames
-            .integrator(
-                algorithm,
-                &scene.data,
-                traversal,
-                size,
-                &settings.options,
-                samples_left,
-            )
-            .map_err(|e| PyValueError::new_err(e.to_string()))?,
-    };
+    let integrator = frames.shaded_integrator(
+        (algorithm, request.shading),
+        &scene.data,
+        &built,
+        size,
+        &settings.options,
+        samples_left,
+    );
+    let mut integrator = integrator.map_err(|error| match error {
+        GpuRenderError::Render(error) => PyValueError::new_err(error.to_string()),
+        other => vcm_error(other),
+    })?;
     // (samples per pixel, seconds) after the latest frame, and what was last reported.
     let latest = Mutex::new((0, 0.0));
     let mut reported = (0, 0.0);

@@ -12,10 +12,9 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use vcm::image_io::RgbImage;
 use vcm::{Film, FrameStats, Integrator};
-use vcm_rs::integrators::Algorithm;
 use vcm_rs::render_loop::{Frames, Remaining};
 use vcm_rs::state::SampleRanges;
-use vcm_rs::{Backend, BuiltTraversal, Shading};
+use vcm_rs::{Backend, BuiltTraversal};
 use vcm_scene::Scene;
 
 use crate::session::View;
@@ -227,26 +226,16 @@ impl Worker {
             })
         };
         let name = settings.algorithm.name();
-        let frames = Frames::new(settings.schedule, settings.backend);
-        match (settings.shading, &built.gpu) {
-            (Shading::Cpu, _) => frames
-                .integrator(
-                    settings.algorithm,
-                    &scene,
-                    built.traversal,
-                    job.view.size,
-                    &settings.integrator,
-                    None,
-                )
-                .map_err(|e| format!("cannot start {name}: {e}")),
-            (Shading::Gpu, Some(bvh)) if settings.algorithm == Algorithm::Pt => frames
-                .gpu_integrator(&scene, bvh, job.view.size, &settings.integrator, None)
-                .map_err(|e| format!("cannot start {name} on the GPU: {e}")),
-            (Shading::Gpu, _) => Err(format!(
-                "cannot start {name} shaded on the GPU: it shades path tracing on the gpu \
-                 backend only"
-            )),
-        }
+        Frames::new(settings.schedule, settings.backend)
+            .shaded_integrator(
+                (settings.algorithm, settings.shading),
+                &scene,
+                &built,
+                job.view.size,
+                &settings.integrator,
+                None,
+            )
+            .map_err(|e| format!("cannot start {name}: {e}"))
     }
 
     /// The scene's BVH on `backend` (with the GPU backend's hierarchy), built or kept.
@@ -421,6 +410,7 @@ pub(crate) mod tests {
     use std::path::Path;
     use std::sync::mpsc;
 
+    use vcm_rs::Shading;
     use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, MergeRadius};
     use vcm_rs::render_loop::ScheduleOptions;
 

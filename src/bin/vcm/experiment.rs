@@ -390,36 +390,27 @@ fn render(
     let built = traversals
         .built(options.backend, tell_traversal)
         .context("building the ray traversal backend")?;
-    let (traversal, gpu_hierarchy) = (Arc::clone(&built.traversal), built.gpu.clone());
     let started = std::time::Instant::now();
+    let algorithm = match options.shading {
+        Shading::Cpu => crate::render::settle_algorithm(
+            options.algo,
+            (scene, &built.traversal),
+            size,
+            &options.integrator,
+            (stop, false),
+        )?,
+        Shading::Gpu => gpu_shaded_algorithm(options.algo)?,
+    };
     let frames = Frames::new(options.schedule, options.backend);
     let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
-    let mut integrator = match (options.shading, &gpu_hierarchy) {
-        (Shading::Cpu, _) => {
-            let algorithm = crate::render::settle_algorithm(
-                options.algo,
-                (scene, &traversal),
-                size,
-                &options.integrator,
-                (stop, false),
-            )?;
-            frames.integrator(
-                algorithm,
-                scene,
-                traversal,
-                size,
-                &options.integrator,
-                samples_left,
-            )?
-        }
-        (Shading::Gpu, Some(bvh)) => {
-            gpu_shaded_algorithm(options.algo)?;
-            frames.gpu_integrator(scene, bvh, size, &options.integrator, samples_left)?
-        }
-        (Shading::Gpu, None) => {
-            bail!("--shading gpu shades on the GPU backend's device: give --backend gpu too")
-        }
-    };
+    let mut integrator = frames.shaded_integrator(
+        (algorithm, options.shading),
+        scene,
+        built,
+        size,
+        &options.integrator,
+        samples_left,
+    )?;
     let mut film = Film::new(size.0, size.1);
     let outcome = progressive::render(
         integrator.as_mut(),

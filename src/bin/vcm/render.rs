@@ -19,7 +19,6 @@ use vcm_rs::gpu::GpuRenderError;
 use vcm_rs::scene::{LoadOptions, Scene, ShadingPlan};
 use vcm_rs::state::{RenderSettings, RenderState, SETTINGS, parse_range, scene_hash};
 use vcm_rs::traversal::Traversal;
-use vcm_rs::traversal_wgpu::GpuBvh;
 use vcm_rs::{Backend, BuiltTraversal, Shading};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic, Watch};
@@ -101,19 +100,20 @@ impl RenderSetup {
             .map_err(|error| self.explain(error, size))
     }
 
-    /// [`integrator`](Self::integrator) for the path tracer shaded on the GPU, on the GPU
-    /// backend's hierarchy `bvh`.
-    pub fn gpu_integrator(
+    /// [`integrator`](Self::integrator) with its paths shaded where `shading` says, on the
+    /// backend `built` (see [`Frames::shaded_integrator`]).
+    pub fn shaded_integrator(
         &self,
+        algorithm: (Algorithm, Shading),
         scene: &Arc<Scene>,
-        bvh: &GpuBvh,
+        built: &BuiltTraversal,
         size: (u32, u32),
         options: &IntegratorOptions,
         samples_left: Option<u32>,
     ) -> anyhow::Result<Box<dyn Integrator>> {
-        let integrator = self
-            .frames()
-            .gpu_integrator(scene, bvh, size, options, samples_left);
+        let integrator =
+            self.frames()
+                .shaded_integrator(algorithm, scene, built, size, options, samples_left);
         integrator.map_err(|error| match error {
             GpuRenderError::Render(error) => self.explain(error, size),
             other => other.into(),
@@ -391,23 +391,14 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     };
     let mut state = prepare_state(&mut plan, &scene, args)?;
     let samples_left = plan.budget.remaining(0, Duration::ZERO).samples;
-    let mut integrator = match &built.gpu {
-        Some(bvh) if args.shading == Shading::Gpu => args.setup.gpu_integrator(
-            &scene,
-            bvh,
-            (width, height),
-            &plan.settings.options,
-            samples_left,
-        )?,
-        _ => args.setup.integrator(
-            plan.settings.algorithm,
-            &scene,
-            traversal,
-            (width, height),
-            &plan.settings.options,
-            samples_left,
-        )?,
-    };
+    let mut integrator = args.setup.shaded_integrator(
+        (plan.settings.algorithm, args.shading),
+        &scene,
+        &built,
+        (width, height),
+        &plan.settings.options,
+        samples_left,
+    )?;
     if args.explain {
         let shading = plan.settings.options.shading_plan(&scene);
         print_explanation(&scene, shading, args.setup.backend, integrator.as_ref());
