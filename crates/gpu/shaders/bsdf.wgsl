@@ -58,6 +58,10 @@ struct Material {
     unused: u32,
 }
 
+fn infinity() -> f32 {
+    return bitcast<f32>(0x7f800000u);
+}
+
 fn is_finite(x: f32) -> bool {
     return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
 }
@@ -76,13 +80,18 @@ fn normalized(v: vec3<f32>) -> vec3<f32> {
     return v * (1.0 / sqrt(dot3(v, v)));
 }
 
-// glam's `try_normalize`: a zero vector where it gives `None`.
-fn try_normalized(v: vec3<f32>) -> vec3<f32> {
+// glam's `try_normalize`, with `fallback` where it gives `None`.
+fn normalized_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
     let rcp = 1.0 / sqrt(dot3(v, v));
     if is_finite(rcp) && rcp > 0.0 {
         return v * rcp;
     }
-    return vec3(0.0);
+    return fallback;
+}
+
+// glam's `try_normalize`: a zero vector where it gives `None`.
+fn try_normalized(v: vec3<f32>) -> vec3<f32> {
+    return normalized_or(v, vec3(0.0));
 }
 
 fn is_zero(v: vec3<f32>) -> bool {
@@ -213,7 +222,7 @@ fn ggx_d(alpha: f32, m: vec3<f32>) -> f32 {
 fn ggx_lambda(alpha: f32, w: vec3<f32>) -> f32 {
     let z2 = w.z * w.z;
     if z2 == 0.0 {
-        return bitcast<f32>(0x7f800000u);
+        return infinity();
     }
     let tan2 = (w.x * w.x + w.y * w.y) / z2;
     return 0.5 * (sqrt(1.0 + alpha * alpha * tan2) - 1.0);

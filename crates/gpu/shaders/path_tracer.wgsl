@@ -148,22 +148,9 @@ const CAPPED_CONTINUATION: f32 = 0.95;
 // The environment map's texels.
 @group(2) @binding(10) var<storage, read> environment_texels: array<vec4<f32>>;
 
-fn infinity() -> f32 {
-    return bitcast<f32>(0x7f800000u);
-}
-
 // glam's `cross`.
 fn cross3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     return vec3(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
-}
-
-// glam's `try_normalize`, with `fallback` where it gives `None`.
-fn normalized_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
-    let rcp = 1.0 / sqrt(dot3(v, v));
-    if is_finite(rcp) && rcp > 0.0 {
-        return v * rcp;
-    }
-    return fallback;
 }
 
 // The unit direction through raster position `raster` (`Projection::direction`).
@@ -172,8 +159,7 @@ fn camera_direction(raster: vec2<f32>) -> vec3<f32> {
     let ndc_y = 1.0 - 2.0 * raster.y / params.size.y;
     let a = ndc_x * params.half_extent.x;
     let b = ndc_y * params.half_extent.y;
-    let d = params.camera_forward + params.camera_right * a + params.camera_up * b;
-    return d * (1.0 / sqrt(d.x * d.x + d.y * d.y + d.z * d.z));
+    return normalized(params.camera_forward + params.camera_right * a + params.camera_up * b);
 }
 
 // A hit turned into a surface point (`SurfaceHit`).
