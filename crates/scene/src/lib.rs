@@ -38,7 +38,6 @@ pub mod sampling;
 pub mod scene;
 pub mod shading_plan;
 pub mod shapes;
-#[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod texture;
 

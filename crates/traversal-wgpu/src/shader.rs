@@ -59,9 +59,8 @@ pub fn traversal_functions(layout: NodeLayout, stack_size: u32, alpha_masks: boo
 
 /// Parses and validates a WGSL module with naga, then resolves its pipeline overrides (at
 /// their defaults) for each of `entries` and writes SPIR-V, as wgpu does on Vulkan: a check
-/// of kernels that needs no GPU, for tests (feature `testing`). The error names the stage
+/// of kernels that needs no GPU, for tests. The error names the stage
 /// that failed, with naga's message.
-#[cfg(any(test, feature = "testing"))]
 pub fn validate_module(source: &str, entries: &[&str]) -> Result<(), String> {
     let module = naga::front::wgsl::parse_str(source)
         .map_err(|e| format!("WGSL parse error:\n{}", e.emit_to_string(source)))?;

@@ -1,6 +1,6 @@
-//! The [`Traversal`] contract as executable checks, for every backend's tests (feature
-//! `testing`): each check builds its scenes through the caller's constructor and panics with
-//! a message on the first violation.
+//! The [`Traversal`] contract as executable checks, for every backend's tests (a new
+//! backend's included): each check builds its scenes through the caller's constructor and
+//! panics with a message on the first violation.
 
 use glam::{Vec3, vec3};
 

@@ -14,7 +14,6 @@
 mod alpha;
 mod batch;
 pub mod build;
-#[cfg(feature = "testing")]
 pub mod contract;
 mod cpu;
 mod error;

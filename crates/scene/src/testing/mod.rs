@@ -14,7 +14,8 @@
 //!   of glTF files for loader tests.
 //! * [`lit_by_bulb_and_sky`]: a third-party model lit for rendering tests.
 //!
-//! Available to other crates' tests through the `testing` feature.
+//! Compiled into every build (not behind a feature), so that the tests of every crate and
+//! the library and binaries share one build of `vcm-scene`.
 
 mod bsdf;
 mod chi2;
