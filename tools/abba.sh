@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Compares the render speed of two `vcm` binaries on this machine, interleaved (A B B A, so
+# that a drift of the machine's speed during the runs weighs on both alike), and prints one
+# Markdown table: per case, the median M samples/s of each binary, their range and B/A.
+#
+# Usage: tools/abba.sh A B [ROUNDS]        (ROUNDS of A B B A per case, default 3)
+# Cases: ABBA_CASES="scene:algorithm:spp ..." (scenes/ names; default below), at
+# ABBA_WIDTH pixels wide (default 384). Run from anywhere; the machine otherwise idle.
+set -euo pipefail
+if [ $# -lt 2 ]; then
+    echo "usage: $0 A B [ROUNDS]" >&2
+    exit 2
+fi
+a=$(realpath "$1")
+b=$(realpath "$2")
+rounds=${3:-3}
+cases=${ABBA_CASES:-"cornell-box:pt:128 cornell-box:vcm:32 large:pt:32 large:vcm:16 cornell-water:pt:64"}
+width=${ABBA_WIDTH:-384}
+cd "$(dirname "$0")/.."
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+# M samples/s of one render, from the summary line `vcm render` prints.
+speed() {
+    "$1" render "scenes/$2.gltf" --algo "$3" --spp "$4" --width "$width" -o "$out/image.exr" 2>&1 |
+        grep -o 'in [0-9.]* s: [0-9.]* M samples/s' | awk '{print $4}'
+}
+
+echo "A: $a"
+echo "B: $b"
+echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) threads; $rounds × ABBA, ${width} px wide"
+echo
+echo "| scene | algorithm | spp | A: M samples/s (range) | B: M samples/s (range) | B/A |"
+echo "| --- | --- | --- | --- | --- | --- |"
+for case in $cases; do
+    IFS=: read -r scene algo spp <<< "$case"
+    runs_a=()
+    runs_b=()
+    for _ in $(seq "$rounds"); do
+        runs_a+=("$(speed "$a" "$scene" "$algo" "$spp")")
+        runs_b+=("$(speed "$b" "$scene" "$algo" "$spp")")
+        runs_b+=("$(speed "$b" "$scene" "$algo" "$spp")")
+        runs_a+=("$(speed "$a" "$scene" "$algo" "$spp")")
+    done
+    python3 - "$scene" "$algo" "$spp" "${runs_a[*]}" "${runs_b[*]}" <<'EOF'
+import statistics, sys
+scene, algo, spp, a, b = sys.argv[1:]
+a, b = [float(x) for x in a.split()], [float(x) for x in b.split()]
+ma, mb = statistics.median(a), statistics.median(b)
+print(f"| {scene} | {algo} | {spp} | {ma:.3g} ({min(a):.3g}–{max(a):.3g}) "
+      f"| {mb:.3g} ({min(b):.3g}–{max(b):.3g}) | {mb / ma:.3f} |")
+EOF
+done
