@@ -50,6 +50,9 @@ fn an_experiment_writes_its_results_and_resumes_finished_runs() {
         "pt--1-sample.error.png",
         "pt--1-sample.csv",
         "vcm.totals.csv",
+        "reference.crop.png",
+        "pt--1-sample.crop.png",
+        "vcm.error-crop.png",
     ] {
         assert!(scene.join(name).is_file(), "{name} is missing");
     }
@@ -68,6 +71,14 @@ fn an_experiment_writes_its_results_and_resumes_finished_runs() {
         report.contains("![](cornell-box/vcm.error.png)"),
         "{report}"
     );
+    // The crop: a quarter of the 24 pixels, made 8 (the least), shown 16× larger.
+    assert!(
+        report.contains("The 8×8 pixels at (")
+            && report.contains("![](cornell-box/vcm.error-crop.png)"),
+        "{report}"
+    );
+    let crop = image::open(scene.join("vcm.crop.png")).unwrap();
+    assert_eq!((crop.width(), crop.height()), (128, 128));
 
     // Run again with one run's totals gone: only that run is rendered.
     std::fs::remove_file(scene.join("vcm.totals.csv")).unwrap();
@@ -105,6 +116,10 @@ fn bad_experiment_files_are_named_with_the_problem() {
         (
             experiment("spp = 2").replace("name = \"vcm\"", "name = \"pt, 1 sample\""),
             "names the files of another run",
+        ),
+        (
+            experiment("spp = 2").replace(".gltf\"\n", ".gltf\"\ncrop = [20, 0, 8]\n"),
+            "the crop [20, 0, 8] does not lie inside the 24×24 image",
         ),
     ];
     for (text, expected) in cases {

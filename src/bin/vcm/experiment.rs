@@ -22,7 +22,8 @@ use vcm_rs::render_loop::{Frames, ScheduleOptions};
 use vcm_rs::scene::Scene;
 use vcm_rs::{Backend, Shading, Traversals};
 
-use crate::progressive::{self, Budget, Checkpoint, Watch};
+use crate::crops::Crop;
+use crate::progressive::{self, Budget, Checkpoint, Part, Watch};
 use crate::render::{
     SceneLimits, gpu_shaded_algorithm, load_scene, relmse_points, stop_flag, tell_traversal,
     write_report, write_text,
@@ -84,6 +85,9 @@ struct SceneEntry {
     camera: Option<String>,
     /// A reference EXR of the image size (instead of rendering one).
     reference: Option<PathBuf>,
+    /// The square the report shows enlarged, `[x, y, size]` in pixels (default: where the
+    /// runs' errors sum to the most).
+    crop: Option<[usize; 3]>,
 }
 
 /// A run configuration: a name and `vcm render` options.
@@ -167,10 +171,16 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         total: experiment.scenes.len() * runs.len(),
         ..Position::default()
     };
+    let screen = Screen::new(position.total);
     for entry in &experiment.scenes {
         let path = base.join(&entry.path);
         let scene = load_scene(&path, entry.camera.as_deref(), &args.limits)?;
         let size = image_size(&scene, experiment.width, None);
+        let chosen_crop = entry
+            .crop
+            .map(|crop| Crop::inside(crop, size.0 as usize, size.1 as usize))
+            .transpose()
+            .with_context(|| format!("{}: scene {}", file.display(), path.display()))?;
         let name = file_stem(&path);
         let folder = output.join(&name);
         std::fs::create_dir_all(&folder)
@@ -182,8 +192,11 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
         for (run, options) in &runs {
             let label = position.label(budget, &name, &run.name);
             say!("{label}");
+            screen.job.set_message(label.clone());
+            let span = screen.span(position.done);
             position.done += 1;
             if let Some(measured) = finished(&folder, run) {
+                screen.job.set_position(span.end);
                 results.push(measured);
                 continue;
             }
@@ -193,7 +206,8 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                     Some(file) => crate::render::read_reference(&base.join(file), size)?,
                     None => {
                         let spec = (&experiment, file.as_path());
-                        reference_for(spec, &scene, &mut traversals, size, &folder, &stop)?
+                        let at = screen.part(span.start..span.start);
+                        reference_for(spec, (&scene, &mut traversals, size), &folder, &stop, at)?
                     }
                 }),
             };
@@ -202,7 +216,8 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
                 traversals: &mut traversals,
                 options,
                 size,
-                label,
+                label: format!("{name}: {}", run.name),
+                part: screen.part(span),
             };
             let measured = measure(setup, budget, reference, &folder, run, &stop)?;
             if stop.is_raised() {
@@ -213,6 +228,13 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
             position.seconds += measured.seconds;
             results.push(measured);
         }
+        let reference = match reference {
+            Some(reference) => Some(reference),
+            None => reference_on_disk(entry, base, &folder, size)?,
+        };
+        let crop = reference
+            .map(|reference| write_crops(&folder, &runs, &reference, size, chosen_crop))
+            .transpose()?;
         let series: Vec<Series> = runs
             .iter()
             .zip(&results)
@@ -223,7 +245,14 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
             .collect();
         plot_relmse(&folder.join("relmse.png"), &name, &series)?;
         let pixels = f64::from(size.0) * f64::from(size.1);
-        report_scene(&mut report, &name, &runs, &results, baseline, pixels);
+        let results_of_scene = SceneResults {
+            name: &name,
+            runs: &runs,
+            results: &results,
+            crop,
+            crop_chosen: chosen_crop.is_some(),
+        };
+        report_scene(&mut report, &results_of_scene, baseline, pixels);
         for ((run, _), m) in runs.iter().zip(&results) {
             let row = m.summary(pixels, &results[baseline]);
             let _ = writeln!(
@@ -277,11 +306,10 @@ fn parse_runs<'a>(file: &Path, runs: &'a [Run]) -> anyhow::Result<Vec<(&'a Run, 
 /// rendered it, else rendered now as `[reference]` says.
 fn reference_for(
     (experiment, file): (&Experiment, &Path),
-    scene: &Arc<Scene>,
-    traversals: &mut Traversals,
-    size: (u32, u32),
+    (scene, traversals, size): (&Arc<Scene>, &mut Traversals, (u32, u32)),
     folder: &Path,
     stop: &vcm::StopFlag,
+    part: Part<'_>,
 ) -> anyhow::Result<Vec<Vec3>> {
     let path = folder.join("reference.exr");
     if path.is_file() {
@@ -307,6 +335,7 @@ fn reference_for(
         options: &options,
         size,
         label: format!("reference of {}", file_stem(&scene.path)),
+        part,
     };
     let (film, _) = render(setup, Budget::Samples(spec.spp), None, stop)?;
     if stop.is_raised() {
@@ -349,6 +378,53 @@ impl Position {
     }
 }
 
+/// The experiment's progress on screen: one bar over all its renders, above the bar of the
+/// render in progress; lines of output are written above both while it lasts.
+struct Screen {
+    bars: indicatif::MultiProgress,
+    job: indicatif::ProgressBar,
+}
+
+/// Length of one render on the experiment's bar.
+const RENDER_STEPS: u64 = 1000;
+
+impl Screen {
+    /// The bar of an experiment of `renders` renders, on stderr (hidden where that is not a
+    /// terminal).
+    fn new(renders: usize) -> Screen {
+        let bars = indicatif::MultiProgress::new();
+        let job = bars.add(indicatif::ProgressBar::new(renders as u64 * RENDER_STEPS));
+        if let Ok(style) = indicatif::ProgressStyle::with_template("experiment {bar:40} {msg}") {
+            job.set_style(style);
+        }
+        crate::say::write_above(Some(bars.clone()));
+        Screen { bars, job }
+    }
+
+    /// The span of render `index` (0-based) on the experiment's bar.
+    fn span(&self, index: usize) -> std::ops::Range<u64> {
+        let start = index as u64 * RENDER_STEPS;
+        start..start + RENDER_STEPS
+    }
+
+    /// A render covering `span` of the experiment's bar.
+    fn part(&self, span: std::ops::Range<u64>) -> Part<'_> {
+        Part {
+            bars: &self.bars,
+            job: &self.job,
+            span,
+        }
+    }
+}
+
+impl Drop for Screen {
+    /// Takes the experiment's bar away; lines are written where the cursor is again.
+    fn drop(&mut self) {
+        self.job.finish_and_clear();
+        crate::say::write_above(None);
+    }
+}
+
 /// `seconds` rounded for people: "40 s", "12 min", "2 h 05 min".
 fn duration_text(seconds: f64) -> String {
     let seconds = seconds.max(0.0).round() as u64;
@@ -370,6 +446,8 @@ struct Setup<'a> {
     size: (u32, u32),
     /// Shown before the render's progress bar.
     label: String,
+    /// Where on the experiment's bar the render is.
+    part: Part<'a>,
 }
 
 /// Renders `setup` within `budget`, measuring against `reference` if given, its progress bar
@@ -386,6 +464,7 @@ fn render(
         options,
         size,
         label,
+        part,
     } = setup;
     let built = traversals
         .built(options.backend, tell_traversal)
@@ -422,6 +501,7 @@ fn render(
             reference,
             periodic: None,
             label: Some(label),
+            part: Some(part),
             started: Some(started),
         },
     )?;
@@ -554,15 +634,29 @@ fn report_header(experiment: &Experiment, file: &Path, budget: Budget) -> String
     )
 }
 
-/// One scene's section: the plot, the table and the images with their error images.
-fn report_scene(
-    report: &mut String,
-    name: &str,
-    runs: &[(&Run, RunOptions)],
-    results: &[Measured],
-    baseline: usize,
-    pixels: f64,
-) {
+/// What a scene's section of the report shows.
+struct SceneResults<'a> {
+    /// The scene's name, also its folder's.
+    name: &'a str,
+    runs: &'a [(&'a Run, RunOptions)],
+    /// What each run measured, in the order of `runs`.
+    results: &'a [Measured],
+    /// The square shown enlarged, where there was a reference to compute errors with.
+    crop: Option<Crop>,
+    /// Whether the experiment file chose the square.
+    crop_chosen: bool,
+}
+
+/// One scene's section: the plot, the table, the images with their error images and the
+/// crops.
+fn report_scene(report: &mut String, scene: &SceneResults<'_>, baseline: usize, pixels: f64) {
+    let SceneResults {
+        name,
+        runs,
+        results,
+        crop,
+        crop_chosen,
+    } = *scene;
     let _ = write!(
         report,
         "\n## {name}\n\n![relMSE against time]({name}/relmse.png)\n\n\
@@ -596,6 +690,95 @@ fn report_scene(
             run.name
         );
     }
+    let Some(crop) = crop else {
+        return;
+    };
+    let chosen = if crop_chosen {
+        "as the experiment file sets it"
+    } else {
+        "where the runs' errors sum to the most"
+    };
+    let _ = writeln!(
+        report,
+        "\nThe {size}×{size} pixels at ({x}, {y}), {chosen}, each pixel shown {scale}× \
+         larger:\n\n| run | crop | relative error |\n| --- | --- | --- |\n\
+         | reference | ![]({name}/reference.crop.png) | |",
+        size = crop.size,
+        x = crop.x,
+        y = crop.y,
+        scale = crop.scale(),
+    );
+    for (run, _) in runs {
+        let file = slug(&run.name);
+        let _ = writeln!(
+            report,
+            "| {} | ![]({name}/{file}.crop.png) | ![]({name}/{file}.error-crop.png) |",
+            run.name
+        );
+    }
+}
+
+/// The reference of a scene whose runs all finished earlier, if it is still on disk: the
+/// file the experiment names, or the one it rendered.
+fn reference_on_disk(
+    entry: &SceneEntry,
+    base: &Path,
+    folder: &Path,
+    size: (u32, u32),
+) -> anyhow::Result<Option<Vec<Vec3>>> {
+    let path = match &entry.reference {
+        Some(file) => base.join(file),
+        None => folder.join("reference.exr"),
+    };
+    if !path.is_file() {
+        return Ok(None);
+    }
+    crate::render::read_reference(&path, size).map(Some)
+}
+
+/// Writes the crops of the reference (`reference.crop.png`) and of each run's image and
+/// relative error (`RUN.crop.png`, `RUN.error-crop.png`): at `chosen`, or where the runs'
+/// errors sum to the most. Returns the square.
+fn write_crops(
+    folder: &Path,
+    runs: &[(&Run, RunOptions)],
+    reference: &[Vec3],
+    size: (u32, u32),
+    chosen: Option<Crop>,
+) -> anyhow::Result<Crop> {
+    let width = size.0 as usize;
+    let mut images = Vec::with_capacity(runs.len());
+    for (run, _) in runs {
+        let path = folder.join(format!("{}.exr", slug(&run.name)));
+        images.push(RgbImage::read_exr(&path)?);
+    }
+    let errors: Vec<Vec<f64>> = images
+        .iter()
+        .map(|image| relative_error_per_pixel(&image.pixels, reference))
+        .collect();
+    let crop = chosen.unwrap_or_else(|| {
+        let total: Vec<f64> = (0..reference.len())
+            .map(|pixel| errors.iter().map(|e| e[pixel]).sum())
+            .collect();
+        Crop::worst(&total, width, size.1 as usize)
+    });
+    let side = crop.size * crop.scale();
+    let write_image = |pixels: &[Vec3], file: String| {
+        let image = RgbImage {
+            width: side,
+            height: side,
+            pixels: crop.cut(pixels, width),
+        };
+        image.write_png(&folder.join(file), 0.0)
+    };
+    write_image(reference, "reference.crop.png".into())?;
+    for (((run, _), image), error) in runs.iter().zip(&images).zip(&errors) {
+        let file = slug(&run.name);
+        write_image(&image.pixels, format!("{file}.crop.png"))?;
+        let path = folder.join(format!("{file}.error-crop.png"));
+        write_error_png(&path, side, side, &crop.cut(error, width))?;
+    }
+    Ok(crop)
 }
 
 /// The CPU's model name (from /proc/cpuinfo where there is one).

@@ -6,6 +6,7 @@ mod say;
 
 mod compare;
 mod convergence;
+mod crops;
 mod experiment;
 mod info;
 mod merge;

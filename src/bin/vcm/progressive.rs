@@ -128,9 +128,36 @@ pub struct Watch<'a> {
     pub periodic: Option<Periodic<'a>>,
     /// Shown before the progress bar (where in an experiment the render is).
     pub label: Option<String>,
+    /// The longer job the render is a part of, whose bar moves on with the render's.
+    pub part: Option<Part<'a>>,
     /// When the render began, if before this call: the time the algorithm's choice took
     /// counts against a time budget and shows in the error's timeline.
     pub started: Option<Instant>,
+}
+
+/// A render as a part of a longer job (one run of an experiment): the job's bar stays on
+/// screen above the render's own, and covers `span` of its length while the render runs.
+pub struct Part<'a> {
+    /// The bars on screen, the job's among them.
+    pub bars: &'a indicatif::MultiProgress,
+    /// The job's bar.
+    pub job: &'a indicatif::ProgressBar,
+    /// Where the render begins and ends on the job's bar.
+    pub span: std::ops::Range<u64>,
+}
+
+impl Part<'_> {
+    /// The job's position when the render is at `position` of `length`:
+    /// start + (end − start) · min(position / length, 1).
+    fn job_position(&self, position: u64, length: u64) -> u64 {
+        let done = if length == 0 {
+            1.0
+        } else {
+            (position as f64 / length as f64).min(1.0)
+        };
+        let width = self.span.end - self.span.start;
+        self.span.start + (width as f64 * done) as u64
+    }
 }
 
 /// Renders `frames` into `film` until `budget` is spent or `stop` is raised (which also cuts
@@ -148,9 +175,14 @@ pub fn render(
         reference,
         mut periodic,
         label,
+        part,
         started,
     } = watch;
     let progress = progress_bar(budget, label.as_deref());
+    let progress = match &part {
+        Some(part) => part.bars.add(progress),
+        None => progress,
+    };
     let mut checkpoints = Vec::new();
     let mut next_checkpoint = 1.0;
     let mut utilization = Vec::new();
@@ -178,6 +210,11 @@ pub fn render(
             Budget::Samples(_) => u64::from(frame.spp),
             Budget::Seconds(_) => (seconds * 10.0) as u64,
         });
+        if let Some(part) = &part {
+            let length = progress.length().unwrap_or(0);
+            part.job
+                .set_position(part.job_position(progress.position(), length));
+        }
         if let Some(reference) = reference
             && seconds >= next_checkpoint
         {
@@ -189,6 +226,10 @@ pub fn render(
         Ok(())
     })?;
     progress.finish_and_clear();
+    if let Some(part) = &part {
+        part.bars.remove(&progress);
+        part.job.set_position(part.span.end);
+    }
     let Rendered {
         spp,
         frames,
@@ -218,5 +259,27 @@ fn checkpoint(film: &Film, reference: &[Vec3], seconds: f64, spp: u32) -> Checkp
         seconds,
         spp,
         metrics,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_part_moves_the_job_bar_across_its_span_only() {
+        let bars = indicatif::MultiProgress::new();
+        let job = indicatif::ProgressBar::hidden();
+        let part = Part {
+            bars: &bars,
+            job: &job,
+            span: 300..400,
+        };
+        assert_eq!(part.job_position(0, 16), 300);
+        assert_eq!(part.job_position(4, 16), 325);
+        assert_eq!(part.job_position(16, 16), 400);
+        // A time budget's last frame can end past it; an empty budget counts as done.
+        assert_eq!(part.job_position(130, 100), 400);
+        assert_eq!(part.job_position(0, 0), 400);
     }
 }

@@ -435,6 +435,7 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
             reference: reference.as_deref(),
             periodic,
             label: None,
+            part: None,
             started: Some(started),
         },
     )?;

@@ -8,6 +8,7 @@
 
 use std::fmt;
 use std::io::{ErrorKind, Write};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Set once a write to stdout failed.
@@ -15,9 +16,30 @@ static STDOUT_GONE: AtomicBool = AtomicBool::new(false);
 /// Set once a write to stderr failed.
 static STDERR_GONE: AtomicBool = AtomicBool::new(false);
 
+/// The progress bars on screen that lines are written above, while there are some.
+static BARS: Mutex<Option<indicatif::MultiProgress>> = Mutex::new(None);
+
+/// Writes every later line above `bars` (which are drawn again below it), or, with `None`,
+/// where the cursor is.
+pub fn write_above(bars: Option<indicatif::MultiProgress>) {
+    if let Ok(mut current) = BARS.lock() {
+        *current = bars;
+    }
+}
+
+/// Runs `write` with the bars on screen (if any) taken away and drawn again after it.
+fn beside_bars<T>(write: impl FnOnce() -> T) -> T {
+    let bars = BARS.lock().ok().and_then(|bars| bars.clone());
+    match bars {
+        Some(bars) => bars.suspend(write),
+        None => write(),
+    }
+}
+
 /// Writes one line of the report to stdout; see the module's documentation on failure.
 pub fn out(args: fmt::Arguments) {
-    if let Err(error) = write_line(&mut std::io::stdout().lock(), &STDOUT_GONE, args)
+    let written = beside_bars(|| write_line(&mut std::io::stdout().lock(), &STDOUT_GONE, args));
+    if let Err(error) = written
         && error.kind() != ErrorKind::BrokenPipe
     {
         err(format_args!(
@@ -29,7 +51,7 @@ pub fn out(args: fmt::Arguments) {
 /// Writes one line (a warning, progress, an error) to stderr, quietly giving up if it fails.
 pub fn err(args: fmt::Arguments) {
     // Nowhere is left to tell of a failure on stderr.
-    let _ = write_line(&mut std::io::stderr().lock(), &STDERR_GONE, args);
+    let _ = beside_bars(|| write_line(&mut std::io::stderr().lock(), &STDERR_GONE, args));
 }
 
 /// Writes `args` and a newline unless `gone` says the stream failed before; a failure sets it.
