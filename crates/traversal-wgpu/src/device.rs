@@ -1,7 +1,7 @@
 //! Headless device selection: the best hardware adapter when there is one, else a software
 //! one (Mesa lavapipe), with the adapter's own limits rather than WebGPU's defaults.
 
-use std::sync::mpsc;
+use std::sync::{Arc, Mutex, mpsc};
 
 use wgpu::util::DeviceExt;
 
@@ -16,6 +16,9 @@ pub struct GpuDevice {
     pub queue: wgpu::Queue,
     /// The adapter's name, driver and kind.
     pub info: wgpu::AdapterInfo,
+    /// The first error the device reported outside any call's result (a validation or
+    /// out-of-memory error, or the device's loss), kept so that later calls fail with it.
+    failure: Arc<Mutex<Option<String>>>,
 }
 
 impl GpuDevice {
@@ -52,11 +55,20 @@ impl GpuDevice {
                     reason: error.to_string(),
                 }
             })?;
+        let failure = Arc::new(Mutex::new(None));
+        keep_failures(&device, &failure);
         Ok(Self {
             device,
             queue,
             info,
+            failure,
         })
+    }
+
+    /// The first error the device reported outside a call's result, or its loss, if any
+    /// (wgpu reports those to a handler whose default panics).
+    pub fn failure(&self) -> Option<String> {
+        self.failure.lock().ok().and_then(|failure| failure.clone())
     }
 
     /// A one-line description: adapter name, kind and backend.
@@ -115,7 +127,8 @@ impl GpuDevice {
 
     /// Submits `encoder`, whose commands copy results into the first `bytes` of `buffer`
     /// (`MAP_READ`), waits for them, and returns what `read` makes of those bytes; the buffer
-    /// is unmapped again. Fails, saying why, where the device is lost or the mapping fails.
+    /// is unmapped again. Fails, saying why, where the device is lost, reported an error
+    /// since it opened ([`GpuDevice::failure`]) or the mapping fails.
     pub fn read_back<T>(
         &self,
         encoder: wgpu::CommandEncoder,
@@ -136,6 +149,9 @@ impl GpuDevice {
         self.device
             .poll(poll)
             .map_err(|e| format!("the GPU device was lost: {e}"))?;
+        if let Some(failure) = self.failure() {
+            return Err(failure);
+        }
         mapped
             .recv()
             .map_err(|_| "wgpu dropped a buffer mapping callback".to_owned())?
@@ -178,6 +194,27 @@ pub fn device_or_skip() -> Option<GpuDevice> {
     }
 }
 
+/// Keeps in `failure` the first error `device` reports outside a call's result and its loss,
+/// instead of wgpu's default, which panics.
+fn keep_failures(device: &wgpu::Device, failure: &Arc<Mutex<Option<String>>>) {
+    fn keep(failure: &Mutex<Option<String>>, message: String) {
+        if let Ok(mut failure) = failure.lock() {
+            failure.get_or_insert(message);
+        }
+    }
+    let slot = Arc::clone(failure);
+    device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
+        keep(&slot, format!("the GPU reported an error: {error}"));
+    }));
+    let slot = Arc::clone(failure);
+    device.set_device_lost_callback(move |reason, message| {
+        keep(
+            &slot,
+            format!("the GPU device was lost ({reason:?}): {message}"),
+        );
+    });
+}
+
 /// Lower is preferred: real GPUs first, software rasterizers last.
 fn preference(kind: wgpu::DeviceType) -> u8 {
     match kind {
@@ -186,5 +223,59 @@ fn preference(kind: wgpu::DeviceType) -> u8 {
         wgpu::DeviceType::VirtualGpu => 2,
         wgpu::DeviceType::Cpu => 3,
         wgpu::DeviceType::Other => 4,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4-byte buffer to read back into.
+    fn readback(gpu: &GpuDevice) -> wgpu::Buffer {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: 4,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    #[test]
+    fn an_error_of_the_device_fails_later_read_backs_instead_of_panicking() {
+        let Some(gpu) = device_or_skip() else {
+            return;
+        };
+        assert_eq!(gpu.failure(), None);
+        let buffer = readback(&gpu);
+        let encoder = gpu.device.create_command_encoder(&Default::default());
+        assert_eq!(gpu.read_back(encoder, (&buffer, 4), <[u8]>::len), Ok(4));
+        // Larger than the device allows: an error no call returns.
+        let too_large = gpu.device.limits().max_buffer_size.saturating_add(4) & !3;
+        let _ = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("too large"),
+            size: too_large,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let failure = gpu.failure().expect("the error is kept");
+        assert!(
+            failure.starts_with("the GPU reported an error"),
+            "{failure}"
+        );
+        let encoder = gpu.device.create_command_encoder(&Default::default());
+        let result = gpu.read_back(encoder, (&buffer, 4), <[u8]>::len);
+        assert_eq!(result, Err(failure));
+    }
+
+    #[test]
+    fn a_destroyed_device_fails_read_backs_instead_of_panicking() {
+        let Some(gpu) = device_or_skip() else {
+            return;
+        };
+        let buffer = readback(&gpu);
+        gpu.device.destroy();
+        let encoder = gpu.device.create_command_encoder(&Default::default());
+        let result = gpu.read_back(encoder, (&buffer, 4), <[u8]>::len);
+        assert!(result.is_err(), "{result:?}");
     }
 }
