@@ -151,7 +151,8 @@ impl Frames {
     /// Renders the next frame into `film` within `remaining` (which must leave at least one
     /// sample), with the schedule its size asks for, and returns what it did; an invalid
     /// schedule (a frame size or tile size of 0) is an error. A frame that a stop request
-    /// cuts short adds nothing and counts for nothing ([`FrameStats::interrupted`]).
+    /// cuts short adds nothing and counts for nothing ([`FrameStats::interrupted`]); one
+    /// whose device failed adds nothing and ends in [`RenderError::DeviceFailed`].
     pub fn render_next(
         &mut self,
         integrator: &mut dyn Integrator,
@@ -165,6 +166,9 @@ impl Frames {
         }
         let start = Instant::now();
         let stats = integrator.render_frame(film, self.next_sample());
+        if let Some(failure) = integrator.failure() {
+            return Err(RenderError::DeviceFailed(failure));
+        }
         if stats.interrupted {
             return Ok(stats);
         }

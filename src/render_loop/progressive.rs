@@ -108,7 +108,66 @@ pub fn render(
 
 #[cfg(test)]
 mod tests {
+    use vcm::{RenderError, Schedule};
+
     use super::*;
+    use crate::Backend;
+    use crate::render_loop::ScheduleOptions;
+    use crate::scene::Decision;
+
+    /// Adds one white sample to its one pixel per frame; its device fails in its third.
+    struct FailsInTheThirdFrame {
+        frames: u32,
+    }
+
+    impl Integrator for FailsInTheThirdFrame {
+        fn render_frame(&mut self, film: &mut Film, _first_sample: u32) -> FrameStats {
+            self.frames += 1;
+            if self.frames == 3 {
+                return FrameStats::INTERRUPTED;
+            }
+            film.add(0, glam::Vec3::ONE);
+            FrameStats::default()
+        }
+
+        fn set_stop(&mut self, _stop: StopFlag) {}
+
+        fn image_size(&self) -> (u32, u32) {
+            (1, 1)
+        }
+
+        fn set_schedule(&mut self, _schedule: Schedule) -> Result<(), RenderError> {
+            Ok(())
+        }
+
+        fn decisions(&self) -> Vec<Decision> {
+            Vec::new()
+        }
+
+        fn failure(&self) -> Option<String> {
+            (self.frames >= 3).then(|| "the device fell over".to_owned())
+        }
+    }
+
+    #[test]
+    fn a_device_failure_ends_the_render_with_its_error_and_keeps_the_whole_frames() {
+        let mut integrator = FailsInTheThirdFrame { frames: 0 };
+        let mut frames = Frames::new(ScheduleOptions::default(), Backend::Cpu);
+        let mut film = Film::new(1, 1);
+        let start = (Budget::Samples(64), Instant::now());
+        let result = render(
+            &mut integrator,
+            &mut frames,
+            &mut film,
+            start,
+            &StopFlag::new(),
+            |_| Ok(()),
+        );
+        let error = result.expect_err("the failure ends the render");
+        assert_eq!(error.to_string(), "the device fell over");
+        assert_eq!(integrator.frames, 3);
+        assert_eq!(film.mean(), vec![glam::Vec3::ONE]);
+    }
 
     #[test]
     fn sample_budgets_count_samples_and_time_budgets_seconds() {

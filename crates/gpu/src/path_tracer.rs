@@ -78,6 +78,8 @@ pub struct GpuPathTracer {
     plan: KernelPlan,
     samples_per_frame: u32,
     stop: StopFlag,
+    /// What failed on the GPU, once something has: no frame renders after it.
+    failure: Option<String>,
 }
 
 /// One dispatch's parameters, output and read-back copy.
@@ -171,6 +173,7 @@ impl GpuPathTracer {
             plan,
             samples_per_frame: 1,
             stop: StopFlag::new(),
+            failure: None,
         })
     }
 
@@ -230,7 +233,7 @@ impl GpuPathTracer {
         &self,
         first_sample: u32,
         (first_path, count): (u64, u64),
-    ) -> (Vec<Vec3>, [u64; 2]) {
+    ) -> Result<(Vec<Vec3>, [u64; 2]), String> {
         let (params, (x, y)) = self.params(first_sample, (first_path, count));
         let b = &self.buffers;
         let queue = &self.gpu.queue;
@@ -264,9 +267,7 @@ impl GpuPathTracer {
             (radiance, [u64::from(counts[0]), u64::from(counts[1])])
         };
         let bytes = radiance_bytes + COUNT_BYTES;
-        self.gpu
-            .read_back(encoder, (&b.readback, bytes), read)
-            .unwrap_or_else(|error| panic!("path tracing on the GPU: {error}"))
+        self.gpu.read_back(encoder, (&b.readback, bytes), read)
     }
 }
 
@@ -386,11 +387,17 @@ impl Integrator for GpuPathTracer {
         let mut frame = Film::new(width, height);
         let mut rays = [0u64; 2];
         for first in (0..paths).step_by(self.buffers.paths as usize) {
-            if self.stop.is_raised() {
+            if self.stop.is_raised() || self.failure.is_some() {
                 return FrameStats::INTERRUPTED;
             }
             let count = self.buffers.paths.min(paths - first);
-            let (radiance, counts) = self.dispatch(first_sample, (first, count));
+            let (radiance, counts) = match self.dispatch(first_sample, (first, count)) {
+                Ok(dispatched) => dispatched,
+                Err(error) => {
+                    self.failure = Some(format!("path tracing on the GPU: {error}"));
+                    return FrameStats::INTERRUPTED;
+                }
+            };
             for (path, rgb) in (first..).zip(radiance) {
                 frame.add((path / samples) as usize, rgb);
             }
@@ -454,5 +461,9 @@ impl Integrator for GpuPathTracer {
         .into_iter()
         .chain(self.plan.decisions())
         .collect()
+    }
+
+    fn failure(&self) -> Option<String> {
+        self.failure.clone()
     }
 }

@@ -29,4 +29,7 @@ pub enum RenderError {
     /// The render's largest buffers would need more memory than the process may allocate.
     #[error(transparent)]
     OutOfMemory(#[from] MemoryShortfall),
+    /// The device the integrator renders on failed ([`Integrator::failure`](crate::Integrator::failure)).
+    #[error("{0}")]
+    DeviceFailed(String),
 }

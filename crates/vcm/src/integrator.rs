@@ -55,6 +55,14 @@ pub trait Integrator: Send {
     /// The integrator's parts and why each runs or is left out for its scene (what
     /// `vcm render --explain` prints besides the scene's [`vcm_scene::ShadingPlan`]).
     fn decisions(&self) -> Vec<Decision>;
+
+    /// Why the integrator can render no more frames, once the device it renders on has
+    /// failed: the frame that met the failure was dropped whole (its stats say
+    /// [`interrupted`](FrameStats::interrupted)), as a stopped one is. `None` for integrators
+    /// that cannot fail, the default.
+    fn failure(&self) -> Option<String> {
+        None
+    }
 }
 
 /// How a frame's paths are scheduled: the grouping into batches and the samples per pixel
