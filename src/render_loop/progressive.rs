@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use vcm::{Film, FrameStats, Integrator, StopFlag};
+use vcm::{Film, FrameStats, Integrator, RenderError, StopFlag};
 
 use super::frames::{FrameCounts, Frames};
 use super::pacer::Remaining;
@@ -67,10 +67,15 @@ pub struct Rendered {
     pub seconds: f64,
     /// Work summed over all frames.
     pub totals: FrameStats,
+    /// Why the render ended early, if its device failed
+    /// ([`Integrator::failure`](vcm::Integrator::failure)): the whole frames before the
+    /// failure are in the film, for the caller to keep before it reports the failure.
+    pub failure: Option<String>,
 }
 
-/// Renders `frames` into `film` until `budget` is spent or `stop` is raised (which also cuts
-/// the frame in progress short, dropping it whole), calling `after_frame` after each whole
+/// Renders `frames` into `film` until `budget` is spent, `stop` is raised (which also cuts
+/// the frame in progress short, dropping it whole) or the integrator's device fails (which
+/// drops that frame too: [`Rendered::failure`]), calling `after_frame` after each whole
 /// frame; an error from it ends the render with that error. Time is counted from `start`
 /// (now, or before the render's setup where that counts against the budget: choosing the
 /// algorithm).
@@ -84,9 +89,16 @@ pub fn render(
 ) -> anyhow::Result<Rendered> {
     integrator.set_stop(stop.clone());
     let mut totals = FrameStats::default();
+    let mut failure = None;
     while !budget.done(frames.samples(), start.elapsed()) && !stop.is_raised() {
         let remaining = budget.remaining(frames.samples(), start.elapsed());
-        let stats = frames.render_next(integrator, film, remaining)?;
+        let stats = match frames.render_next(integrator, film, remaining) {
+            Err(RenderError::DeviceFailed(why)) => {
+                failure = Some(why);
+                break;
+            }
+            rendered => rendered?,
+        };
         if stats.interrupted {
             break;
         }
@@ -103,12 +115,13 @@ pub fn render(
         frames: frames.counts(),
         seconds: start.elapsed().as_secs_f64(),
         totals,
+        failure,
     })
 }
 
 #[cfg(test)]
 mod tests {
-    use vcm::{RenderError, Schedule};
+    use vcm::Schedule;
 
     use super::*;
     use crate::Backend;
@@ -150,7 +163,7 @@ mod tests {
     }
 
     #[test]
-    fn a_device_failure_ends_the_render_with_its_error_and_keeps_the_whole_frames() {
+    fn a_device_failure_ends_the_render_and_keeps_the_whole_frames_before_it() {
         let mut integrator = FailsInTheThirdFrame { frames: 0 };
         let mut frames = Frames::new(ScheduleOptions::default(), Backend::Cpu);
         let mut film = Film::new(1, 1);
@@ -163,9 +176,11 @@ mod tests {
             &StopFlag::new(),
             |_| Ok(()),
         );
-        let error = result.expect_err("the failure ends the render");
-        assert_eq!(error.to_string(), "the device fell over");
+        let rendered = result.unwrap();
+        assert_eq!(rendered.failure.as_deref(), Some("the device fell over"));
         assert_eq!(integrator.frames, 3);
+        // Two whole frames of one sample each; the third added nothing.
+        assert_eq!(rendered.spp, 2);
         assert_eq!(film.mean(), vec![glam::Vec3::ONE]);
     }
 

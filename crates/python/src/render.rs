@@ -213,7 +213,10 @@ fn run(
                 Ok(())
             },
         );
-        rendered.map(|r| (film, r.spp, algorithm))
+        rendered.and_then(|r| match r.failure {
+            Some(failure) => Err(anyhow::anyhow!(failure)),
+            None => Ok((film, r.spp, algorithm)),
+        })
     })?;
     rendered.map_err(vcm_error)
 }

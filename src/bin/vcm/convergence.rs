@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use anyhow::bail;
 use vcm::Film;
 
 use crate::progressive::{self, Outcome, Watch};
@@ -67,7 +68,7 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
             .setup
             .integrator(algorithm, &scene, traversal, size, options, None)?;
         let mut film = Film::new(size.0, size.1);
-        let outcome = progressive::render(
+        let mut outcome = progressive::render(
             integrator.as_mut(),
             args.setup.frames(),
             &mut film,
@@ -78,6 +79,9 @@ pub fn run(args: &ConvergenceArgs) -> anyhow::Result<()> {
                 ..Watch::default()
             },
         )?;
+        if let Some(failure) = outcome.failure.take() {
+            bail!("{}: {failure}", algorithm.name());
+        }
         outcomes.push((algorithm, outcome));
         if interrupted.is_raised() {
             tell!("interrupted: writing the results so far");

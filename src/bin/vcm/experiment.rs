@@ -491,7 +491,7 @@ fn render(
         samples_left,
     )?;
     let mut film = Film::new(size.0, size.1);
-    let outcome = progressive::render(
+    let mut outcome = progressive::render(
         integrator.as_mut(),
         frames,
         &mut film,
@@ -505,6 +505,9 @@ fn render(
             started: Some(started),
         },
     )?;
+    if let Some(failure) = outcome.failure.take() {
+        bail!("{failure}");
+    }
     Ok((film, outcome))
 }
 

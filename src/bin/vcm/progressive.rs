@@ -109,6 +109,9 @@ pub struct Outcome {
     /// CPU utilization over the whole render as a fraction of all worker threads; `None`
     /// where the CPU time is unknown.
     pub mean_utilization: Option<f64>,
+    /// Why the render ended early, if its device failed; the whole frames before it are in
+    /// the film.
+    pub failure: Option<String>,
 }
 
 /// Something to do with the film every so often while rendering (write a checkpoint).
@@ -235,6 +238,7 @@ pub fn render(
         frames,
         seconds,
         totals,
+        failure,
     } = rendered;
     let mean_utilization = cpu_seconds()
         .zip(cpu_start)
@@ -250,6 +254,7 @@ pub fn render(
         checkpoints,
         utilization,
         mean_utilization,
+        failure,
     })
 }
 

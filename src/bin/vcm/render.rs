@@ -445,6 +445,12 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
             outcome.spp
         );
     }
+    if let Some(failure) = &outcome.failure {
+        tell!(
+            "{failure}: writing the {} samples per pixel rendered before it",
+            outcome.spp
+        );
+    }
     let image = film.image();
     image.write_exr(&plan.output)?;
     let png = png_beside(&plan.output);
@@ -490,7 +496,10 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     }
     print_summary(&film, &outcome);
     say!("wrote {} and {}", plan.output.display(), png.display());
-    Ok(())
+    match outcome.failure {
+        Some(failure) => bail!("{failure}"),
+        None => Ok(()),
+    }
 }
 
 /// The state the render adds to, when one is written: the resumed one, checked against
