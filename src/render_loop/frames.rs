@@ -102,13 +102,12 @@ impl Frames {
         options: &IntegratorOptions,
         samples_left: Option<u32>,
     ) -> Result<Box<dyn Integrator>, GpuRenderError> {
-        let traversal = Arc::clone(&built.traversal);
         let bvh = match (shading, &built.gpu) {
             (Shading::Cpu, _) => {
                 return Ok(self.integrator(
                     algorithm,
                     scene,
-                    traversal,
+                    Arc::clone(&built.traversal),
                     size,
                     options,
                     samples_left,

@@ -495,6 +495,17 @@ pub(crate) mod tests {
         }
     }
 
+    /// For [`wait_for`]: the message of job `generation`'s failure.
+    pub(crate) fn failed(update: Update, generation: u64) -> Option<String> {
+        match update {
+            Update::Failed {
+                generation: failed,
+                message,
+            } if failed == generation => Some(message),
+            _ => None,
+        }
+    }
+
     /// The film of `samples` rendered directly by the integrator, one sample per pixel per
     /// frame (the VCM family's frames of two samples add the same as two of one).
     pub(crate) fn direct_film(scene: &Arc<Scene>, size: (u32, u32), samples: Range<u32>) -> Film {
@@ -648,13 +659,7 @@ pub(crate) mod tests {
         vcm_job.view.settings.backend = Backend::Gpu;
         vcm_job.view.settings.shading = Shading::Gpu;
         renderer.submit(vcm_job);
-        let message = wait_for(&renderer, &woken, |u| match u {
-            Update::Failed {
-                generation: 2,
-                message,
-            } => Some(message),
-            _ => None,
-        });
+        let message = wait_for(&renderer, &woken, |u| failed(u, 2));
         assert!(message.contains("path tracing"), "{message}");
     }
 
@@ -663,13 +668,7 @@ pub(crate) mod tests {
         let scene = cornell_box();
         let (renderer, woken) = spawn(None);
         renderer.submit(job(5, &scene, (0, 4), None));
-        let message = wait_for(&renderer, &woken, |u| match u {
-            Update::Failed {
-                generation: 5,
-                message,
-            } => Some(message),
-            _ => None,
-        });
+        let message = wait_for(&renderer, &woken, |u| failed(u, 5));
         assert!(
             message.contains("vcm") && message.contains("0×4"),
             "{message}"
