@@ -685,14 +685,7 @@ fn report_scene(report: &mut String, scene: &SceneResults<'_>, baseline: usize, 
         report,
         "\n| run | image | relative error |\n| --- | --- | --- |"
     );
-    for (run, _) in runs {
-        let file = slug(&run.name);
-        let _ = writeln!(
-            report,
-            "| {} | ![]({name}/{file}.png) | ![]({name}/{file}.error.png) |",
-            run.name
-        );
-    }
+    image_rows(report, name, runs, ["png", "error.png"]);
     let Some(crop) = crop else {
         return;
     };
@@ -711,11 +704,18 @@ fn report_scene(report: &mut String, scene: &SceneResults<'_>, baseline: usize, 
         y = crop.y,
         scale = crop.scale(),
     );
+    image_rows(report, name, runs, ["crop.png", "error-crop.png"]);
+}
+
+/// One table row per run: its name, then its images `RUN.{kinds[0]}` and `RUN.{kinds[1]}`
+/// in the scene's folder `name`.
+fn image_rows(report: &mut String, name: &str, runs: &[(&Run, RunOptions)], kinds: [&str; 2]) {
+    let [left, right] = kinds;
     for (run, _) in runs {
         let file = slug(&run.name);
         let _ = writeln!(
             report,
-            "| {} | ![]({name}/{file}.crop.png) | ![]({name}/{file}.error-crop.png) |",
+            "| {} | ![]({name}/{file}.{left}) | ![]({name}/{file}.{right}) |",
             run.name
         );
     }
