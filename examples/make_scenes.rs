@@ -7,6 +7,8 @@
 //! - `cornell-specular-close`: the same, with the camera close to the spheres;
 //! - `cornell-water`: the lower part of the room filled with water (IOR 1.33) under a wavy
 //!   surface (an interface spanning the room), casting caustics on the floor;
+//! - `cornell-point`: the room without its area light, lit by a point light above a floating
+//!   glass sphere under a large mirror on the ceiling (caustics only light paths find);
 //! - `large`: the room with 196 instanced spheres of mixed materials, ~1M triangles.
 //!
 //! Run with `cargo run --example make_scenes` from any folder.
@@ -37,6 +39,8 @@ struct GltfWriter {
     materials: Vec<Value>,
     nodes: Vec<Value>,
     cameras: Vec<Value>,
+    /// `KHR_lights_punctual` lights.
+    lights: Vec<Value>,
     extensions: BTreeSet<String>,
 }
 
@@ -201,9 +205,21 @@ impl GltfWriter {
         }));
     }
 
+    /// Adds a `KHR_lights_punctual` point light of radiant intensity `intensity · color`.
+    fn point_light(&mut self, name: &str, position: Vec3, color: [f32; 3], intensity: f32) {
+        self.extensions.insert("KHR_lights_punctual".into());
+        self.lights.push(json!({
+            "name": name, "type": "point", "color": color, "intensity": intensity
+        }));
+        self.nodes.push(json!({
+            "name": name, "translation": position.to_array(),
+            "extensions": {"KHR_lights_punctual": {"light": self.lights.len() - 1}}
+        }));
+    }
+
     fn write(self, path: &Path) -> std::io::Result<()> {
         let data = base64::engine::general_purpose::STANDARD.encode(&self.buffer);
-        let document = json!({
+        let mut document = json!({
             "asset": {"version": "2.0", "generator": "vcm-rs examples/make_scenes.rs"},
             "extensionsUsed": self.extensions,
             "scene": 0,
@@ -213,6 +229,9 @@ impl GltfWriter {
             "buffers": [{"byteLength": self.buffer.len(),
                          "uri": format!("data:application/octet-stream;base64,{data}")}]
         });
+        if !self.lights.is_empty() {
+            document["extensions"] = json!({"KHR_lights_punctual": {"lights": self.lights}});
+        }
         std::fs::write(path, serde_json::to_string_pretty(&document)? + "\n")
     }
 }
@@ -307,6 +326,8 @@ enum RoomLight {
     Down,
     /// A quad below the ceiling shining up at it.
     Up,
+    /// None: the scene brings its own light.
+    Absent,
 }
 
 /// The Cornell room: a 2×2×2 box open toward +Z, with walls and an area light.
@@ -314,7 +335,6 @@ fn cornell_room(w: &mut GltfWriter, light: RoomLight) -> usize {
     let white = w.diffuse("white", WHITE);
     let red = w.diffuse("red", RED);
     let green = w.diffuse("green", GREEN);
-    let emitter = w.emitter("light", [1.0, 0.706, 0.235], 17.0);
     let v = Vec3::new;
     let walls = [
         (
@@ -380,7 +400,9 @@ fn cornell_room(w: &mut GltfWriter, light: RoomLight) -> usize {
             v(-s, 0.998, s),
         ],
         RoomLight::Up => [v(-s, 0.9, -s), v(-s, 0.9, s), v(s, 0.9, s), v(s, 0.9, -s)],
+        RoomLight::Absent => return white,
     };
+    let emitter = w.emitter("light", [1.0, 0.706, 0.235], 17.0);
     w.object("light", &quad(corners), emitter);
     white
 }
@@ -432,6 +454,27 @@ fn cornell_water() -> GltfWriter {
     w
 }
 
+fn cornell_point() -> GltfWriter {
+    let mut w = GltfWriter::default();
+    cornell_room(&mut w, RoomLight::Absent);
+    let mirror = w.metal("mirror", [1.0, 1.0, 1.0], 0.0);
+    let glass = w.dielectric("glass", 1.5);
+    let v = Vec3::new;
+    let m = 0.75;
+    let ceiling_mirror = [
+        v(-m, 0.99, -m),
+        v(m, 0.99, -m),
+        v(m, 0.99, m),
+        v(-m, 0.99, m),
+    ];
+    w.object("ceiling mirror", &quad(ceiling_mirror), mirror);
+    let sphere = placed(icosphere(4), Vec3::new(0.0, -0.45, 0.1), 0.3);
+    w.object("glass sphere", &sphere, glass);
+    w.point_light("bulb", Vec3::new(0.0, 0.5, 0.1), [1.0, 0.85, 0.65], 1.5);
+    standard_camera(&mut w);
+    w
+}
+
 /// The room with a 14 × 14 grid of instanced spheres (5,120 triangles each) in four materials.
 fn large() -> GltfWriter {
     let mut w = GltfWriter::default();
@@ -471,6 +514,7 @@ fn main() -> std::io::Result<()> {
         ("cornell-specular", cornell_specular(false)),
         ("cornell-specular-close", cornell_specular(true)),
         ("cornell-water", cornell_water()),
+        ("cornell-point", cornell_point()),
         ("large", large()),
     ];
     for (name, writer) in scenes {

@@ -97,3 +97,33 @@ fn the_indirect_light_faces_the_ceiling_and_the_water_surface_faces_up() {
     );
     assert_eq!(water.materials[water_material as usize].ior, 1.33);
 }
+
+#[test]
+fn the_point_light_scene_has_no_area_light_and_a_mirror_facing_down() {
+    let scene = load("cornell-point.gltf");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let f = scene.features;
+    assert!(f.materials.diffuse && f.materials.specular && f.materials.transmission);
+    assert_eq!((f.lights.area, f.lights.point), (0, 1));
+    let Light::Point(bulb) = &scene.lights[0] else {
+        panic!("a point light")
+    };
+    // Above the glass sphere, below the mirror, inside the room and in view.
+    assert!(bulb.position.y > 0.0 && bulb.position.y < 0.99);
+    assert!(bulb.position.abs().max_element() < 1.0);
+    assert!(scene.camera.raster_of(512, 512, bulb.position).is_some());
+    let mirror = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "mirror")
+        .unwrap() as u32;
+    let faces: Vec<usize> = (0..scene.mesh.triangle_count())
+        .filter(|&t| scene.mesh.material_ids[t] == mirror)
+        .collect();
+    assert_eq!(faces.len(), 2);
+    assert!(
+        faces
+            .iter()
+            .all(|&t| scene.mesh.geometric_normal(t).y < -0.99)
+    );
+}

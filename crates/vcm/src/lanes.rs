@@ -184,6 +184,12 @@ impl Mask {
         Mask(bools.map(|b| 0u32.wrapping_sub(u32::from(b))))
     }
 
+    /// No lane set.
+    #[inline(always)]
+    pub fn none() -> Mask {
+        Mask([0; LANES])
+    }
+
     /// The first `count` lanes set.
     #[inline(always)]
     pub fn first(count: usize) -> Mask {

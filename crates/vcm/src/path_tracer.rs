@@ -37,7 +37,7 @@ pub struct PtSettings {
     /// Russian roulette only.
     pub max_depth: Option<u32>,
     /// Shade vertices on plain Lambertian surfaces in SIMD lanes where the scene allows it
-    /// (every light a constant area light; the same image bit for bit, faster); `false`:
+    /// (where no volume absorbs; the same image bit for bit, faster); `false`:
     /// every vertex goes through the general BSDF, for comparisons.
     pub lambert_lanes: bool,
 }

@@ -90,12 +90,24 @@ fn shadow_segment(
     receiver: Vec3,
     origin: Vec3,
 ) -> (Vec3, f32) {
-    if !illumination.distance.is_finite() {
-        return (illumination.direction, f32::INFINITY);
+    match shadow_target(light, illumination, receiver) {
+        Some(target) => segment_to(origin, target),
+        None => (illumination.direction, f32::INFINITY),
     }
-    let target = receiver + illumination.direction * illumination.distance;
-    let target = offset_off_light(light, target, -illumination.direction);
-    segment_to(origin, target)
+}
+
+/// Where a shadow ray from `receiver` toward the light sample `illumination` of `light` ends:
+/// the sample point, offset off an area light's triangle toward the receiver; `None` for
+/// distant lights, whose rays are unbounded.
+pub(crate) fn shadow_target(
+    light: &Light,
+    illumination: &Illumination,
+    receiver: Vec3,
+) -> Option<Vec3> {
+    illumination.distance.is_finite().then(|| {
+        let target = receiver + illumination.direction * illumination.distance;
+        offset_off_light(light, target, -illumination.direction)
+    })
 }
 
 /// `point` on `light`, offset off an area light's triangle to the side of direction `w` by its

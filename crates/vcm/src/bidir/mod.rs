@@ -92,7 +92,7 @@ pub struct VcmSettings {
     /// part of the algorithm, for comparisons.
     pub prune: bool,
     /// Shade light vertices, and camera vertices where nothing merges, on plain Lambertian
-    /// surfaces in SIMD lanes where the scene allows it (every light a constant area light;
+    /// surfaces in SIMD lanes where the scene allows it (where no volume absorbs;
     /// the same image bit for bit, faster); `false`: every vertex goes through the general
     /// BSDF, for comparisons.
     pub lambert_lanes: bool,

@@ -2,11 +2,11 @@
 //!
 //! The general vertex goes through the layered glTF BSDF one path at a time: a long chain of
 //! dependent steps, most of them there for lobes a plain diffuse surface does not have. Where
-//! every light of a scene is a constant, uncut area light and no volume absorbs, vertices on
-//! materials whose lobes are one plain Lambert lobe
+//! no volume absorbs, vertices on materials whose lobes are one plain Lambert lobe
 //! ([`Lobes::lambert`](vcm_scene::bsdf::Lobes::lambert)) are shaded in SIMD lanes instead,
 //! eight paths per instruction: the surface point, the BSDF's sides, frame, values and pdfs
-//! ([`surface`]), the area light sample ([`light_sample`]), the cosine-weighted
+//! ([`surface`]), the light sample ([`light_sample`]: points on constant area lights in the
+//! lanes, every other light by its own `Light::illuminate`), the cosine-weighted
 //! continuation and the ray offsets. The integrators build their vertices from these parts
 //! ([`path_tracing`] here, the camera and light passes of the VCM family in
 //! [`crate::bidir`]).
@@ -43,7 +43,7 @@ pub(crate) struct LambertMaterial {
     pub double_sided: bool,
 }
 
-/// An area light as light sampling reads it.
+/// A constant, uncut area light as light sampling in lanes reads it.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LaneLight {
     pub corners: [Vec3; 3],
@@ -62,8 +62,9 @@ pub(crate) struct LaneLight {
 pub(crate) struct LambertLanes {
     /// Per material, where it is plain Lambert.
     pub materials: Vec<Option<LambertMaterial>>,
-    /// Per light (all of them area lights).
-    pub lights: Vec<LaneLight>,
+    /// Per light, where it is a constant, uncut area light (its points are sampled in the
+    /// lanes; other lights sample their own, one lane at a time).
+    pub lights: Vec<Option<LaneLight>>,
     /// Per triangle, whether vertices on it are shaded in lanes: a plain Lambert surface
     /// that does not emit. One load per vertex where the two tests behind it take three,
     /// two of them dependent (the triangle's material, then that material's entry).
@@ -98,8 +99,7 @@ impl LambertLanes {
                 }
                 _ => None,
             })
-            .collect::<Option<Vec<_>>>()
-            .ok_or("a light is not a constant, uncut area light")?;
+            .collect();
         let materials: Vec<_> = scene
             .materials
             .iter()
@@ -206,8 +206,7 @@ impl Arrivals {
 }
 
 /// Why the lanes run, for an integrator's decisions.
-pub(crate) const LANES_RUN: &str =
-    "some material is plain Lambert and every light is a constant area light";
+pub(crate) const LANES_RUN: &str = "some material is plain Lambert and no volume absorbs";
 
 /// The name of the lanes in an integrator's decisions.
 pub(crate) const LANES_PART: &str = "plain Lambert vertices in SIMD lanes";

@@ -53,10 +53,14 @@ fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &
     });
     let Arrivals { vertex, throughput } = arrivals;
     let shadows = light_samples(
-        (&vertex, &light),
+        (scene, &vertex, &light),
         throughput,
         (pair(1), false),
-        |_, eval, light_pdf_w| power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf),
+        // Full weight for delta lights, which BSDF sampling cannot reach.
+        |illumination, eval, light_pdf_w| {
+            let weight = power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf);
+            illumination.delta.select(F32s::splat(1.0), weight)
+        },
     );
     let continuations = Continuations::sample(
         &vertex,

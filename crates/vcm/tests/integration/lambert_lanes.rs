@@ -1,15 +1,15 @@
-//! Every integrator shades vertices on plain Lambertian surfaces under area lights in SIMD
-//! lanes where it can (the path tracer's vertices, the VCM family's light vertices, and its
+//! Every integrator shades vertices on plain Lambertian surfaces in SIMD lanes where it can (the path tracer's vertices, the VCM family's light vertices, and its
 //! camera vertices where nothing merges); every other vertex goes through the general BSDF.
 //! The lanes perform the general vertex's operations in the same order, so a render gives
 //! the same film with them and without them (`lambert_lanes` off in the settings), bit for
 //! bit: on the Cornell scenes, with leaning shading normals, with path length limits,
 //! several samples per frame and several connections per camera vertex, and on a scene of
 //! one-sided and double-sided surfaces seen from both sides under two lights of different
-//! power, beside glossy and emitting ones.
+//! power, beside glossy and emitting ones, and under every kind of light.
 
 use glam::{Vec3, Vec4};
 use vcm::{Algorithm, Film, Integrator, MergeRadius, PtSettings, Schedule, VcmSettings};
+use vcm_scene::light::{DirectionalLight, Light, PointLight, SpotLight};
 use vcm_scene::{Material, Scene};
 
 use crate::common::{self, EVERY_ALGORITHM};
@@ -261,24 +261,62 @@ fn one_and_two_sided_surfaces_under_two_lights_render_the_same_in_lanes() {
     assert_lanes_change_nothing("sides", &sides(), &EVERY_ALGORITHM, DEFAULT);
 }
 
-/// A light other than a constant area light keeps every vertex on the general BSDF.
-#[test]
-fn a_point_light_leaves_the_lanes_out() {
-    let scene = common::scene_file("cornell-box.gltf");
-    let bulb = vcm_scene::light::Light::Point(vcm_scene::light::PointLight {
-        position: Vec3::new(0.0, 1.0, 0.0),
-        intensity: Vec3::ONE,
-    });
-    let scene = common::rebuilt(scene.clone(), scene.mesh.clone(), vec![bulb]);
-    for algorithm in [None, Some(Algorithm::Vcm)] {
-        let integrator = integrator(scene.clone(), algorithm, DEFAULT);
-        let decisions = integrator.decisions();
-        let lanes = decisions.iter().find(|d| d.part == LANES_PART).unwrap();
-        assert!(!lanes.runs);
-        assert!(
-            lanes.reason.contains("constant, uncut area light"),
-            "{}",
-            lanes.reason
-        );
+/// The Cornell box lit by `lights`, with its area light (`area`) or without (its emitter
+/// black).
+fn cornell_box_lit_by(lights: Vec<Light>, area: bool) -> Scene {
+    let mut scene = common::scene_file("cornell-box.gltf");
+    if !area {
+        for material in &mut scene.materials {
+            material.emission = Vec3::ZERO;
+        }
     }
+    let mesh = scene.mesh.clone();
+    common::rebuilt(scene, mesh, lights)
+}
+
+/// Lanes that pick a point, spot, directional or environment light sample it by the light's
+/// own code and go on in the lanes; lanes of the same group that pick the area light sample
+/// it in the lanes.
+#[test]
+fn every_kind_of_light_renders_the_same_in_lanes() {
+    let mesh = common::scene_file("cornell-box.gltf").mesh;
+    let bounds = mesh.bounds();
+    let point = Light::Point(PointLight {
+        position: Vec3::new(-0.3, 0.7, 0.2),
+        intensity: Vec3::new(1.0, 0.8, 0.6),
+    });
+    let spot = Light::Spot(SpotLight {
+        position: Vec3::new(0.4, 0.8, 0.5),
+        direction: Vec3::new(-0.3, -1.0, -0.4).normalize(),
+        intensity: Vec3::new(2.0, 2.0, 3.0),
+        cos_inner: 0.9,
+        cos_outer: 0.7,
+    });
+    // Into the box's open front, lighting the floor and the back wall.
+    let sun = Light::Directional(DirectionalLight {
+        direction: Vec3::new(0.2, -0.5, -1.0).normalize(),
+        irradiance: Vec3::new(1.5, 1.4, 1.2),
+        scene_center: bounds.center(),
+        scene_radius: bounds.radius(),
+    });
+    let sky = common::sky(Vec3::new(0.2, 0.3, 0.5), None, &mesh);
+    let every = vec![point.clone(), spot.clone(), sun.clone(), sky.clone()];
+    for (name, lights, area) in [
+        ("point light alone", vec![point.clone()], false),
+        ("spot light and area light", vec![spot], true),
+        ("sun alone", vec![sun], false),
+        ("sky and area light", vec![sky], true),
+        ("every kind", every, true),
+    ] {
+        let scene = cornell_box_lit_by(lights, area);
+        assert_lanes_change_nothing(name, &scene, &EVERY_ALGORITHM, DEFAULT);
+    }
+    let limited = Options {
+        max_depth: Some(3),
+        connections: 2,
+        ..DEFAULT
+    };
+    let connecting = [None, Some(Algorithm::Bpt), Some(Algorithm::Vcm)];
+    let scene = cornell_box_lit_by(vec![point], true);
+    assert_lanes_change_nothing("point light, limited", &scene, &connecting, limited);
 }

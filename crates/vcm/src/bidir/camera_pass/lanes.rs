@@ -92,7 +92,7 @@ fn shade(
     let factors = MisFactors::lanes(|lane| &ctx(lane).factors);
     mis.arrive(Some(t * t), vertex.cos_geometric_out());
     let sample = light_samples(
-        (&vertex, &light),
+        (scene, &vertex, &light),
         throughput,
         (pair(1), true),
         |illumination, eval, light_pdf_w| {
@@ -101,7 +101,8 @@ fn shade(
                 emission_pdf_w: illumination.emission_pdf_w * light.pick_pmf,
                 cos_at_light: illumination.cos_at_light,
                 cos_at_receiver: vertex.cos_geometric(illumination.direction),
-                bsdf_fwd_pdf_w: eval.pdf,
+                // No BSDF sample hits a delta light.
+                bsdf_fwd_pdf_w: illumination.delta.select(F32s::splat(0.0), eval.pdf),
                 bsdf_rev_pdf_w: eval.pdf_rev,
             };
             light_sample_weight(&mis, &pdfs, &factors)
@@ -238,6 +239,7 @@ fn connections(
         queued: camera_ok & Mask::from_bools(light_ok) & light.f_cos.is_nonzero(),
         origin: vertex.spawn(direction),
         target,
+        distant: Mask::none(),
         contribution: throughput
             .mul(light_throughput)
             .mul(camera.f_cos)

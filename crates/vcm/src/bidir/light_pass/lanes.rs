@@ -13,7 +13,7 @@ use crate::lambert::continuation::Continuations;
 use crate::lambert::shadow_rays::ShadowLanes;
 use crate::lambert::surface::Vertex;
 use crate::lambert::{Arrivals, LambertLanes, lane_of, start_vertices};
-use crate::lanes::{F32s, LANES, Vec3s};
+use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::light_vertex_cache::LightVertex;
 use crate::surface_hit::Hit;
 use crate::vertex_numbers::{Draw, LAMBERT_LIGHT_DRAWS, LIGHT};
@@ -146,6 +146,7 @@ fn camera_connections(
             queued: vertex.alive & eval.valid & eval.f_cos.is_nonzero(),
             origin: vertex.spawn(direction),
             target: Vec3s::splat(camera.position),
+            distant: Mask::none(),
             contribution: throughput
                 .mul(eval.f_cos)
                 .scale(weight * camera_pdf_w / (distance_sq * factors.light_paths)),
