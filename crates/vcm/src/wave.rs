@@ -73,8 +73,13 @@ pub(crate) enum Ahead {
     Second,
 }
 
-/// Vertices shaded several at a time in SIMD lanes, instead of one by one.
-pub(crate) trait LaneShading<P>: Sync {
+/// Vertices shaded several at a time in SIMD lanes, instead of one by one; `T` is what the
+/// vertices shaded alone prepare ahead ([`shade_in_parallel`]).
+pub(crate) trait LaneShading<P, T>: Sync {
+    /// Whether the vertices it takes are prepared ahead as those shaded alone are (`prepare`
+    /// and the look-ahead of [`shade_in_parallel`]), for what they read far away in memory.
+    const PREPARED: bool = false;
+
     /// Whether the vertex `path` reached at `hit` is shaded in lanes.
     fn takes(&self, path: &P, hit: Hit) -> bool;
 
@@ -85,21 +90,9 @@ pub(crate) trait LaneShading<P>: Sync {
 
     /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`] of
     /// them, each taken by [`LaneShading::takes`]), whose samplers are where the last
-    /// vertex left them.
-    fn shade(&self, paths: &mut [P], group: &[(usize, Hit)]);
-}
-
-/// Takes no vertex: every path is shaded on its own.
-pub(crate) struct NoLanes;
-
-impl<P> LaneShading<P> for NoLanes {
-    fn takes(&self, _: &P, _: Hit) -> bool {
-        false
-    }
-
-    fn shade(&self, _: &mut [P], group: &[(usize, Hit)]) {
-        debug_assert!(group.is_empty(), "no vertex was taken");
-    }
+    /// vertex left them. Where [`LaneShading::PREPARED`], `prepared` holds what was
+    /// prepared for each of them, in the same order; else it is empty.
+    fn shade(&self, paths: &mut [P], group: &[(usize, Hit)], prepared: &[(usize, T)]);
 }
 
 /// A chunk's lists between its steps, kept from chunk to chunk by each rayon job: as arrays
@@ -115,6 +108,9 @@ struct ChunkLists<T> {
     prepared: Vec<(usize, T)>,
     /// (index in the chunk, hit) of the paths shaded in lanes.
     lane_group: Vec<(usize, Hit)>,
+    /// What `prepare` computed for each of `lane_group`, where the lanes ask for it
+    /// ([`LaneShading::PREPARED`]).
+    lane_prepared: Vec<(usize, T)>,
 }
 
 /// How one path of a chunk is shaded.
@@ -132,6 +128,7 @@ impl<T> ChunkLists<T> {
             kinds: Vec::with_capacity(SHADE_CHUNK),
             prepared: Vec::with_capacity(SHADE_CHUNK),
             lane_group: Vec::with_capacity(SHADE_CHUNK),
+            lane_prepared: Vec::new(),
         }
     }
 }
@@ -151,13 +148,15 @@ impl<T> ChunkLists<T> {
 ///
 /// The vertices `lanes` takes are shaded by it instead, [`LANES`] at a time, once the
 /// others of the chunk are done; it moves their samplers and computes their numbers itself.
+/// Where it asks for them ([`LaneShading::PREPARED`]), they are prepared and looked ahead for
+/// too, after the others.
 ///
 /// Once `stop` is raised no further chunk is shaded: the pass is being dropped.
-pub(crate) fn shade_in_parallel<P: Send, T: Send>(
+pub(crate) fn shade_in_parallel<P: Send, T: Send, L: LaneShading<P, T>>(
     paths: &mut [P],
     (hits, stop): (&HitBatch, &StopFlag),
     vertex_sampler: impl Fn(&mut P) -> &mut SobolSampler + Sync,
-    lanes: &impl LaneShading<P>,
+    lanes: &L,
     prepare: impl Fn(&mut P, Hit) -> T + Sync,
     ahead: Option<impl Fn(&P, &mut T, Ahead) + Sync>,
     shade: impl Fn(&mut P, Option<(Hit, &T)>) + Sync,
@@ -173,6 +172,7 @@ pub(crate) fn shade_in_parallel<P: Send, T: Send>(
                 kinds,
                 prepared,
                 lane_group,
+                lane_prepared,
             } = lists;
             kinds.clear();
             lane_group.clear();
@@ -192,19 +192,16 @@ pub(crate) fn shade_in_parallel<P: Send, T: Send>(
             );
             prepared.clear();
             prepared.extend(alone_hits(chunk, kinds).map(|(i, path, hit)| (i, prepare(path, hit))));
+            lane_prepared.clear();
+            if L::PREPARED {
+                let hits = lane_group
+                    .iter()
+                    .map(|&(i, hit)| (i, prepare(&mut chunk[i], hit)));
+                lane_prepared.extend(hits);
+            }
             if let Some(ahead) = &ahead {
-                // Entry k takes its first step, entry k − AHEAD_LAG (if any) its second.
-                for k in 0..prepared.len() + AHEAD_LAG {
-                    let steps = [
-                        (k, Ahead::First),
-                        (k.wrapping_sub(AHEAD_LAG), Ahead::Second),
-                    ];
-                    for (j, step) in steps {
-                        if let Some((i, prepared)) = prepared.get_mut(j) {
-                            ahead(&chunk[*i], prepared, step);
-                        }
-                    }
-                }
+                look_ahead(chunk, prepared, ahead);
+                look_ahead(chunk, lane_prepared, ahead);
             }
             let mut prepared = prepared.iter().map(|(_, prepared)| prepared);
             for (path, kind) in chunk.iter_mut().zip(kinds.iter()) {
@@ -213,11 +210,29 @@ pub(crate) fn shade_in_parallel<P: Send, T: Send>(
                     shade(path, ahead);
                 }
             }
+            let mut prepared = lane_prepared.chunks(LANES);
             for group in lane_group.chunks(LANES) {
-                lanes.shade(chunk, group);
+                lanes.shade(chunk, group, prepared.next().unwrap_or_default());
             }
         },
     );
+}
+
+/// Takes each of `prepared` (index in `chunk`, what was prepared) through the two [`Ahead`]
+/// steps, the second [`AHEAD_LAG`] entries behind the first.
+fn look_ahead<P, T>(chunk: &[P], prepared: &mut [(usize, T)], ahead: &impl Fn(&P, &mut T, Ahead)) {
+    // Entry k takes its first step, entry k − AHEAD_LAG (if any) its second.
+    for k in 0..prepared.len() + AHEAD_LAG {
+        let steps = [
+            (k, Ahead::First),
+            (k.wrapping_sub(AHEAD_LAG), Ahead::Second),
+        ];
+        for (j, step) in steps {
+            if let Some((i, prepared)) = prepared.get_mut(j) {
+                ahead(&chunk[*i], prepared, step);
+            }
+        }
+    }
 }
 
 /// (index in the chunk, path, hit) of the paths of `chunk` shaded alone at a hit.
@@ -235,6 +250,19 @@ fn alone_hits<'a, P>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Takes no vertex: every path is shaded on its own.
+    struct NoLanes;
+
+    impl<P, T> LaneShading<P, T> for NoLanes {
+        fn takes(&self, _: &P, _: Hit) -> bool {
+            false
+        }
+
+        fn shade(&self, _: &mut [P], group: &[(usize, Hit)], _: &[(usize, T)]) {
+            assert!(group.is_empty(), "no vertex was taken");
+        }
+    }
 
     #[test]
     fn paths_start_in_key_and_sample_order_in_one_go_and_in_parallel() {

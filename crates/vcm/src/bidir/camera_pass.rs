@@ -27,7 +27,7 @@ use crate::shadow::{LightSample, segment_to};
 use crate::surface_hit::{Hit, SurfaceHit};
 use crate::vertex_numbers::{CAMERA, Draw};
 use crate::walk::Walk;
-use crate::wave::{Ahead, NoLanes, fill_extension_rays, shade_in_parallel, start_paths};
+use crate::wave::{Ahead, fill_extension_rays, shade_in_parallel, start_paths};
 
 mod lanes;
 
@@ -171,7 +171,7 @@ impl Wavefront for CameraWavefront<'_> {
                 &mut self.paths,
                 (hits, iterations[0].frame.stop),
                 vertex_sampler,
-                &NoLanes,
+                &lanes::CameraLanes::new(iterations),
                 |path, hit| MergingHit::prepare(ctx(path), path, hit),
                 Some(|path: &_, hit: &mut MergingHit, step| hit.look_ahead(ctx(path), step)),
                 |path, hit| {

@@ -293,16 +293,16 @@ pub(crate) fn connection_weight<T: Real>(
 /// Weight of merging a camera vertex with a light vertex (eqs. 38–39): `camera_fwd_pdf_w` is
 /// the camera BSDF's pdf of the light vertex's incoming direction, `camera_rev_pdf_w` its pdf
 /// of the camera direction given that one.
-pub(crate) fn merge_weight(
-    camera: &SubpathMis,
-    light: &SubpathMis,
-    camera_fwd_pdf_w: f32,
-    camera_rev_pdf_w: f32,
-    factors: &MisFactors,
-) -> f32 {
+pub(crate) fn merge_weight<T: Real>(
+    camera: &SubpathMis<T>,
+    light: &SubpathMis<T>,
+    camera_fwd_pdf_w: T,
+    camera_rev_pdf_w: T,
+    factors: &MisFactors<T>,
+) -> T {
     let w_light = light.d_vcm * factors.connect + light.d_vm * camera_fwd_pdf_w;
     let w_camera = camera.d_vcm * factors.connect + camera.d_vm * camera_rev_pdf_w;
-    1.0 / (w_light + 1.0 + w_camera)
+    T::splat(1.0) / (w_light + T::splat(1.0) + w_camera)
 }
 
 #[cfg(test)]

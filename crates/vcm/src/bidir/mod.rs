@@ -91,10 +91,10 @@ pub struct VcmSettings {
     /// Leave out what the scene does not need (see [`Integrator::decisions`]); `false` runs every
     /// part of the algorithm, for comparisons.
     pub prune: bool,
-    /// Shade light vertices, and camera vertices where nothing merges, on plain Lambertian
-    /// surfaces in SIMD lanes where the scene allows it (where no volume absorbs;
-    /// the same image bit for bit, faster); `false`: every vertex goes through the general
-    /// BSDF, for comparisons.
+    /// Shade light vertices, and the camera vertices of BPT and VCM, on plain Lambertian
+    /// surfaces in SIMD lanes where the scene allows it (where no volume absorbs; the same
+    /// image bit for bit, faster); `false`: every vertex goes through the general BSDF, for
+    /// comparisons.
     pub lambert_lanes: bool,
 }
 

@@ -25,7 +25,7 @@ pub(crate) struct LambertShading<'a> {
     pub max_segments: u32,
 }
 
-impl LaneShading<PathState> for LambertShading<'_> {
+impl<T> LaneShading<PathState, T> for LambertShading<'_> {
     /// A plain Lambert surface that does not emit, with room left for another segment.
     #[inline]
     fn takes(&self, path: &PathState, hit: Hit) -> bool {
@@ -34,7 +34,7 @@ impl LaneShading<PathState> for LambertShading<'_> {
         })
     }
 
-    fn shade(&self, paths: &mut [PathState], group: &[(usize, Hit)]) {
+    fn shade(&self, paths: &mut [PathState], group: &[(usize, Hit)], _: &[(usize, T)]) {
         if let Some(tables) = self.tables {
             shade(tables, self.scene, paths, group);
         }

@@ -1,16 +1,22 @@
-//! The camera vertex ([`super::shade`]) on plain Lambert surfaces where nothing merges, in
-//! lanes ([`crate::lambert`]): the light sample and the connections to cached light
-//! vertices, each weighted by VCM's MIS ([`crate::bidir::mis`]), and the continuation with
-//! the MIS quantities' update and Russian roulette.
+//! The camera vertex ([`super::shade`]) on plain Lambert surfaces, in lanes
+//! ([`crate::lambert`]): the light sample, the connections to cached light vertices and,
+//! where the algorithm merges, merging with the light vertices found around it, each
+//! weighted by VCM's MIS ([`crate::bidir::mis`]), and the continuation with the MIS
+//! quantities' update and Russian roulette.
+
+use std::f32::consts::PI;
 
 use glam::Vec3;
 use smallvec::SmallVec;
 use vcm_scene::bsdf::TransportMode;
 
-use super::{CachePicks, CameraContext, CameraPathState, pick_and_prefetch};
+use super::{
+    CachePicks, CameraContext, CameraPathState, MergingHit, Neighbours, pick_and_prefetch,
+};
 use crate::bidir::Algorithm;
 use crate::bidir::mis::{
-    ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight, light_sample_weight,
+    ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight,
+    light_sample_weight, merge_weight,
 };
 use crate::lambert::continuation::Continuations;
 use crate::lambert::light_sample::{LightInputs, light_samples};
@@ -31,27 +37,33 @@ pub(super) struct CameraLanes<'a> {
 
 impl<'a> CameraLanes<'a> {
     /// The lanes of a camera pass over `iterations`: where the scene allows them and the
-    /// algorithm connects without merging (light tracing's camera paths only find emission).
+    /// algorithm connects (BPT and VCM; light tracing's camera paths only find emission, and
+    /// BPM's and PPM's neither connect nor sample lights).
     pub fn new(iterations: &'a [CameraContext<'a>]) -> CameraLanes<'a> {
         let ctx = &iterations[0];
-        let plan = ctx.plan;
-        let algorithm = ctx.settings.algorithm;
-        let applies = plan.connects && !plan.merges && algorithm != Algorithm::LightTracing;
+        let applies = ctx.plan.connects && ctx.settings.algorithm != Algorithm::LightTracing;
         CameraLanes {
             iterations,
             tables: ctx.lanes.filter(|_| applies),
         }
     }
-}
 
-impl LaneShading<CameraPathState> for CameraLanes<'_> {
     /// A plain Lambert surface that does not emit, with room left for another segment.
     #[inline]
-    fn takes(&self, path: &CameraPathState, hit: Hit) -> bool {
+    fn takes_vertex(&self, path: &CameraPathState, hit: Hit) -> bool {
         self.tables.is_some_and(|tables| {
             let ctx = &self.iterations[path.sample as usize];
             path.walk.segments < ctx.max_segments() && tables.takes_surface(hit)
         })
+    }
+}
+
+/// Where nothing merges, the lanes' vertices are not prepared ahead: they pick the light
+/// vertices they connect to themselves.
+impl LaneShading<CameraPathState, SurfaceHit> for CameraLanes<'_> {
+    #[inline]
+    fn takes(&self, path: &CameraPathState, hit: Hit) -> bool {
+        self.takes_vertex(path, hit)
     }
 
     /// The light vertices the vertex connects to start loading (as [`super::prepare`]).
@@ -59,20 +71,49 @@ impl LaneShading<CameraPathState> for CameraLanes<'_> {
         pick_and_prefetch(&self.iterations[path.sample as usize], path);
     }
 
-    fn shade(&self, paths: &mut [CameraPathState], group: &[(usize, Hit)]) {
+    fn shade(
+        &self,
+        paths: &mut [CameraPathState],
+        group: &[(usize, Hit)],
+        _: &[(usize, SurfaceHit)],
+    ) {
         if let Some(tables) = self.tables {
-            shade(tables, self.iterations, paths, group);
+            shade(tables, self.iterations, (paths, group), None);
+        }
+    }
+}
+
+/// Where the algorithm merges, the lanes' vertices are prepared ahead as the others are
+/// ([`MergingHit`]: the connections' picks and the light vertices within the radius).
+impl LaneShading<CameraPathState, MergingHit> for CameraLanes<'_> {
+    const PREPARED: bool = true;
+
+    #[inline]
+    fn takes(&self, path: &CameraPathState, hit: Hit) -> bool {
+        self.takes_vertex(path, hit)
+    }
+
+    fn shade(
+        &self,
+        paths: &mut [CameraPathState],
+        group: &[(usize, Hit)],
+        prepared: &[(usize, MergingHit)],
+    ) {
+        if let Some(tables) = self.tables {
+            let found = |lane: usize| &prepared[lane.min(prepared.len() - 1)].1.found;
+            shade(tables, self.iterations, (paths, group), Some(&found));
         }
     }
 }
 
 /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most [`LANES`]), as
-/// [`super::shade`] would.
-fn shade(
+/// [`super::shade`] would; where merging, with the light vertices `found(lane)` found within
+/// the radius of each lane's vertex.
+fn shade<'f>(
     tables: &LambertLanes,
     iterations: &[CameraContext],
-    paths: &mut [CameraPathState],
-    group: &[(usize, Hit)],
+    (paths, group): (&mut [CameraPathState], &[(usize, Hit)]),
+    found: Option<&dyn Fn(usize) -> &'f Neighbours>,
 ) {
     let indices = const { CAMERA.indices(LAMBERT_CAMERA_DRAWS) };
     let numbers = start_vertices(paths, group, CAMERA.pairs(), indices);
@@ -129,6 +170,10 @@ fn shade(
             any.then(|| connections(lanes, &pick, (throughput, &mis, &factors)))
         })
         .collect();
+    let merged = found.map(|found| {
+        let segments = std::array::from_fn(|lane| paths[at(lane).0].walk.segments);
+        merges((&ctx, segments), (&vertex, &mis, &factors), found)
+    });
     let continuations = Continuations::sample(
         &vertex,
         throughput,
@@ -143,6 +188,9 @@ fn shade(
             path.alive = false;
             continue;
         }
+        if let Some(merged) = &merged {
+            path.radiance += throughput.lane(lane) * merged.lane(lane);
+        }
         // One push per ray: `extend` from an iterator did not inline.
         let rays = std::iter::once(&sample).chain(&connected);
         for ray in rays.filter_map(|shadows| shadows.ray(lane)) {
@@ -152,6 +200,49 @@ fn shade(
         let to_roulette = const { CAMERA.index(Draw::Roulette) };
         path.alive = continuations.go_on(lane, &mut path.walk, to_roulette, next_mis.lane(lane));
     }
+}
+
+/// Merging at each lane's vertex ([`super::merge`]) with the light vertices `found(lane)`
+/// within the radius, for camera paths of `segments` segments with MIS quantities `mis`: the
+/// MIS-weighted density estimate per unit throughput. Each lane adds its vertices' terms in
+/// their order, the k-th of every lane at once.
+#[inline(always)]
+fn merges<'c, 'f>(
+    (ctx, segments): (&impl Fn(usize) -> &'c CameraContext<'c>, [u32; LANES]),
+    (vertex, mis, factors): (&Vertex, &SubpathMis<F32s>, &MisFactors<F32s>),
+    found: &dyn Fn(usize) -> &'f Neighbours,
+) -> Vec3s {
+    let most = (0..LANES).map(|lane| found(lane).len()).max().unwrap_or(0);
+    let mut sum = Vec3s::default();
+    for k in 0..most {
+        let (mut wo, mut light_throughput) = (Vec3s::default(), Vec3s::default());
+        let mut light_mis = SubpathMis::<F32s>::default();
+        let mut merging = [false; LANES];
+        for (lane, merges) in merging.iter_mut().enumerate() {
+            let ctx = ctx(lane);
+            let Some(&i) = found(lane).get(k) else {
+                continue;
+            };
+            let light = &ctx.cache.vertices()[i as usize];
+            if segments[lane].saturating_add(light.path_length.get()) > ctx.max_segments() {
+                continue;
+            }
+            *merges = true;
+            wo.set(lane, light.wo);
+            light_throughput.set(lane, light.throughput);
+            light_mis.set(lane, &light.mis);
+        }
+        let eval = vertex.eval(wo, TransportMode::Radiance, true);
+        let weight = merge_weight(mis, &light_mis, eval.pdf, eval.pdf_rev, factors);
+        // The photon's flux weighs f·|ωi·n_s| / |ωi·n_g| (see `merge`).
+        let term = light_throughput
+            .mul(eval.f_cos)
+            .scale(weight / vertex.cos_geometric(wo));
+        let adds = Mask::from_bools(merging) & eval.valid & eval.f_cos.is_nonzero();
+        sum = adds.select3(sum + term, sum);
+    }
+    let radius = F32s::from_fn(|lane| ctx(lane).radius);
+    sum.div(F32s::splat(PI) * radius * radius * factors.light_paths)
 }
 
 /// The light vertex a lane connects to, with its iteration.

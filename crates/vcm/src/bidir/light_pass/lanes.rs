@@ -26,7 +26,7 @@ pub(super) struct LightLanes<'a> {
     pub splat: bool,
 }
 
-impl LaneShading<LightPathState> for LightLanes<'_> {
+impl<T> LaneShading<LightPathState, T> for LightLanes<'_> {
     /// A plain Lambert surface that does not emit.
     #[inline]
     fn takes(&self, _: &LightPathState, hit: Hit) -> bool {
@@ -34,7 +34,7 @@ impl LaneShading<LightPathState> for LightLanes<'_> {
         ctx.lanes.is_some_and(|tables| tables.takes_surface(hit))
     }
 
-    fn shade(&self, paths: &mut [LightPathState], group: &[(usize, Hit)]) {
+    fn shade(&self, paths: &mut [LightPathState], group: &[(usize, Hit)], _: &[(usize, T)]) {
         if let Some(tables) = self.iterations[0].lanes {
             shade(tables, self, paths, group);
         }
