@@ -222,7 +222,7 @@ struct Pilot {
 }
 
 /// Renders `PILOT_FRAMES` frames of `algorithm`, each into a film of its own; `None` if
-/// `stop` cut one short.
+/// `stop` cut one short, an error if the device it traces or shades on failed.
 fn pilot(
     algorithm: Algorithm,
     scene: &Arc<Scene>,
@@ -245,6 +245,9 @@ fn pilot(
     for sample in 0..PILOT_FRAMES {
         let mut film = Film::new(width, height);
         let frame = integrator.render_frame(&mut film, sample);
+        if let Some(failure) = integrator.failure() {
+            return Err(RenderError::DeviceFailed(failure));
+        }
         if frame.interrupted {
             return Ok(None);
         }

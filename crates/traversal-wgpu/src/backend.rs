@@ -286,7 +286,8 @@ impl Inner {
             parts: Vec::new(),
             submission: None,
         };
-        let Some(scene_groups) = &self.scene_groups else {
+        // A failed device traces nothing more: every ray misses.
+        let Some(scene_groups) = self.scene_groups.as_ref().filter(|_| !self.failed()) else {
             return launch;
         };
         let device = &self.gpu.device;
@@ -429,6 +430,11 @@ impl Inner {
         Some(Duration::from_nanos(times[times.len() / 2] as u64))
     }
 
+    /// Whether the device has failed ([`GpuDevice::failure`]).
+    fn failed(&self) -> bool {
+        self.gpu.failure().is_some()
+    }
+
     /// A slot with room for `rays`, from the pool if one is big enough.
     fn take_slot(&self, rays: u64) -> Slot {
         let mut pool = self.slots.lock().expect("slot pool poisoned");
@@ -450,33 +456,43 @@ impl Inner {
 
 impl Launch {
     /// Waits for the GPU and hands each part's output bytes to `read` with its first ray.
-    fn collect(mut self, mut read: impl FnMut(usize, &[u8])) {
+    /// Fails, saying why, where the device is lost or in error, or a mapping fails: the
+    /// device then keeps the failure ([`GpuDevice::fail`]) and traces nothing more.
+    fn collect(mut self, mut read: impl FnMut(usize, &[u8])) -> Result<(), ()> {
         let Some(submission) = self.submission.take() else {
-            return;
+            return Ok(());
         };
+        let gpu = &self.inner.gpu;
         let poll = wgpu::PollType::Wait {
             submission_index: Some(submission),
             timeout: None,
         };
-        self.inner
-            .gpu
-            .device
-            .poll(poll)
-            .expect("GPU device lost while traversing");
+        let polled = gpu.device.poll(poll);
+        let failed = |message: String| gpu.fail(format!("traversing on the GPU: {message}"));
+        if let Err(error) = polled {
+            failed(format!("the GPU device was lost: {error}"));
+        }
+        if self.inner.failed() {
+            return Err(());
+        }
         for part in std::mem::take(&mut self.parts) {
-            part.mapped
-                .recv()
-                .expect("wgpu dropped a buffer mapping callback")
-                .expect("mapping the traversal results failed");
+            let mapped = match part.mapped.recv() {
+                Ok(result) => result.map_err(|e| format!("mapping the results failed: {e}")),
+                Err(_) => Err("wgpu dropped a buffer mapping callback".to_owned()),
+            };
             let bytes = part.count as u64 * self.query.output_bytes();
-            {
-                let view = part
-                    .slot
-                    .readback
-                    .slice(..bytes)
+            let slice = part.slot.readback.slice(..bytes);
+            let view = mapped.and_then(|()| {
+                slice
                     .get_mapped_range()
-                    .expect("the readback buffer was just mapped");
-                read(part.first, &view);
+                    .map_err(|e| format!("reading the mapped results failed: {e}"))
+            });
+            match view {
+                Ok(view) => read(part.first, &view),
+                Err(message) => {
+                    failed(message);
+                    return Err(());
+                }
             }
             part.slot.readback.unmap();
             self.inner
@@ -485,16 +501,20 @@ impl Launch {
                 .expect("slot pool poisoned")
                 .push(part.slot);
         }
+        Ok(())
     }
 
-    /// Waits and writes one hit per ray into `hits`.
+    /// Waits and writes one hit per ray into `hits`: all misses where the device failed.
     fn into_hits(self, hits: &mut HitBatch) {
+        let misses = |hits: &mut HitBatch| {
+            hits.t.fill(f32::INFINITY);
+            hits.prim.fill(NO_HIT);
+            hits.u.fill(0.0);
+            hits.v.fill(0.0);
+        };
         hits.resize(self.rays);
-        hits.t.fill(f32::INFINITY);
-        hits.prim.fill(NO_HIT);
-        hits.u.fill(0.0);
-        hits.v.fill(0.0);
-        self.collect(|first, bytes| {
+        misses(hits);
+        let collected = self.collect(|first, bytes| {
             let records: &[[u32; 4]] = bytemuck::cast_slice(bytes);
             for (i, &[t, prim, u, v]) in records.iter().enumerate() {
                 if prim != NO_HIT {
@@ -506,18 +526,24 @@ impl Launch {
                 }
             }
         });
+        if collected.is_err() {
+            misses(hits);
+        }
     }
 
-    /// Waits and writes one flag per ray into `occluded`.
+    /// Waits and writes one flag per ray into `occluded`: none where the device failed.
     fn into_occluded(self, occluded: &mut Vec<bool>) {
         occluded.clear();
         occluded.resize(self.rays, false);
-        self.collect(|first, bytes| {
+        let collected = self.collect(|first, bytes| {
             let flags: &[u32] = bytemuck::cast_slice(bytes);
             for (out, &flag) in occluded[first..].iter_mut().zip(flags) {
                 *out = flag != 0;
             }
         });
+        if collected.is_err() {
+            occluded.fill(false);
+        }
     }
 }
 
@@ -591,6 +617,10 @@ impl Traversal for GpuBvh {
 
     fn submits_asynchronously(&self) -> bool {
         true
+    }
+
+    fn failure(&self) -> Option<String> {
+        self.inner.gpu.failure()
     }
 }
 

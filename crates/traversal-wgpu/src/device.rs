@@ -71,6 +71,12 @@ impl GpuDevice {
         self.failure.lock().ok().and_then(|failure| failure.clone())
     }
 
+    /// Records `message` as the device's failure, unless one is kept already (a read-back
+    /// that failed: what [`GpuDevice::failure`] then returns).
+    pub fn fail(&self, message: String) {
+        keep(&self.failure, message);
+    }
+
     /// A one-line description: adapter name, kind and backend.
     pub fn describe(&self) -> String {
         format!(
@@ -194,14 +200,16 @@ pub fn device_or_skip() -> Option<GpuDevice> {
     }
 }
 
+/// Keeps `message` in `failure` unless a failure is kept already.
+fn keep(failure: &Mutex<Option<String>>, message: String) {
+    if let Ok(mut failure) = failure.lock() {
+        failure.get_or_insert(message);
+    }
+}
+
 /// Keeps in `failure` the first error `device` reports outside a call's result and its loss,
 /// instead of wgpu's default, which panics.
 fn keep_failures(device: &wgpu::Device, failure: &Arc<Mutex<Option<String>>>) {
-    fn keep(failure: &Mutex<Option<String>>, message: String) {
-        if let Ok(mut failure) = failure.lock() {
-            failure.get_or_insert(message);
-        }
-    }
     let slot = Arc::clone(failure);
     device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
         keep(&slot, format!("the GPU reported an error: {error}"));

@@ -40,6 +40,14 @@ pub trait Traversal: Send + Sync {
     fn submits_asynchronously(&self) -> bool {
         false
     }
+
+    /// Why the backend cannot trace any more, if it cannot (a GPU device lost or in error):
+    /// from then on its queries report every ray as missing and unoccluded, so a caller drops
+    /// what it traced since it last checked. `None` (the default) for backends that cannot
+    /// fail.
+    fn failure(&self) -> Option<String> {
+        None
+    }
 }
 
 /// A query that owns its rays and its output buffer, so it can be in flight on another

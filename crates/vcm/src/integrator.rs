@@ -4,6 +4,7 @@ use std::time::Duration;
 
 use vcm_scene::Decision;
 use vcm_scheduler::{Scheduler, StopFlag};
+use vcm_traversal::Traversal;
 
 use crate::error::RenderError;
 use crate::film::Film;
@@ -196,4 +197,18 @@ pub fn check_image_size(width: u32, height: u32) -> Result<(), RenderError> {
         return Err(RenderError::ImageTooLarge { width, height });
     }
     Ok(())
+}
+
+/// Whether a frame traced with `traversal` must be dropped whole: a stop request cut it
+/// short, or the traversal failed during it (its rays since then all missed).
+pub(crate) fn frame_cut_short(stop: &StopFlag, traversal: &dyn Traversal) -> bool {
+    stop.is_raised() || traversal.failure().is_some()
+}
+
+/// [`Integrator::failure`] of an integrator that shades on the CPU and traces with
+/// `traversal`: the traversal's failure.
+pub(crate) fn traversal_failure(traversal: &dyn Traversal) -> Option<String> {
+    traversal
+        .failure()
+        .map(|failure| format!("ray traversal failed: {failure}"))
 }

@@ -13,7 +13,9 @@ use vcm_traversal::{HitBatch, RayBatch, Traversal};
 use crate::camera_rays::jittered_directions;
 use crate::error::RenderError;
 use crate::film::Film;
-use crate::integrator::{FrameStats, Integrator, Schedule, check_image_size};
+use crate::integrator::{
+    FrameStats, Integrator, Schedule, check_image_size, frame_cut_short, traversal_failure,
+};
 use crate::lambert::path_tracing::LambertShading;
 use crate::lambert::{LANES_PART, LANES_RUN, LambertLanes};
 use crate::memory::{MemoryEstimate, bytes_of, check_render};
@@ -176,7 +178,7 @@ impl Integrator for PathTracer {
             new_wavefront,
         );
         self.last_schedule_stats = stats;
-        if self.stop.is_raised() {
+        if frame_cut_short(&self.stop, self.traversal.as_ref()) {
             // Cut short: drop the frame whole, leaving the film as it was.
             return FrameStats::INTERRUPTED;
         }
@@ -238,6 +240,10 @@ impl Integrator for PathTracer {
 
     fn samples_per_frame(&self) -> u32 {
         self.schedule.samples_per_frame
+    }
+
+    fn failure(&self) -> Option<String> {
+        traversal_failure(self.traversal.as_ref())
     }
 }
 

@@ -1,10 +1,11 @@
 //! A device that fails mid-render: the frame that meets the failure is dropped whole and the
-//! path tracer says why, instead of panicking.
+//! integrator says why, instead of panicking.
 
 use std::sync::Arc;
 
-use vcm::{Film, Integrator, PtSettings};
+use vcm::{Algorithm, Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
 use vcm_gpu::GpuPathTracer;
+use vcm_traversal::Traversal;
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions};
 
 use crate::common::{gpu, scene};
@@ -30,4 +31,44 @@ fn a_lost_device_drops_the_frame_and_names_the_failure() {
     assert_eq!(film, before, "the failed frame added nothing");
     // No frame renders after it.
     assert!(tracer.render_frame(&mut film, 2).interrupted);
+}
+
+/// Shading on the CPU over the GPU's traversal: the traversal's failure drops the frame that
+/// met it whole and ends the render, for the path tracer and for VCM alike.
+#[test]
+fn a_lost_device_under_cpu_shading_drops_the_frame_and_names_the_failure() {
+    let Some(gpu) = gpu() else { return };
+    let scene = scene("cornell-specular");
+    let options = GpuBvhOptions::default();
+    let bvh = GpuBvh::new(Arc::clone(&gpu), &scene.triangle_corners(), options).unwrap();
+    let traversal: Arc<dyn Traversal> = Arc::new(bvh);
+    let path_tracer = PathTracer::new(
+        Arc::clone(&scene),
+        Arc::clone(&traversal),
+        PtSettings::new(8, 8),
+    );
+    let vcm = Vcm::new(
+        Arc::clone(&scene),
+        Arc::clone(&traversal),
+        VcmSettings::new(Algorithm::Vcm, 8, 8),
+    );
+    let mut integrators: [Box<dyn Integrator>; 2] =
+        [Box::new(path_tracer.unwrap()), Box::new(vcm.unwrap())];
+    let mut films = [Film::new(8, 8), Film::new(8, 8)];
+    for (integrator, film) in integrators.iter_mut().zip(&mut films) {
+        assert!(!integrator.render_frame(film, 0).interrupted);
+        assert_eq!(integrator.failure(), None);
+    }
+    let before = films.clone();
+    gpu.device.destroy();
+    for (k, (integrator, film)) in integrators.iter_mut().zip(&mut films).enumerate() {
+        assert!(
+            integrator.render_frame(film, 1).interrupted,
+            "integrator {k}"
+        );
+        let failure = integrator.failure().expect("the failure is kept");
+        assert!(failure.starts_with("ray traversal failed: "), "{failure}");
+        assert_eq!(*film, before[k], "the failed frame added nothing");
+        assert!(integrator.render_frame(film, 2).interrupted);
+    }
 }

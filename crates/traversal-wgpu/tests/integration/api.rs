@@ -138,3 +138,40 @@ fn kernels_are_timed_where_the_adapter_has_timestamps() {
     bvh.intersect(&rays, &mut after);
     assert_eq!(before, after);
 }
+
+/// A device lost mid-render fails the backend instead of panicking: the batch in flight and
+/// every later one report misses and no occlusion, and the backend says why.
+#[test]
+fn a_lost_device_fails_the_backend_instead_of_panicking() {
+    let Some(device) = gpu().map(Arc::new) else {
+        return;
+    };
+    let bvh = backend(&device, &uv_sphere(Vec3::ZERO, 1.0, 16, 32));
+    let mut rng = Rng::new(5, 0);
+    let rays = random_rays(&mut rng, Vec3::splat(-2.0), Vec3::splat(2.0), 2000);
+    let (mut hits, mut occluded) = (HitBatch::default(), Vec::new());
+    bvh.intersect(&rays, &mut hits);
+    bvh.occluded(&rays, &mut occluded);
+    assert!(hits.prim.iter().any(|&p| p != NO_HIT));
+    assert!(occluded.iter().any(|&o| o));
+    assert_eq!(bvh.failure(), None);
+    let in_flight = bvh.submit(TraversalJob::Intersect {
+        rays: rays.clone(),
+        hits: HitBatch::default(),
+    });
+    device.device.destroy();
+    let TraversalJob::Intersect { hits: lost, .. } = in_flight.wait() else {
+        unreachable!("the job submitted")
+    };
+    assert!(
+        lost.prim.iter().all(|&p| p == NO_HIT),
+        "the batch in flight missed"
+    );
+    assert_eq!(lost.len(), rays.len());
+    let failure = bvh.failure().expect("the failure is kept");
+    assert!(failure.contains("lost"), "{failure}");
+    bvh.intersect(&rays, &mut hits);
+    bvh.occluded(&rays, &mut occluded);
+    assert!(hits.prim.iter().all(|&p| p == NO_HIT) && hits.len() == rays.len());
+    assert!(occluded.iter().all(|&o| !o) && occluded.len() == rays.len());
+}

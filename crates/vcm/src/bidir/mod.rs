@@ -47,7 +47,7 @@ use crate::algorithm::Algorithm;
 use crate::error::RenderError;
 use crate::film::Film;
 use crate::hash_grid::HashGrid;
-use crate::integrator::{FrameStats, Integrator, Schedule};
+use crate::integrator::{FrameStats, Integrator, Schedule, frame_cut_short, traversal_failure};
 use crate::lambert::{LANES_PART, LANES_RUN, LambertLanes};
 use crate::light_vertex_cache::LightVertexCache;
 use light_pass::ResultBuffers;
@@ -325,8 +325,8 @@ impl Vcm {
         )
     }
 
-    /// Ends a frame that a stop request cut short, leaving the film as it was and keeping
-    /// the frame's buffers for the next.
+    /// Ends a frame that a stop request or a failed traversal cut short, leaving the film as
+    /// it was and keeping the frame's buffers for the next.
     fn drop_frame(
         &mut self,
         light: Vec<light_pass::LightResults>,
@@ -367,7 +367,7 @@ impl Integrator for Vcm {
         } else {
             Vec::new()
         };
-        if self.stop.is_raised() {
+        if frame_cut_short(&self.stop, self.traversal.as_ref()) {
             return self.drop_frame(light, caches, grids);
         }
         if plan.cache {
@@ -396,7 +396,7 @@ impl Integrator for Vcm {
             .map(|(frame, (cache, grid))| camera_pass::CameraContext { frame, cache, grid })
             .collect();
         let camera = camera_pass::run(&samples, scheduler, &mut stats);
-        if self.stop.is_raised() {
+        if frame_cut_short(&self.stop, self.traversal.as_ref()) {
             return self.drop_frame(light, caches, grids);
         }
         film.add_in_bands(|band| {
@@ -456,6 +456,10 @@ impl Integrator for Vcm {
 
     fn samples_per_frame(&self) -> u32 {
         self.schedule.samples_per_frame
+    }
+
+    fn failure(&self) -> Option<String> {
+        traversal_failure(self.traversal.as_ref())
     }
 }
 
