@@ -3,8 +3,8 @@
 use std::path::Path;
 
 use glam::Vec3;
-use vcm_rs::scene::Scene;
 use vcm_rs::scene::light::Light;
+use vcm_rs::scene::{Material, Scene};
 
 fn load(name: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -81,21 +81,24 @@ fn the_indirect_light_faces_the_ceiling_and_the_water_surface_faces_up() {
         assert!(area.normal.y > 0.99);
     }
     let water = load("cornell-water.gltf");
-    let water_material = water
-        .materials
-        .iter()
-        .position(|m| m.name == "water")
-        .unwrap() as u32;
-    let surface: Vec<usize> = (0..water.mesh.triangle_count())
-        .filter(|&t| water.mesh.material_ids[t] == water_material)
-        .collect();
+    let (water_material, surface) = triangles_of(&water, "water");
     assert!(!surface.is_empty());
     assert!(
         surface
             .iter()
             .all(|&t| water.mesh.geometric_normal(t).y > 0.5)
     );
-    assert_eq!(water.materials[water_material as usize].ior, 1.33);
+    assert_eq!(water_material.ior, 1.33);
+}
+
+/// The material named `name` of `scene` and the triangles that have it.
+fn triangles_of<'a>(scene: &'a Scene, name: &str) -> (&'a Material, Vec<usize>) {
+    let index = scene.materials.iter().position(|m| m.name == name);
+    let index = index.unwrap_or_else(|| panic!("no material {name}"));
+    let triangles = (0..scene.mesh.triangle_count())
+        .filter(|&t| scene.mesh.material_ids[t] as usize == index)
+        .collect();
+    (&scene.materials[index], triangles)
 }
 
 #[test]
@@ -112,14 +115,7 @@ fn the_point_light_scene_has_no_area_light_and_a_mirror_facing_down() {
     assert!(bulb.position.y > 0.0 && bulb.position.y < 0.99);
     assert!(bulb.position.abs().max_element() < 1.0);
     assert!(scene.camera.raster_of(512, 512, bulb.position).is_some());
-    let mirror = scene
-        .materials
-        .iter()
-        .position(|m| m.name == "mirror")
-        .unwrap() as u32;
-    let faces: Vec<usize> = (0..scene.mesh.triangle_count())
-        .filter(|&t| scene.mesh.material_ids[t] == mirror)
-        .collect();
+    let (_, faces) = triangles_of(&scene, "mirror");
     assert_eq!(faces.len(), 2);
     assert!(
         faces
