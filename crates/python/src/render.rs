@@ -12,7 +12,6 @@ use pyo3::types::PyDict;
 use vcm_rs::gpu::GpuRenderError;
 use vcm_rs::integrators::{Algorithm, choice};
 use vcm_rs::render_loop::{self, Budget, Frames};
-use vcm_rs::state::RenderSettings;
 use vcm_rs::state::RenderState as State;
 use vcm_rs::vcm::{Film, StopFlag};
 
@@ -105,11 +104,7 @@ pub fn render_state<'py>(
     };
     let (film, spp, algorithm) = run(py, scene, &request, first, budget)?;
     let path = scene.data.path.clone();
-    let settings = RenderSettings {
-        algorithm,
-        ..request.settings.clone()
-    };
-    let mut state = State::new(settings, scene.hash(), path);
+    let mut state = State::new(request.settings(algorithm), scene.hash(), path);
     state.film = film;
     state.samples.insert(first..first + spp);
     if let (None, Budget::Samples(spp)) = (samples, budget) {
@@ -147,8 +142,7 @@ fn run(
     first: u32,
     budget: Budget,
 ) -> PyResult<(Film, u32, Algorithm)> {
-    let settings = &request.settings;
-    let size = (settings.width, settings.height);
+    let size = request.size;
     let samples_left = budget.remaining(0, Duration::ZERO).samples;
     let built = py
         .detach(|| scene.traversal(request.backend))
@@ -160,7 +154,7 @@ fn run(
         Some(algorithm) => algorithm,
         // Pilots, stopped by Ctrl-C as a render is.
         None => {
-            let options = &settings.options;
+            let options = &request.options;
             let choose = || choice::choose(&scene.data, traversal, size, options, &stop);
             run_released(py, &stop, |_| Ok(()), choose)?
                 .map_err(vcm_error)?
@@ -173,7 +167,7 @@ fn run(
         &scene.data,
         &built,
         size,
-        &settings.options,
+        &request.options,
         samples_left,
     );
     let mut integrator = integrator.map_err(|error| match error {

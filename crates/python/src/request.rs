@@ -35,11 +35,14 @@ const DEFAULT_WIDTH: u32 = 512;
 
 /// A render as the keyword arguments ask for it.
 pub struct Request {
-    /// What the estimator computes (the image a seed gives depends on these only); with
-    /// `algo="auto"` its algorithm is path tracing until [`Request::algorithm`] chooses.
-    pub settings: RenderSettings,
     /// `algo`: one algorithm, or `auto`.
     pub algorithm: AlgorithmOption,
+    /// (width, height) of the image in pixels.
+    pub size: (u32, u32),
+    /// The file's camera rendered from (`None`: the default).
+    pub camera: Option<String>,
+    /// Seed, sampler, path length, connections, merge radius and its reduction, pruning.
+    pub options: IntegratorOptions,
     /// How the work is scheduled.
     pub schedule: ScheduleOptions,
     /// Where rays are traced.
@@ -129,16 +132,11 @@ impl Request {
                 }
             };
         }
-        let (width, height) = image_size(&scene.data, width, height);
         Ok(Request {
             algorithm,
-            settings: RenderSettings {
-                algorithm: algorithm.fixed().unwrap_or(Algorithm::Pt),
-                width,
-                height,
-                camera: scene.camera.clone(),
-                options,
-            },
+            size: image_size(&scene.data, width, height),
+            camera: scene.camera.clone(),
+            options,
             schedule,
             backend,
             shading,
@@ -146,6 +144,19 @@ impl Request {
             time,
             progress,
         })
+    }
+
+    /// What the estimator computes, rendered with `algorithm` (the request's, or the one
+    /// `algo="auto"` chose): the image a seed gives depends on these only.
+    pub fn settings(&self, algorithm: Algorithm) -> RenderSettings {
+        let (width, height) = self.size;
+        RenderSettings {
+            algorithm,
+            width,
+            height,
+            camera: self.camera.clone(),
+            options: self.options.clone(),
+        }
     }
 
     /// The budget `spp` or `time` give (16 samples per pixel when neither is given).
