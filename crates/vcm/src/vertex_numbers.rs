@@ -26,6 +26,11 @@ pub(crate) enum Draw {
     Roulette,
 }
 
+impl Draw {
+    /// How many kinds of decision there are.
+    pub const COUNT: usize = Draw::Roulette as usize + 1;
+}
+
 /// The decisions of one vertex, in the order of their pairs.
 pub(crate) struct Layout<const N: usize>([Draw; N]);
 

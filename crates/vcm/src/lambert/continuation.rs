@@ -5,9 +5,11 @@
 
 use vcm_scene::bsdf::TransportMode;
 
+use super::VertexNumbers;
 use super::surface::{Scattered, Vertex};
 use crate::bidir::mis::{MisFactors, SubpathMis};
 use crate::lanes::{F32s, Vec3s};
+use crate::vertex_numbers::Draw;
 use crate::walk::Walk;
 
 /// The sampled next segments of eight walks, before Russian roulette.
@@ -20,25 +22,28 @@ pub(crate) struct Continuations {
     origin: Vec3s,
     /// Roulette's numbers, computed ahead; a walk takes its own only where it plays.
     roulette: F32s,
+    /// The index of roulette's pair in the vertices' layout.
+    to_roulette: u32,
 }
 
 impl Continuations {
     /// Samples the Lambert lobes at `vertex` in `mode` (`reverse`: with the reverse pdf)
-    /// with the direction numbers `direction`, for walks with throughput `throughput` and
-    /// roulette's numbers `roulette`.
+    /// with the direction numbers of `numbers`, for walks with throughput `throughput`
+    /// (roulette's numbers taken from `numbers` too).
     #[inline(always)]
     pub fn sample(
         vertex: &Vertex,
         throughput: Vec3s,
-        (direction, roulette): ((F32s, F32s), F32s),
+        numbers: &VertexNumbers,
         (mode, reverse): (TransportMode, bool),
     ) -> Continuations {
-        let next = vertex.sample(direction, mode, reverse);
+        let next = vertex.sample(numbers.pair(Draw::Direction), mode, reverse);
         Continuations {
             // β ← β · f·|cos| / p
             throughput: throughput.mul(next.eval.f_cos.div(next.eval.pdf)),
             origin: vertex.spawn(next.wi),
-            roulette,
+            roulette: numbers.first(Draw::Roulette),
+            to_roulette: numbers.to_roulette,
             next,
         }
     }
@@ -58,13 +63,13 @@ impl Continuations {
         next_mis
     }
 
-    /// Continues lane `lane`'s walk: moves its numbers `to_roulette` ahead (past those its
+    /// Continues lane `lane`'s walk: moves its numbers to roulette's pair (past those its
     /// vertex drew), and where the lane's sample is valid the walk remembers `mis`, plays
     /// Russian roulette and, if it survives, starts the next segment. Returns whether the
     /// walk goes on.
     #[inline]
-    pub fn go_on<M>(&self, lane: usize, walk: &mut Walk<M>, to_roulette: u32, mis: M) -> bool {
-        walk.rng.skip(to_roulette);
+    pub fn go_on<M>(&self, lane: usize, walk: &mut Walk<M>, mis: M) -> bool {
+        walk.rng.skip(self.to_roulette);
         if !self.next.valid.get(lane) {
             return false;
         }

@@ -26,9 +26,10 @@ use vcm_scene::Scene;
 use vcm_scene::light::Light;
 use vcm_scene::sampling::SobolSampler;
 
-use crate::lanes::{LANES, Mask, Vec3s};
+use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::ray_offset::barycentric_error;
 use crate::surface_hit::Hit;
+use crate::vertex_numbers::{Draw, Layout};
 #[cfg(doc)]
 use crate::walk::Walk;
 use crate::walk::Walker;
@@ -152,22 +153,52 @@ pub(crate) fn lane_of(group: &[(usize, Hit)], lane: usize) -> (usize, Hit) {
     group[lane.min(group.len() - 1)]
 }
 
-/// Starts the vertices `group` reached: moves each path's numbers to its vertex, `pairs`
-/// pairs of dimensions per vertex ([`Walk::start_vertex`]), and reads the pairs at
-/// `indices` of every lane's numbers ahead, all lanes at once.
+/// The numbers a lane group's vertices draw, read ahead ([`start_vertices`]).
+pub(crate) struct VertexNumbers {
+    /// Each decision's pair in every lane, by [`Draw`] (zeros for those not read).
+    pairs: [[[f32; LANES]; 2]; Draw::COUNT],
+    /// The index of Russian roulette's pair in the vertices' layout.
+    pub to_roulette: u32,
+}
+
+impl VertexNumbers {
+    /// The pair of `draw` in every lane (one the vertices read).
+    #[inline(always)]
+    pub fn pair(&self, draw: Draw) -> (F32s, F32s) {
+        let [first, second] = self.pairs[draw as usize];
+        (F32s(first), F32s(second))
+    }
+
+    /// The first number of `draw`'s pair in every lane.
+    #[inline(always)]
+    pub fn first(&self, draw: Draw) -> F32s {
+        self.pair(draw).0
+    }
+}
+
+/// Starts the vertices `group` reached, whose numbers follow `layout`: moves each path's
+/// numbers to its vertex ([`Walk::start_vertex`]) and reads the pairs of `draws` of every
+/// lane's numbers ahead, all lanes at once.
 #[inline(always)]
-pub(crate) fn start_vertices<P: Walker, const N: usize>(
-    paths: &mut [P],
-    group: &[(usize, Hit)],
-    pairs: u32,
-    indices: [u32; N],
-) -> [[[f32; LANES]; 2]; N] {
+pub(crate) fn start_vertices<P: Walker, const L: usize, const N: usize>(
+    (paths, group): (&mut [P], &[(usize, Hit)]),
+    layout: &Layout<L>,
+    draws: [Draw; N],
+) -> VertexNumbers {
     debug_assert!(!group.is_empty() && group.len() <= LANES);
     for &(i, _) in group {
-        paths[i].walk_mut().start_vertex(pairs);
+        paths[i].walk_mut().start_vertex(layout.pairs());
     }
     let samplers = std::array::from_fn(|lane| &paths[lane_of(group, lane).0].walk().rng);
-    SobolSampler::peek_lanes(samplers, indices)
+    let read = SobolSampler::peek_lanes(samplers, layout.indices(draws));
+    let mut pairs = [[[0.0; LANES]; 2]; Draw::COUNT];
+    for (draw, pair) in draws.into_iter().zip(read) {
+        pairs[draw as usize] = pair;
+    }
+    VertexNumbers {
+        pairs,
+        to_roulette: layout.index(Draw::Roulette),
+    }
 }
 
 /// Eight walks arriving at plain Lambert surfaces, as the lanes read them.

@@ -44,18 +44,17 @@ impl<T> LaneShading<PathState, T> for LambertShading<'_> {
 /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most
 /// [`LANES`](crate::lanes::LANES)), as [`crate::shade::shade`] would.
 fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &[(usize, Hit)]) {
-    let indices = const { PATH_TRACER.indices(LAMBERT_CAMERA_DRAWS) };
-    let numbers = start_vertices(paths, group, PATH_TRACER.pairs(), indices);
-    let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
+    let numbers = start_vertices((paths, group), &PATH_TRACER, LAMBERT_CAMERA_DRAWS);
+    let light_pick = numbers.first(Draw::LightPick);
     let mut light = LightInputs::default();
     let arrivals = Arrivals::gather((tables, scene), (paths, group), |lane, _, _| {
-        light.gather(tables, scene, lane, numbers[0][0][lane])
+        light.gather(tables, scene, lane, light_pick.0[lane])
     });
     let Arrivals { vertex, throughput } = arrivals;
     let shadows = light_samples(
         (scene, &vertex, &light),
         throughput,
-        (pair(1), false),
+        (numbers.pair(Draw::LightPoint), false),
         // Full weight for delta lights, which BSDF sampling cannot reach.
         |illumination, eval, light_pdf_w| {
             let weight = power_heuristic(1.0, light_pdf_w, 1.0, eval.pdf);
@@ -65,18 +64,16 @@ fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &
     let continuations = Continuations::sample(
         &vertex,
         throughput,
-        (pair(2), F32s(numbers[3][0])),
+        &numbers,
         (TransportMode::Radiance, false),
     );
     let pdf_w = continuations.next.eval.pdf;
     for (lane, &(i, _)) in group.iter().enumerate() {
         let path = &mut paths[i];
         path.shadow = shadows.ray(lane);
-        // Light pick, light point, lobe and direction.
-        let to_roulette = const { PATH_TRACER.index(Draw::Roulette) };
         let mis = SegmentOrigin::Bsdf {
             pdf_w: pdf_w.0[lane],
         };
-        path.alive = continuations.go_on(lane, &mut path.walk, to_roulette, mis);
+        path.alive = continuations.go_on(lane, &mut path.walk, mis);
     }
 }

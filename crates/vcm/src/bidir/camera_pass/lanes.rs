@@ -115,17 +115,16 @@ fn shade<'f>(
     (paths, group): (&mut [CameraPathState], &[(usize, Hit)]),
     found: Option<&dyn Fn(usize) -> &'f Neighbours>,
 ) {
-    let indices = const { CAMERA.indices(LAMBERT_CAMERA_DRAWS) };
-    let numbers = start_vertices(paths, group, CAMERA.pairs(), indices);
+    let numbers = start_vertices((paths, group), &CAMERA, LAMBERT_CAMERA_DRAWS);
     let at = |lane: usize| lane_of(group, lane);
     let ctx = |lane: usize| &iterations[paths[at(lane).0].sample as usize];
     let scene = iterations[0].scene;
-    let pair = |k: usize| (F32s(numbers[k][0]), F32s(numbers[k][1]));
+    let light_pick = numbers.first(Draw::LightPick);
     let mut light = LightInputs::default();
     let mut mis = SubpathMis::<F32s>::default();
     let mut t = F32s::default();
     let arrivals = Arrivals::gather((tables, scene), (paths, group), |lane, hit, path| {
-        light.gather(tables, scene, lane, numbers[0][0][lane]);
+        light.gather(tables, scene, lane, light_pick.0[lane]);
         mis.set(lane, &path.walk.mis);
         t.0[lane] = hit.t;
     });
@@ -135,7 +134,7 @@ fn shade<'f>(
     let sample = light_samples(
         (scene, &vertex, &light),
         throughput,
-        (pair(1), true),
+        (numbers.pair(Draw::LightPoint), true),
         |illumination, eval, light_pdf_w| {
             let pdfs = LightSamplePdfs {
                 direct_pdf_w: light_pdf_w,
@@ -177,7 +176,7 @@ fn shade<'f>(
     let continuations = Continuations::sample(
         &vertex,
         throughput,
-        (pair(2), F32s(numbers[3][0])),
+        &numbers,
         (TransportMode::Radiance, true),
     );
     let next_mis = continuations.scattered_mis(&vertex, &mis, &factors);
@@ -196,9 +195,7 @@ fn shade<'f>(
         for ray in rays.filter_map(|shadows| shadows.ray(lane)) {
             path.shadows.push(ray);
         }
-        // The picks' stream, then the light sample's two pairs and the continuation's two.
-        let to_roulette = const { CAMERA.index(Draw::Roulette) };
-        path.alive = continuations.go_on(lane, &mut path.walk, to_roulette, next_mis.lane(lane));
+        path.alive = continuations.go_on(lane, &mut path.walk, next_mis.lane(lane));
     }
 }
 

@@ -16,7 +16,7 @@ use crate::lambert::{Arrivals, LambertLanes, lane_of, start_vertices};
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::light_vertex_cache::LightVertex;
 use crate::surface_hit::Hit;
-use crate::vertex_numbers::{Draw, LAMBERT_LIGHT_DRAWS, LIGHT};
+use crate::vertex_numbers::{LAMBERT_LIGHT_DRAWS, LIGHT};
 use crate::wave::LaneShading;
 
 /// The light pass's vertices in lanes, where the scene allows them.
@@ -49,8 +49,7 @@ fn shade(
     paths: &mut [LightPathState],
     group: &[(usize, Hit)],
 ) {
-    let indices = const { LIGHT.indices(LAMBERT_LIGHT_DRAWS) };
-    let numbers = start_vertices(paths, group, LIGHT.pairs(), indices);
+    let numbers = start_vertices((paths, group), &LIGHT, LAMBERT_LIGHT_DRAWS);
     let at = |lane: usize| lane_of(group, lane);
     let samples: [usize; LANES] = std::array::from_fn(|lane| paths[at(lane).0].sample as usize);
     let ctx = |lane: usize| &lanes.iterations[samples[lane]];
@@ -73,10 +72,7 @@ fn shade(
     let continuations = Continuations::sample(
         &vertex,
         throughput,
-        (
-            (F32s(numbers[0][0]), F32s(numbers[0][1])),
-            F32s(numbers[1][0]),
-        ),
+        &numbers,
         (TransportMode::Importance, true),
     );
     let next_mis = continuations.scattered_mis(&vertex, &mis, &factors);
@@ -100,11 +96,9 @@ fn shade(
         path.vertex = Some(light_vertex);
         // A further vertex has segments + 1 segments, and using it takes one more.
         let continues = walk.segments.saturating_add(2) <= max_segments;
-        // The lobe and the direction.
-        let to_roulette = const { LIGHT.index(Draw::Roulette) };
         path.alive = continues
             && vertex.alive.get(lane)
-            && continuations.go_on(lane, walk, to_roulette, next_mis.lane(lane));
+            && continuations.go_on(lane, walk, next_mis.lane(lane));
     }
 }
 
