@@ -26,11 +26,6 @@ pub(crate) enum Draw {
     Roulette,
 }
 
-impl Draw {
-    /// How many kinds of decision there are.
-    pub const COUNT: usize = Draw::Roulette as usize + 1;
-}
-
 /// The decisions of one vertex, in the order of their pairs.
 pub(crate) struct Layout<const N: usize>([Draw; N]);
 
@@ -94,17 +89,50 @@ pub(crate) const EMISSION: Layout<3> = Layout([Draw::LightPick, Draw::LightPoint
 
 const _: () = assert!(EMISSION.pairs() == LIGHT.pairs());
 
+/// The pairs a vertex shaded in lanes reads ahead of its layout, found when the crate is
+/// compiled.
+pub(crate) struct LaneDraws<const N: usize> {
+    /// Pairs of the layout (how far a vertex moves its numbers).
+    pub pairs: u32,
+    /// The decisions read.
+    pub draws: [Draw; N],
+    /// The index of each of `draws` in the layout.
+    pub indices: [u32; N],
+    /// The index of Russian roulette's pair in the layout.
+    pub to_roulette: u32,
+}
+
+impl<const N: usize> LaneDraws<N> {
+    /// `draws` of `layout`.
+    const fn of<const L: usize>(layout: &Layout<L>, draws: [Draw; N]) -> LaneDraws<N> {
+        LaneDraws {
+            pairs: layout.pairs(),
+            draws,
+            indices: layout.indices(draws),
+            to_roulette: layout.index(Draw::Roulette),
+        }
+    }
+}
+
 /// What a plain Lambert vertex in lanes reads of a camera or path tracer layout: one lobe
 /// needs no choice.
-pub(crate) const LAMBERT_CAMERA_DRAWS: [Draw; 4] = [
+const LAMBERT_CAMERA_DRAWS: [Draw; 4] = [
     Draw::LightPick,
     Draw::LightPoint,
     Draw::Direction,
     Draw::Roulette,
 ];
 
-/// What a plain Lambert light vertex in lanes reads: one lobe needs no choice.
-pub(crate) const LAMBERT_LIGHT_DRAWS: [Draw; 2] = [Draw::Direction, Draw::Roulette];
+/// A path tracer's plain Lambert vertex in lanes.
+pub(crate) const PATH_TRACER_LANES: LaneDraws<4> =
+    LaneDraws::of(&PATH_TRACER, LAMBERT_CAMERA_DRAWS);
+
+/// A camera vertex of the VCM family on a plain Lambert surface, in lanes.
+pub(crate) const CAMERA_LANES: LaneDraws<4> = LaneDraws::of(&CAMERA, LAMBERT_CAMERA_DRAWS);
+
+/// A light vertex on a plain Lambert surface, in lanes: one lobe needs no choice.
+pub(crate) const LIGHT_LANES: LaneDraws<2> =
+    LaneDraws::of(&LIGHT, [Draw::Direction, Draw::Roulette]);
 
 #[cfg(test)]
 mod tests {
@@ -112,9 +140,9 @@ mod tests {
 
     #[test]
     fn indices_follow_the_layouts_order() {
-        assert_eq!(PATH_TRACER.indices(LAMBERT_CAMERA_DRAWS), [0, 1, 3, 4]);
-        assert_eq!(CAMERA.indices(LAMBERT_CAMERA_DRAWS), [1, 2, 4, 5]);
-        assert_eq!(LIGHT.indices(LAMBERT_LIGHT_DRAWS), [1, 2]);
-        assert_eq!((CAMERA.pairs(), LIGHT.index(Draw::Roulette)), (6, 2));
+        assert_eq!(PATH_TRACER_LANES.indices, [0, 1, 3, 4]);
+        assert_eq!(CAMERA_LANES.indices, [1, 2, 4, 5]);
+        assert_eq!(LIGHT_LANES.indices, [1, 2]);
+        assert_eq!((CAMERA_LANES.pairs, LIGHT_LANES.to_roulette), (6, 2));
     }
 }

@@ -31,10 +31,10 @@ impl Continuations {
     /// with the direction numbers of `numbers`, for walks with throughput `throughput`
     /// (roulette's numbers taken from `numbers` too).
     #[inline(always)]
-    pub fn sample(
+    pub fn sample<const N: usize>(
         vertex: &Vertex,
         throughput: Vec3s,
-        numbers: &VertexNumbers,
+        numbers: &VertexNumbers<N>,
         (mode, reverse): (TransportMode, bool),
     ) -> Continuations {
         let next = vertex.sample(numbers.pair(Draw::Direction), mode, reverse);

@@ -29,7 +29,7 @@ use vcm_scene::sampling::SobolSampler;
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::ray_offset::barycentric_error;
 use crate::surface_hit::Hit;
-use crate::vertex_numbers::{Draw, Layout};
+use crate::vertex_numbers::{Draw, LaneDraws};
 #[cfg(doc)]
 use crate::walk::Walk;
 use crate::walk::Walker;
@@ -154,18 +154,21 @@ pub(crate) fn lane_of(group: &[(usize, Hit)], lane: usize) -> (usize, Hit) {
 }
 
 /// The numbers a lane group's vertices draw, read ahead ([`start_vertices`]).
-pub(crate) struct VertexNumbers {
-    /// Each decision's pair in every lane, by [`Draw`] (zeros for those not read).
-    pairs: [[[f32; LANES]; 2]; Draw::COUNT],
+pub(crate) struct VertexNumbers<const N: usize> {
+    /// The decisions read, in the order of `pairs`.
+    draws: [Draw; N],
+    /// Each decision's pair in every lane.
+    pairs: [[[f32; LANES]; 2]; N],
     /// The index of Russian roulette's pair in the vertices' layout.
     pub to_roulette: u32,
 }
 
-impl VertexNumbers {
+impl<const N: usize> VertexNumbers<N> {
     /// The pair of `draw` in every lane (one the vertices read).
     #[inline(always)]
     pub fn pair(&self, draw: Draw) -> (F32s, F32s) {
-        let [first, second] = self.pairs[draw as usize];
+        let k = self.draws.iter().position(|&d| d == draw);
+        let [first, second] = self.pairs[k.expect("a decision the vertices read")];
         (F32s(first), F32s(second))
     }
 
@@ -176,28 +179,23 @@ impl VertexNumbers {
     }
 }
 
-/// Starts the vertices `group` reached, whose numbers follow `layout`: moves each path's
-/// numbers to its vertex ([`Walk::start_vertex`]) and reads the pairs of `draws` of every
+/// Starts the vertices `group` reached, which read `lane_draws` of their layout: moves each
+/// path's numbers to its vertex ([`Walk::start_vertex`]) and reads those pairs of every
 /// lane's numbers ahead, all lanes at once.
 #[inline(always)]
-pub(crate) fn start_vertices<P: Walker, const L: usize, const N: usize>(
+pub(crate) fn start_vertices<P: Walker, const N: usize>(
     (paths, group): (&mut [P], &[(usize, Hit)]),
-    layout: &Layout<L>,
-    draws: [Draw; N],
-) -> VertexNumbers {
+    lane_draws: &LaneDraws<N>,
+) -> VertexNumbers<N> {
     debug_assert!(!group.is_empty() && group.len() <= LANES);
     for &(i, _) in group {
-        paths[i].walk_mut().start_vertex(layout.pairs());
+        paths[i].walk_mut().start_vertex(lane_draws.pairs);
     }
     let samplers = std::array::from_fn(|lane| &paths[lane_of(group, lane).0].walk().rng);
-    let read = SobolSampler::peek_lanes(samplers, layout.indices(draws));
-    let mut pairs = [[[0.0; LANES]; 2]; Draw::COUNT];
-    for (draw, pair) in draws.into_iter().zip(read) {
-        pairs[draw as usize] = pair;
-    }
     VertexNumbers {
-        pairs,
-        to_roulette: layout.index(Draw::Roulette),
+        draws: lane_draws.draws,
+        pairs: SobolSampler::peek_lanes(samplers, lane_draws.indices),
+        to_roulette: lane_draws.to_roulette,
     }
 }
 

@@ -12,7 +12,7 @@ use super::{Arrivals, LambertLanes, start_vertices};
 use crate::lanes::F32s;
 use crate::path_state::{PathState, SegmentOrigin};
 use crate::surface_hit::Hit;
-use crate::vertex_numbers::{Draw, LAMBERT_CAMERA_DRAWS, PATH_TRACER};
+use crate::vertex_numbers::{Draw, PATH_TRACER_LANES};
 use crate::wave::LaneShading;
 
 /// [`LambertLanes`] at work in one pass of the path tracer.
@@ -44,7 +44,7 @@ impl<T> LaneShading<PathState, T> for LambertShading<'_> {
 /// Shades `paths[i]` at `hit` for each `(i, hit)` of `group` (at most
 /// [`LANES`](crate::lanes::LANES)), as [`crate::shade::shade`] would.
 fn shade(tables: &LambertLanes, scene: &Scene, paths: &mut [PathState], group: &[(usize, Hit)]) {
-    let numbers = start_vertices((paths, group), &PATH_TRACER, LAMBERT_CAMERA_DRAWS);
+    let numbers = start_vertices((paths, group), &PATH_TRACER_LANES);
     let light_pick = numbers.first(Draw::LightPick);
     let mut light = LightInputs::default();
     let arrivals = Arrivals::gather((tables, scene), (paths, group), |lane, _, _| {

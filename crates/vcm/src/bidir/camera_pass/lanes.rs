@@ -26,7 +26,7 @@ use crate::lambert::{Arrivals, LambertLanes, lane_of, start_vertices};
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::light_vertex_cache::LightVertex;
 use crate::surface_hit::{Hit, SurfaceHit};
-use crate::vertex_numbers::{CAMERA, Draw, LAMBERT_CAMERA_DRAWS};
+use crate::vertex_numbers::{CAMERA_LANES, Draw};
 use crate::wave::LaneShading;
 
 /// The camera pass's vertices in lanes, where the frame and the scene allow them.
@@ -115,7 +115,7 @@ fn shade<'f>(
     (paths, group): (&mut [CameraPathState], &[(usize, Hit)]),
     found: Option<&dyn Fn(usize) -> &'f Neighbours>,
 ) {
-    let numbers = start_vertices((paths, group), &CAMERA, LAMBERT_CAMERA_DRAWS);
+    let numbers = start_vertices((paths, group), &CAMERA_LANES);
     let at = |lane: usize| lane_of(group, lane);
     let ctx = |lane: usize| &iterations[paths[at(lane).0].sample as usize];
     let scene = iterations[0].scene;

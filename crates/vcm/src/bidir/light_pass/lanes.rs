@@ -16,7 +16,7 @@ use crate::lambert::{Arrivals, LambertLanes, lane_of, start_vertices};
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::light_vertex_cache::LightVertex;
 use crate::surface_hit::Hit;
-use crate::vertex_numbers::{LAMBERT_LIGHT_DRAWS, LIGHT};
+use crate::vertex_numbers::LIGHT_LANES;
 use crate::wave::LaneShading;
 
 /// The light pass's vertices in lanes, where the scene allows them.
@@ -49,7 +49,7 @@ fn shade(
     paths: &mut [LightPathState],
     group: &[(usize, Hit)],
 ) {
-    let numbers = start_vertices((paths, group), &LIGHT, LAMBERT_LIGHT_DRAWS);
+    let numbers = start_vertices((paths, group), &LIGHT_LANES);
     let at = |lane: usize| lane_of(group, lane);
     let samples: [usize; LANES] = std::array::from_fn(|lane| paths[at(lane).0].sample as usize);
     let ctx = |lane: usize| &lanes.iterations[samples[lane]];
