@@ -31,7 +31,9 @@ pub(crate) struct LightInputs {
     error: Vec3s,
     /// The picked light's index in the lanes that sample it one lane at a time (it is not a
     /// constant, uncut area light).
-    general: [Option<usize>; LANES],
+    general: [Option<u32>; LANES],
+    /// Whether some lane samples its light one lane at a time.
+    any_general: bool,
 }
 
 impl LightInputs {
@@ -44,7 +46,8 @@ impl LightInputs {
             .expect("the scene has a light to sample");
         self.pick_pmf.0[lane] = pmf;
         let Some(light) = &tables.lights[index] else {
-            self.general[lane] = Some(index);
+            self.general[lane] = Some(index as u32);
+            self.any_general = true;
             return;
         };
         for (c, &corner) in light.corners.iter().enumerate() {
@@ -124,7 +127,7 @@ fn illuminate(
     (ux, uy): (F32s, F32s),
 ) -> Illumination {
     let mut illumination = illuminate_area(light, vertex, (ux, uy));
-    if light.general.iter().all(Option::is_none) {
+    if !light.any_general {
         return illumination;
     }
     let mut lit = illumination.lit.bools();
@@ -133,7 +136,7 @@ fn illuminate(
         let Some(index) = *index else {
             continue;
         };
-        let light = &scene.lights[index];
+        let light = &scene.lights[index as usize];
         let receiver = vertex.position.lane(lane);
         let u = Vec2::new(ux.0[lane], uy.0[lane]);
         let Some(sample) = light.illuminate(&scene.textures, receiver, u) else {
