@@ -1,6 +1,7 @@
 //! `--algo auto`: the algorithm a scene is rendered with, chosen from short pilot renders.
 //!
-//! Each candidate — path tracing, BPT and, where the scene has specular or near-specular
+//! Each candidate — path tracing (unless it misses some of the scene's light,
+//! [`path_tracing_misses_light`]), BPT and, where the scene has specular or near-specular
 //! surfaces for merging to serve, VCM — renders [`PILOT_FRAMES`] frames of one sample per
 //! pixel of the image scaled down to at most [`PILOT_PIXELS`] pixels. Its *relative variance per sample* is
 //! estimated from the spread of its frames per pixel,
@@ -19,7 +20,7 @@
 //! times, measure the cost — so shards of one render made on different machines choose the
 //! same algorithm. An image of fewer than [`MIN_PILOTED_PIXELS`] is not piloted: at 16
 //! samples per pixel its render would be smaller than its pilots, and path tracing, the
-//! cheapest per sample, renders it.
+//! cheapest per sample, renders it (BPT where path tracing misses light).
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -122,10 +123,24 @@ impl Choice {
     }
 }
 
+/// Whether path tracing misses light that `scene` has: light from a point, spot or
+/// directional light that reaches a surface only through delta lobes (mirrors, smooth
+/// glass, smooth coats). A camera path finds it neither by a light sample (a delta lobe
+/// passes no light sample through) nor by a BSDF sample (which never hits a delta light),
+/// so path tracing converges to an image without those caustics, however long it renders;
+/// its variance says nothing of it. Light tracing's splats and merging find them.
+pub fn path_tracing_misses_light(scene: &Scene) -> bool {
+    let lights = &scene.features.lights;
+    let delta_lights = lights.point + lights.spot + lights.directional;
+    delta_lights > 0 && scene.features.materials.specular
+}
+
 /// Chooses the algorithm to render `scene` with at `size` with `options` by piloting the
-/// candidates (see the [module](self)). An image of fewer than [`MIN_PILOTED_PIXELS`] is
-/// not piloted: path tracing renders it (`candidates` is then empty). Once `stop` is raised
-/// the pilot in progress is dropped, and those finished before it choose.
+/// candidates (see the [module](self)): path tracing only where it misses no light
+/// ([`path_tracing_misses_light`]). An image of fewer than [`MIN_PILOTED_PIXELS`] is not
+/// piloted: path tracing renders it, or BPT where path tracing misses light (`candidates` is
+/// then empty). Once `stop` is raised the pilot in progress is dropped, and those finished
+/// before it choose.
 pub fn choose(
     scene: &Arc<Scene>,
     traversal: &Arc<dyn Traversal>,
@@ -134,8 +149,13 @@ pub fn choose(
     stop: &StopFlag,
 ) -> Result<Choice, RenderError> {
     let pilot_size = pilot_size(size);
+    let misses_light = path_tracing_misses_light(scene);
     let unpiloted = Choice {
-        algorithm: Algorithm::Pt,
+        algorithm: if misses_light {
+            Algorithm::Bpt
+        } else {
+            Algorithm::Pt
+        },
         candidates: Vec::new(),
         pilot_size,
     };
@@ -143,7 +163,11 @@ pub fn choose(
         return Ok(unpiloted);
     }
     let options = pilot_options(options, size.0, pilot_size.0);
-    let mut algorithms = vec![Algorithm::Pt, Algorithm::Bpt];
+    let mut algorithms = if misses_light {
+        vec![Algorithm::Bpt]
+    } else {
+        vec![Algorithm::Pt, Algorithm::Bpt]
+    };
     if options.no_prune || scene.features.materials.specular_or_near() {
         algorithms.push(Algorithm::Vcm);
     }

@@ -555,10 +555,17 @@ pub fn settle_algorithm(
     let choice =
         choice::choose(scene, traversal, size, options, stop).context("choosing the algorithm")?;
     let (width, height) = choice.pilot_size;
+    // Why path tracing is no candidate, where it is not.
+    let misses_light = if choice::path_tracing_misses_light(scene) {
+        "; path tracing would miss the light of point, spot or directional lights through \
+         mirrors or smooth glass"
+    } else {
+        ""
+    };
     if choice.candidates.is_empty() {
         tell!(
             "algorithm: {} (an image of fewer than {} pixels is not piloted: its pilots would \
-             take longer than its render)",
+             take longer than its render{misses_light})",
             choice.algorithm.name(),
             choice::MIN_PILOTED_PIXELS
         );
@@ -575,7 +582,7 @@ pub fn settle_algorithm(
             .iter()
             .map(|c| format!("{} {:.3}", c.algorithm.name(), c.inefficiency()));
         tell!(
-            "algorithm: {} ({pilots}; variance × cost: {})",
+            "algorithm: {} ({pilots}; variance × cost: {}{misses_light})",
             choice.algorithm.name(),
             each.collect::<Vec<_>>().join(", ")
         );
@@ -598,6 +605,9 @@ pub fn settle_algorithm(
             candidate.inefficiency(),
             if chosen { "  ← chosen" } else { "" }
         );
+    }
+    if let Some(why) = misses_light.strip_prefix("; ") {
+        say!("  pt   not piloted: {why}");
     }
     Ok(choice.algorithm)
 }
