@@ -1,7 +1,6 @@
 //! `--algo auto`: the algorithm a scene is rendered with, chosen from short pilot renders.
 //!
-//! Each candidate — path tracing (unless it misses some of the scene's light,
-//! [`path_tracing_misses_light`]), BPT and, where the scene has specular or near-specular
+//! Each candidate — path tracing, BPT and, where the scene has specular or near-specular
 //! surfaces for merging to serve, VCM — renders [`PILOT_FRAMES`] frames of one sample per
 //! pixel of the image scaled down to at most [`PILOT_PIXELS`] pixels. Its *relative variance per sample* is
 //! estimated from the spread of its frames per pixel,
@@ -20,7 +19,8 @@
 //! times, measure the cost — so shards of one render made on different machines choose the
 //! same algorithm. An image of fewer than [`MIN_PILOTED_PIXELS`] is not piloted: at 16
 //! samples per pixel its render would be smaller than its pilots, and path tracing, the
-//! cheapest per sample, renders it (BPT where path tracing misses light).
+//! cheapest per sample, renders it. Where only merging finds all of the scene's light
+//! ([`only_merging_finds_all_light`]), VCM renders without pilots.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -106,14 +106,26 @@ impl Estimate {
 /// The algorithm chosen for a scene and the pilots it was chosen from.
 #[derive(Clone, Debug)]
 pub struct Choice {
-    /// The candidate with the least [`Candidate::inefficiency`] (path tracing where nothing
-    /// was piloted).
+    /// The candidate with the least [`Candidate::inefficiency`], or the algorithm chosen
+    /// without pilots ([`Choice::unpiloted`]).
     pub algorithm: Algorithm,
-    /// Every candidate piloted, in the order they ran (none for an image of fewer than
-    /// [`MIN_PILOTED_PIXELS`]).
+    /// Every candidate piloted, in the order they ran (none where nothing was piloted).
     pub candidates: Vec<Candidate>,
     /// (width, height) of the pilot renders.
     pub pilot_size: (u32, u32),
+    /// Why nothing was piloted, where nothing was (a stop before the first pilot aside).
+    pub unpiloted: Option<Unpiloted>,
+}
+
+/// Why an algorithm is chosen without pilots.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unpiloted {
+    /// The image has fewer than [`MIN_PILOTED_PIXELS`]: its pilots would take longer than
+    /// its render. Path tracing renders it, the cheapest per sample.
+    SmallImage,
+    /// Only merging finds all of the scene's light ([`only_merging_finds_all_light`]): VCM
+    /// renders it, the one candidate that converges to the whole image.
+    OnlyMergingFindsAllLight,
 }
 
 impl Choice {
@@ -123,24 +135,26 @@ impl Choice {
     }
 }
 
-/// Whether path tracing misses light that `scene` has: light from a point, spot or
-/// directional light that reaches a surface only through delta lobes (mirrors, smooth
-/// glass, smooth coats). A camera path finds it neither by a light sample (a delta lobe
-/// passes no light sample through) nor by a BSDF sample (which never hits a delta light),
-/// so path tracing converges to an image without those caustics, however long it renders;
-/// its variance says nothing of it. Light tracing's splats and merging find them.
-pub fn path_tracing_misses_light(scene: &Scene) -> bool {
+/// Whether only merging finds all of `scene`'s light: where a point, spot or directional
+/// light shines through delta lobes (mirrors, smooth glass, smooth coats). A camera path
+/// finds such light neither by a light sample (no light sample passes a delta lobe) nor by
+/// a BSDF sample (which never hits a delta light), so path tracing misses every caustic of
+/// it; BPT's light paths find the caustics seen directly, but not those seen through a delta
+/// lobe in turn (a connection needs a non-delta vertex on each side). Both converge to an
+/// image without that light, however long they render, and their pilots' variance says
+/// nothing of it; VCM's merging finds it.
+pub fn only_merging_finds_all_light(scene: &Scene) -> bool {
     let lights = &scene.features.lights;
     let delta_lights = lights.point + lights.spot + lights.directional;
     delta_lights > 0 && scene.features.materials.specular
 }
 
 /// Chooses the algorithm to render `scene` with at `size` with `options` by piloting the
-/// candidates (see the [module](self)): path tracing only where it misses no light
-/// ([`path_tracing_misses_light`]). An image of fewer than [`MIN_PILOTED_PIXELS`] is not
-/// piloted: path tracing renders it, or BPT where path tracing misses light (`candidates` is
-/// then empty). Once `stop` is raised the pilot in progress is dropped, and those finished
-/// before it choose.
+/// candidates (see the [module](self)). Where only merging finds all of the scene's light
+/// ([`only_merging_finds_all_light`]) VCM is chosen without pilots; an image of fewer than
+/// [`MIN_PILOTED_PIXELS`] is not piloted either: path tracing renders it ([`Unpiloted`]).
+/// Once `stop` is raised the pilot in progress is dropped, and those finished before it
+/// choose.
 pub fn choose(
     scene: &Arc<Scene>,
     traversal: &Arc<dyn Traversal>,
@@ -149,25 +163,23 @@ pub fn choose(
     stop: &StopFlag,
 ) -> Result<Choice, RenderError> {
     let pilot_size = pilot_size(size);
-    let misses_light = path_tracing_misses_light(scene);
-    let unpiloted = Choice {
-        algorithm: if misses_light {
-            Algorithm::Bpt
-        } else {
-            Algorithm::Pt
+    let unpiloted = |why: Option<Unpiloted>| Choice {
+        algorithm: match why {
+            Some(Unpiloted::OnlyMergingFindsAllLight) => Algorithm::Vcm,
+            _ => Algorithm::Pt,
         },
         candidates: Vec::new(),
         pilot_size,
+        unpiloted: why,
     };
+    if only_merging_finds_all_light(scene) {
+        return Ok(unpiloted(Some(Unpiloted::OnlyMergingFindsAllLight)));
+    }
     if u64::from(size.0) * u64::from(size.1) < u64::from(MIN_PILOTED_PIXELS) {
-        return Ok(unpiloted);
+        return Ok(unpiloted(Some(Unpiloted::SmallImage)));
     }
     let options = pilot_options(options, size.0, pilot_size.0);
-    let mut algorithms = if misses_light {
-        vec![Algorithm::Bpt]
-    } else {
-        vec![Algorithm::Pt, Algorithm::Bpt]
-    };
+    let mut algorithms = vec![Algorithm::Pt, Algorithm::Bpt];
     if options.no_prune || scene.features.materials.specular_or_near() {
         algorithms.push(Algorithm::Vcm);
     }
@@ -180,7 +192,7 @@ pub fn choose(
     }
     algorithms.truncate(pilots.len());
     let Some(robust) = pilots.last() else {
-        return Ok(unpiloted);
+        return Ok(unpiloted(None));
     };
     let mean = smoothed(&robust.mean, pilot_size);
     let candidates: Vec<_> = algorithms
@@ -201,6 +213,7 @@ pub fn choose(
         algorithm: best.algorithm,
         pilot_size,
         candidates,
+        unpiloted: None,
     })
 }
 

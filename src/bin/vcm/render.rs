@@ -22,7 +22,8 @@ use vcm_rs::traversal::Traversal;
 use vcm_rs::{Backend, BuiltTraversal, Shading};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic, Watch};
-use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions, choice, image_size};
+use vcm_rs::integrators::choice::{self, Unpiloted};
+use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
 
@@ -555,20 +556,22 @@ pub fn settle_algorithm(
     let choice =
         choice::choose(scene, traversal, size, options, stop).context("choosing the algorithm")?;
     let (width, height) = choice.pilot_size;
-    // Why path tracing is no candidate, where it is not.
-    let misses_light = if choice::path_tracing_misses_light(scene) {
-        "; path tracing would miss the light of point, spot or directional lights through \
-         mirrors or smooth glass"
-    } else {
-        ""
-    };
-    if choice.candidates.is_empty() {
-        tell!(
+    match choice.unpiloted {
+        Some(Unpiloted::SmallImage) => tell!(
             "algorithm: {} (an image of fewer than {} pixels is not piloted: its pilots would \
-             take longer than its render{misses_light})",
+             take longer than its render)",
             choice.algorithm.name(),
             choice::MIN_PILOTED_PIXELS
-        );
+        ),
+        Some(Unpiloted::OnlyMergingFindsAllLight) => tell!(
+            "algorithm: {} (not piloted: a point, spot or directional light shines through \
+             mirrors or smooth glass, light that path tracing misses and BPT misses where it \
+             is seen through them again; only merging finds all of it)",
+            choice.algorithm.name()
+        ),
+        None => {}
+    }
+    if choice.candidates.is_empty() {
         return Ok(choice.algorithm);
     }
     let pilots = format!(
@@ -582,7 +585,7 @@ pub fn settle_algorithm(
             .iter()
             .map(|c| format!("{} {:.3}", c.algorithm.name(), c.inefficiency()));
         tell!(
-            "algorithm: {} ({pilots}; variance × cost: {}{misses_light})",
+            "algorithm: {} ({pilots}; variance × cost: {})",
             choice.algorithm.name(),
             each.collect::<Vec<_>>().join(", ")
         );
@@ -605,9 +608,6 @@ pub fn settle_algorithm(
             candidate.inefficiency(),
             if chosen { "  ← chosen" } else { "" }
         );
-    }
-    if let Some(why) = misses_light.strip_prefix("; ") {
-        say!("  pt   not piloted: {why}");
     }
     Ok(choice.algorithm)
 }
