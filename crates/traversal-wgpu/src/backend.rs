@@ -14,7 +14,7 @@ use vcm_traversal::{
 };
 
 use crate::alpha::AlphaMasks;
-use crate::device::GpuDevice;
+use crate::device::{GpuDevice, read_mapped};
 use crate::error::GpuError;
 use crate::layout::{NodeLayout, SceneLayout};
 use crate::shader::{ANY_HIT_ENTRY, CLOSEST_HIT_ENTRY, traversal_functions, traversal_module};
@@ -287,7 +287,8 @@ impl Inner {
             submission: None,
         };
         // A failed device traces nothing more: every ray misses.
-        let Some(scene_groups) = self.scene_groups.as_ref().filter(|_| !self.failed()) else {
+        let failed = self.gpu.failure().is_some();
+        let Some(scene_groups) = self.scene_groups.as_ref().filter(|_| !failed) else {
             return launch;
         };
         let device = &self.gpu.device;
@@ -430,11 +431,6 @@ impl Inner {
         Some(Duration::from_nanos(times[times.len() / 2] as u64))
     }
 
-    /// Whether the device has failed ([`GpuDevice::failure`]).
-    fn failed(&self) -> bool {
-        self.gpu.failure().is_some()
-    }
-
     /// A slot with room for `rays`, from the pool if one is big enough.
     fn take_slot(&self, rays: u64) -> Slot {
         let mut pool = self.slots.lock().expect("slot pool poisoned");
@@ -463,37 +459,12 @@ impl Launch {
             return Ok(());
         };
         let gpu = &self.inner.gpu;
-        let poll = wgpu::PollType::Wait {
-            submission_index: Some(submission),
-            timeout: None,
-        };
-        let polled = gpu.device.poll(poll);
         let failed = |message: String| gpu.fail(format!("traversing on the GPU: {message}"));
-        if let Err(error) = polled {
-            failed(format!("the GPU device was lost: {error}"));
-        }
-        if self.inner.failed() {
-            return Err(());
-        }
+        gpu.wait(submission).map_err(failed)?;
         for part in std::mem::take(&mut self.parts) {
-            let mapped = match part.mapped.recv() {
-                Ok(result) => result.map_err(|e| format!("mapping the results failed: {e}")),
-                Err(_) => Err("wgpu dropped a buffer mapping callback".to_owned()),
-            };
             let bytes = part.count as u64 * self.query.output_bytes();
             let slice = part.slot.readback.slice(..bytes);
-            let view = mapped.and_then(|()| {
-                slice
-                    .get_mapped_range()
-                    .map_err(|e| format!("reading the mapped results failed: {e}"))
-            });
-            match view {
-                Ok(view) => read(part.first, &view),
-                Err(message) => {
-                    failed(message);
-                    return Err(());
-                }
-            }
+            read_mapped(slice, &part.mapped, |view| read(part.first, view)).map_err(failed)?;
             part.slot.readback.unmap();
             self.inner
                 .slots

@@ -148,6 +148,15 @@ impl GpuDevice {
             // The receiver waits below.
             let _ = sender.send(result);
         });
+        self.wait(submission)?;
+        let result = read_mapped(slice, &mapped, read)?;
+        buffer.unmap();
+        Ok(result)
+    }
+
+    /// Waits until the commands of `submission` are done. Fails, saying why, where the
+    /// device is lost or reported an error since it opened ([`GpuDevice::failure`]).
+    pub fn wait(&self, submission: wgpu::SubmissionIndex) -> Result<(), String> {
         let poll = wgpu::PollType::Wait {
             submission_index: Some(submission),
             timeout: None,
@@ -155,21 +164,7 @@ impl GpuDevice {
         self.device
             .poll(poll)
             .map_err(|e| format!("the GPU device was lost: {e}"))?;
-        if let Some(failure) = self.failure() {
-            return Err(failure);
-        }
-        mapped
-            .recv()
-            .map_err(|_| "wgpu dropped a buffer mapping callback".to_owned())?
-            .map_err(|e| format!("mapping a read-back buffer failed: {e}"))?;
-        let result = {
-            let view = slice
-                .get_mapped_range()
-                .map_err(|e| format!("reading a mapped buffer failed: {e}"))?;
-            read(&view)
-        };
-        buffer.unmap();
-        Ok(result)
+        self.failure().map_or(Ok(()), Err)
     }
 
     /// The largest storage buffer binding the device accepts, in bytes.
@@ -179,6 +174,24 @@ impl GpuDevice {
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size)
     }
+}
+
+/// What `read` makes of the bytes of `slice`, once the mapping that `mapped` reports on (the
+/// channel its `map_async` callback sends to) is done, after [`GpuDevice::wait`]. Fails,
+/// saying why, where the mapping fails; the caller unmaps the buffer.
+pub(crate) fn read_mapped<T>(
+    slice: wgpu::BufferSlice<'_>,
+    mapped: &mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
+    read: impl FnOnce(&[u8]) -> T,
+) -> Result<T, String> {
+    mapped
+        .recv()
+        .map_err(|_| "wgpu dropped a buffer mapping callback".to_owned())?
+        .map_err(|e| format!("mapping a read-back buffer failed: {e}"))?;
+    let view = slice
+        .get_mapped_range()
+        .map_err(|e| format!("reading a mapped buffer failed: {e}"))?;
+    Ok(read(&view))
 }
 
 /// Set to `1` (as `.ci/run` does) to make a missing adapter fail the tests that need one
