@@ -32,8 +32,6 @@ pub(crate) struct LightInputs {
     /// The picked light's index in the lanes that sample it one lane at a time (it is not a
     /// constant, uncut area light).
     general: [Option<u32>; LANES],
-    /// Whether some lane samples its light one lane at a time.
-    any_general: bool,
 }
 
 impl LightInputs {
@@ -47,7 +45,6 @@ impl LightInputs {
         self.pick_pmf.0[lane] = pmf;
         let Some(light) = &tables.lights[index] else {
             self.general[lane] = Some(index as u32);
-            self.any_general = true;
             return;
         };
         for (c, &corner) in light.corners.iter().enumerate() {
@@ -127,7 +124,7 @@ fn illuminate(
     (ux, uy): (F32s, F32s),
 ) -> Illumination {
     let mut illumination = illuminate_area(light, vertex, (ux, uy));
-    if !light.any_general {
+    if light.general.iter().all(Option::is_none) {
         return illumination;
     }
     let mut lit = illumination.lit.bools();
