@@ -13,14 +13,10 @@ mod common;
 
 use std::time::{Duration, Instant};
 
-use common::{Scene, SurfacePoints, cornell_box, million_triangles, primary_rays};
+use common::{Scene, Workload, cornell_box, million_triangles};
 use criterion::{Criterion, Throughput};
-use vcm_scene::sampling::Rng;
 use vcm_traversal::{CpuBvh, CpuBvhOptions, HitBatch, RayBatch, Traversal};
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, NodeLayout};
-
-/// Image resolution of the primary rays (one ray per pixel).
-const RESOLUTION: u32 = 512;
 
 /// Timed dispatches per ray set for the kernel-only rates (their median counts).
 const KERNEL_REPEATS: u32 = 21;
@@ -33,29 +29,6 @@ const LARGE_BATCH: usize = 1 << 22;
 
 /// Builds of the large scene timed for the build statistics.
 const BUILD_REPEATS: usize = 3;
-
-/// The three ray sets traced against one scene.
-struct Workload {
-    primary: RayBatch,
-    bounce: RayBatch,
-    shadow: RayBatch,
-}
-
-impl Workload {
-    /// Primary rays from the scene's camera; bounce and shadow rays from their hit points.
-    fn new(scene: &Scene, bvh: &CpuBvh) -> Self {
-        let primary = primary_rays(&scene.camera, RESOLUTION);
-        let mut hits = HitBatch::default();
-        bvh.intersect(&primary, &mut hits);
-        let points = SurfacePoints::from_hits(&scene.triangles, &primary, &hits);
-        let mut rng = Rng::new(1, 0);
-        Self {
-            bounce: points.bounce_rays(&mut rng),
-            shadow: points.shadow_rays(&scene.emitters, &mut rng),
-            primary,
-        }
-    }
-}
 
 /// Builds `scene` `repeats` times, prints the fastest build and the memory per triangle, and
 /// returns the last BVH.

@@ -11,7 +11,7 @@ use vcm_scene::light::Light;
 use vcm_scene::sampling::{
     Rng, Sampler, sample_cosine_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
 };
-use vcm_traversal::{HitBatch, RayBatch};
+use vcm_traversal::{HitBatch, RayBatch, Traversal};
 
 /// Triangles, a camera framing them and the emitting triangles shadow rays aim at.
 pub struct Scene {
@@ -23,6 +23,36 @@ pub struct Scene {
     pub camera: Camera,
     /// Emitting triangles, all of the same area (so each is picked with equal probability).
     pub emitters: Vec<[Vec3; 3]>,
+}
+
+/// Image resolution of the primary rays (one ray per pixel).
+pub const RESOLUTION: u32 = 512;
+
+/// The three ray sets traced against one scene.
+pub struct Workload {
+    /// One camera ray per pixel, row by row: coherent.
+    pub primary: RayBatch,
+    /// Cosine-distributed rays from the primary hits: incoherent.
+    pub bounce: RayBatch,
+    /// Rays from the primary hits to points on the emitters, for occlusion.
+    pub shadow: RayBatch,
+}
+
+impl Workload {
+    /// Primary rays from the scene's camera at [`RESOLUTION`]²; bounce and shadow rays from
+    /// their hit points in `bvh`.
+    pub fn new(scene: &Scene, bvh: &dyn Traversal) -> Self {
+        let primary = primary_rays(&scene.camera, RESOLUTION);
+        let mut hits = HitBatch::default();
+        bvh.intersect(&primary, &mut hits);
+        let points = SurfacePoints::from_hits(&scene.triangles, &primary, &hits);
+        let mut rng = Rng::new(1, 0);
+        Self {
+            bounce: points.bounce_rays(&mut rng),
+            shadow: points.shadow_rays(&scene.emitters, &mut rng),
+            primary,
+        }
+    }
 }
 
 /// One ray through the centre of every pixel of a square `resolution²` image, row by row.
