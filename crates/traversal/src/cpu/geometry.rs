@@ -34,11 +34,15 @@ impl LeafGeometry {
             bvh2_to_cwbvh(&bvh2, leaf_size, true, false)
         };
         let ids = std::mem::take(&mut bvh.primitive_indices);
-        let triangles = LeafTriangles::new(ids.iter().map(|&id| triangles[id as usize]));
+        let leaf_order: Vec<[Vec3; 3]> = ids.iter().map(|&id| triangles[id as usize]).collect();
+        let nodes = wide_nodes(&bvh, &leaf_order);
+        let groups = nodes
+            .iter()
+            .map(|node| (node.first_triangle as usize, node.triangle_count as usize));
         Ok(Self {
             levels: cwbvh_levels(&bvh),
-            nodes: wide_nodes(&bvh, &triangles),
-            triangles,
+            triangles: LeafTriangles::new(&leaf_order, groups),
+            nodes,
             ids,
         })
     }
@@ -72,4 +76,20 @@ pub(crate) fn prefetch<T>(address: *const T) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = address;
+}
+
+/// A reproducible soup of `count` small triangles in the unit cube, for tests of the layout.
+#[cfg(test)]
+pub(crate) fn small_triangle_soup(count: usize, seed: u32) -> Vec<[Vec3; 3]> {
+    let mut state = seed;
+    let mut next = || {
+        state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (state >> 8) as f32 / (1 << 24) as f32
+    };
+    (0..count)
+        .map(|_| {
+            let corner = Vec3::new(next(), next(), next());
+            [0, 1, 2].map(|_| corner + 0.05 * Vec3::new(next(), next(), next()))
+        })
+        .collect()
 }

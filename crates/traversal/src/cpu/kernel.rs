@@ -17,7 +17,7 @@ use super::filter::HitFilter;
 use super::geometry::LeafGeometry;
 use super::node::{NodeHits, NodeTest, widen_up};
 use super::ray::PreparedRay;
-use super::triangle::{Candidate, TriangleTest};
+use super::triangle::{Candidate, LeafGroup, TriangleTest};
 use super::wide_node::WideNode;
 
 /// Rays traced in turn per thread on hierarchies larger than the caches.
@@ -28,8 +28,8 @@ pub(crate) const LANES_LARGE: usize = 8;
 enum Step {
     /// Test the ray against node `index`.
     Node(u32),
-    /// Test leaf triangles `first + k` for the set bits `k` of `mask`.
-    Leaves { first: usize, mask: u32 },
+    /// Test the leaf triangles of a node.
+    Leaves(LeafGroup),
     /// Nothing is left to visit.
     Done,
 }
@@ -44,8 +44,8 @@ pub(crate) struct Walk {
     /// Nodes still to visit after it, with the same bounds; in decreasing order of the bound
     /// within each node's children, so the nearest is on top.
     stack: Vec<(u32, f32)>,
-    /// Leaf triangles still to test: the first index and a bit per triangle.
-    leaves: (usize, u32),
+    /// Leaf triangles still to test (none: an empty mask).
+    leaves: LeafGroup,
 }
 
 impl Walk {
@@ -55,7 +55,7 @@ impl Walk {
         Self {
             only_child: None,
             stack: Vec::with_capacity(7 * geometry.levels + 1),
-            leaves: (0, 0),
+            leaves: LeafGroup::default(),
         }
     }
 
@@ -64,16 +64,15 @@ impl Walk {
     fn start(&mut self, geometry: &LeafGeometry) {
         self.stack.clear();
         self.only_child = (!geometry.nodes.is_empty()).then_some((0, f32::NEG_INFINITY));
-        self.leaves = (0, 0);
+        self.leaves.mask = 0;
     }
 
     /// The next step of a search that has nothing to find beyond `tmax`: the leaves of the
     /// node visited last, else the nearest node left that the ray may enter by `tmax`.
     #[inline(always)]
     fn next(&mut self, tmax: f32) -> Step {
-        if self.leaves.1 != 0 {
-            let (first, mask) = std::mem::take(&mut self.leaves);
-            return Step::Leaves { first, mask };
+        if self.leaves.mask != 0 {
+            return Step::Leaves(std::mem::take(&mut self.leaves));
         }
         let bound = widen_up(tmax);
         if let Some((node, entry)) = self.only_child.take()
@@ -92,7 +91,11 @@ impl Walk {
     /// Takes in what the ray overlaps among `node`'s children.
     #[inline(always)]
     fn visited(&mut self, node: &WideNode, hits: &NodeHits) {
-        self.leaves = (node.first_triangle as usize, hits.leaves);
+        self.leaves = LeafGroup {
+            first: node.first_triangle as usize,
+            count: node.triangle_count as usize,
+            mask: hits.leaves,
+        };
         let mut inner = hits.inner;
         if inner & inner.wrapping_sub(1) == 0 {
             let slot = inner.trailing_zeros() as usize;
@@ -121,11 +124,7 @@ impl Walk {
 fn prefetch(geometry: &LeafGeometry, step: Step) {
     match step {
         Step::Node(index) => geometry.prefetch_node(index as usize),
-        Step::Leaves { first, mask } => {
-            geometry
-                .triangles
-                .prefetch(first + mask.trailing_zeros() as usize);
-        }
+        Step::Leaves(group) => geometry.triangles.prefetch(&group),
         Step::Done => {}
     }
 }
@@ -158,15 +157,15 @@ pub(crate) type AnyHit = Found<bool>;
 
 /// How a search takes in a node's leaves.
 pub(crate) trait Search {
-    /// Tests the leaf triangles `first + k` for the set bits `k` of `mask` (`group`); returns
-    /// true when the search is over.
+    /// Tests the triangles of `group` its mask selects; returns true when the search is
+    /// over.
     fn leaves<N: TriangleTest, F: HitFilter>(
         &mut self,
         geometry: &LeafGeometry,
         node_test: N,
         filter: &F,
         ray: &PreparedRay,
-        group: (usize, u32),
+        group: LeafGroup,
     ) -> bool;
 }
 
@@ -191,10 +190,10 @@ impl Search for ClosestHit {
         node_test: N,
         filter: &F,
         ray: &PreparedRay,
-        (first, mask): (usize, u32),
+        group: LeafGroup,
     ) -> bool {
         let limit = self.limit();
-        node_test.candidates(&geometry.triangles, ray, first, mask, limit, |leaf, c| {
+        node_test.candidates(&geometry.triangles, ray, group, limit, |leaf, c| {
             // The limit only shrinks while the group's candidates are taken in turn.
             if c.t < self.limit()
                 && self.hit.is_none_or(|(best, _)| {
@@ -219,10 +218,10 @@ impl Search for AnyHit {
         node_test: N,
         filter: &F,
         ray: &PreparedRay,
-        (first, mask): (usize, u32),
+        group: LeafGroup,
     ) -> bool {
         let accept = |leaf, candidate| filter.accepts(leaf, &candidate);
-        self.hit = node_test.candidates(&geometry.triangles, ray, first, mask, self.tmax, accept);
+        self.hit = node_test.candidates(&geometry.triangles, ray, group, self.tmax, accept);
         self.hit
     }
 }
@@ -245,9 +244,7 @@ where
             walk.visited(node, &node_test.intersect(node, ray, search.tmax));
             false
         }
-        Step::Leaves { first, mask } => {
-            search.leaves(geometry, node_test, filter, ray, (first, mask))
-        }
+        Step::Leaves(group) => search.leaves(geometry, node_test, filter, ray, group),
         Step::Done => true,
     }
 }

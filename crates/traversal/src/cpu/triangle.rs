@@ -6,92 +6,111 @@
 //! 2D cross products of transformed vertices, so the two triangles sharing an edge compute
 //! the same value with opposite signs and no ray slips between them.
 //!
-//! The triangles of one node's leaves are consecutive in leaf order, so a node's hit leaves
-//! are tested together ([`TriangleTest`]): with AVX2, eight triangles per instruction, with
-//! exactly the operations of the one-triangle test (no fused multiply-adds), so both give
-//! bit-identical hits.
+//! The triangles of one node's leaves are consecutive in leaf order and stored together
+//! ([`LeafTriangles`]), so a node's hit leaves are tested together ([`TriangleTest`]): with
+//! AVX2, eight triangles per instruction, with exactly the operations of the one-triangle
+//! test (no fused multiply-adds), so both give bit-identical hits.
 
 use glam::{DVec3, Vec3, Vec3A, Vec3Swizzles};
-use obvhs::aabb::Aabb;
 
 use super::node::Portable;
 use super::ray::PreparedRay;
 
-/// Padding after each coordinate plane of [`LeafTriangles`], so that eight-wide loads
-/// starting at any triangle stay inside the plane.
-const PLANE_PADDING: usize = 8;
+/// Padding after the last group of [`LeafTriangles`], so that eight-wide loads starting at
+/// any of its triangles stay inside the buffer.
+const PADDING: usize = 8;
 
-/// All leaf triangles as nine coordinate planes: plane `3·v + a` holds coordinate `a` of
-/// vertex `v` of every triangle (36 bytes per triangle).
+/// Coordinates per triangle: three of each of its three vertices.
+const COORDS: usize = 9;
+
+/// The leaf triangles of one node: leaf-order triangles `first..first + count`, of which a
+/// search tests triangle `first + k` for the set bits `k` of `mask`.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct LeafGroup {
+    /// The group's first leaf-order triangle.
+    pub first: usize,
+    /// The group's triangle count.
+    pub count: usize,
+    /// A bit per triangle to test.
+    pub mask: u32,
+}
+
+/// All leaf triangles, each node's group in a block of its own: the block of the group
+/// `first..first + count` starts at coordinate `9·first` and holds nine coordinate planes of
+/// `count` floats, plane `3·v + a` holding coordinate `a` of vertex `v` of the group's
+/// triangles (36 bytes per triangle). A node's triangles thus lie in a few adjacent cache
+/// lines, which one leaf visit reads whole, and eight-wide loads take one coordinate of
+/// eight of them.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct LeafTriangles {
-    /// Plane length: the triangle count plus [`PLANE_PADDING`].
-    stride: usize,
+    /// The number of triangles.
+    len: usize,
     coords: Vec<f32>,
 }
 
 impl LeafTriangles {
-    /// The triangles in the given order (no triangles: no memory).
-    pub fn new(triangles: impl ExactSizeIterator<Item = [Vec3; 3]>) -> Self {
-        let stride = match triangles.len() {
-            0 => 0,
-            n => n + PLANE_PADDING,
-        };
-        let mut coords = vec![0.0; 9 * stride];
-        for (i, triangle) in triangles.enumerate() {
-            for (v, vertex) in triangle.iter().enumerate() {
-                for a in 0..3 {
-                    coords[(3 * v + a) * stride + i] = vertex[a];
+    /// Lays out `triangles` (in leaf order) in the blocks of `groups`, `(first, count)` per
+    /// node with leaves (no triangles: no memory).
+    ///
+    /// # Panics
+    /// If the groups do not cover the triangles exactly once, in order (obvhs's CWBVH gives
+    /// each node's leaves a range of its own, one after the other).
+    pub fn new(triangles: &[[Vec3; 3]], groups: impl Iterator<Item = (usize, usize)>) -> Self {
+        let len = triangles.len();
+        let mut coords = vec![0.0; COORDS * len + if len == 0 { 0 } else { PADDING }];
+        let mut groups: Vec<(usize, usize)> = groups.filter(|&(_, count)| count > 0).collect();
+        groups.sort_unstable();
+        let mut covered = 0;
+        for (first, count) in groups {
+            assert_eq!(
+                first, covered,
+                "leaf triangle groups overlap or leave a gap"
+            );
+            covered += count;
+            let block = &mut coords[COORDS * first..COORDS * (first + count)];
+            for (k, triangle) in triangles[first..first + count].iter().enumerate() {
+                for (v, vertex) in triangle.iter().enumerate() {
+                    for a in 0..3 {
+                        block[(3 * v + a) * count + k] = vertex[a];
+                    }
                 }
             }
         }
-        Self { stride, coords }
+        assert_eq!(covered, len, "leaf triangle groups leave triangles out");
+        Self { len, coords }
     }
 
     /// Number of triangles.
     pub fn len(&self) -> usize {
-        self.stride.saturating_sub(PLANE_PADDING)
+        self.len
     }
 
-    /// Bytes of the planes.
+    /// Bytes of the blocks.
     pub fn memory_bytes(&self) -> usize {
         size_of_val(self.coords.as_slice())
     }
 
-    /// Asks for the cache lines that hold triangle `i` in each plane.
+    /// Asks for the cache lines of the block of `group`.
     #[inline(always)]
-    pub fn prefetch(&self, i: usize) {
-        for plane in 0..9 {
-            super::geometry::prefetch(self.coords.as_ptr().wrapping_add(plane * self.stride + i));
+    pub fn prefetch(&self, group: &LeafGroup) {
+        let block = self.coords.as_ptr().wrapping_add(COORDS * group.first);
+        // Sixteen floats per 64-byte line.
+        for line in (0..COORDS * group.count).step_by(16) {
+            super::geometry::prefetch(block.wrapping_add(line));
         }
+        super::geometry::prefetch(block.wrapping_add(COORDS * group.count - 1));
     }
 
-    /// Where coordinate plane `3·vertex + axis` starts in `coords`.
+    /// Where coordinate `a` of vertex `v` of triangle `k` of `group` is in `coords`.
     #[inline(always)]
-    fn plane_start(&self, vertex: usize, axis: usize) -> usize {
-        (3 * vertex + axis) * self.stride
+    fn index(group: &LeafGroup, v: usize, a: usize, k: usize) -> usize {
+        COORDS * group.first + (3 * v + a) * group.count + k
     }
 
-    /// Coordinate plane `3·vertex + axis`, padding included.
+    /// Triangle `k` of `group`, transposed for the one-triangle test.
     #[inline(always)]
-    fn plane(&self, vertex: usize, axis: usize) -> &[f32] {
-        let start = self.plane_start(vertex, axis);
-        &self.coords[start..start + self.stride]
-    }
-
-    /// The bounding box of triangle `i`.
-    pub fn bounds(&self, i: usize) -> Aabb {
-        let axes = self.get(i).axes;
-        Aabb::new(
-            Vec3A::from(axes.map(|a| a.min_element())),
-            Vec3A::from(axes.map(|a| a.max_element())),
-        )
-    }
-
-    /// Triangle `i`, transposed for the one-triangle test.
-    #[inline(always)]
-    pub fn get(&self, i: usize) -> LeafTriangle {
-        let c = |vertex, axis| self.plane(vertex, axis)[i];
+    pub fn get(&self, group: &LeafGroup, k: usize) -> LeafTriangle {
+        let c = |v, a| self.coords[Self::index(group, v, a, k)];
         LeafTriangle {
             axes: [0, 1, 2].map(|a| Vec3A::new(c(0, a), c(1, a), c(2, a))),
         }
@@ -100,15 +119,14 @@ impl LeafTriangles {
 
 /// Tests a ray against several leaf triangles at once.
 pub(crate) trait TriangleTest: Copy {
-    /// Tests the ray against leaf triangles `first + k` for the set bits `k` of `mask`, and
-    /// calls `found(leaf, candidate)` for each one it hits with t in `[ray.tmin, limit)`, in
+    /// Tests the ray against the triangles of `group` its mask selects, and calls
+    /// `found(leaf, candidate)` for each one it hits with t in `[ray.tmin, limit)`, in
     /// increasing leaf order, until `found` returns true. Returns whether it did.
     fn candidates(
         self,
         triangles: &LeafTriangles,
         ray: &PreparedRay,
-        first: usize,
-        mask: u32,
+        group: LeafGroup,
         limit: f32,
         found: impl FnMut(usize, Candidate) -> bool,
     ) -> bool;
@@ -120,16 +138,16 @@ impl TriangleTest for Portable {
         self,
         triangles: &LeafTriangles,
         ray: &PreparedRay,
-        first: usize,
-        mut mask: u32,
+        group: LeafGroup,
         limit: f32,
         mut found: impl FnMut(usize, Candidate) -> bool,
     ) -> bool {
+        let mut mask = group.mask;
         while mask != 0 {
-            let leaf = first + mask.trailing_zeros() as usize;
+            let k = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            if let Some(candidate) = triangles.get(leaf).intersect(ray, limit)
-                && found(leaf, candidate)
+            if let Some(candidate) = triangles.get(&group, k).intersect(ray, limit)
+                && found(group.first + k, candidate)
             {
                 return true;
             }
@@ -213,7 +231,7 @@ fn edges_f64(x: Vec3A, y: Vec3A) -> Vec3A {
 mod avx2 {
     use std::arch::x86_64::*;
 
-    use super::{Candidate, LeafTriangles, TriangleTest};
+    use super::{Candidate, LeafGroup, LeafTriangles, TriangleTest};
     use crate::cpu::node::Avx2;
     use crate::cpu::ray::PreparedRay;
 
@@ -231,20 +249,20 @@ mod avx2 {
             self,
             triangles: &LeafTriangles,
             ray: &PreparedRay,
-            first: usize,
-            mut mask: u32,
+            group: LeafGroup,
             limit: f32,
             mut found: impl FnMut(usize, Candidate) -> bool,
         ) -> bool {
+            let mut mask = group.mask;
             while mask != 0 {
                 let offset = mask.trailing_zeros();
-                let start = first + offset as usize;
+                let start = offset as usize;
                 let lanes = (mask >> offset) & 0xff;
                 mask &= !(0xff << offset);
                 // SAFETY: `Avx2` values only exist when the CPU supports AVX2 and FMA; the
-                // block's loads stay inside the padded planes (`start` < triangle count).
+                // block's loads stay inside the padded buffer (`start` < the group's count).
                 let (block, accepted, degenerate) =
-                    unsafe { test_block(triangles, ray, start, limit) };
+                    unsafe { test_block(triangles, ray, (&group, start), limit) };
                 let mut hits = (accepted | degenerate) & lanes;
                 if hits == 0 {
                     continue;
@@ -261,10 +279,10 @@ mod avx2 {
                 while hits != 0 {
                     let lane = hits.trailing_zeros() as usize;
                     hits &= hits - 1;
-                    let leaf = start + lane;
+                    let leaf = group.first + start + lane;
                     // A zero edge function needs the double-precision sign of the scalar test.
                     let candidate = if degenerate & (1 << lane) != 0 {
-                        triangles.get(leaf).intersect(ray, limit)
+                        triangles.get(&group, start + lane).intersect(ray, limit)
                     } else {
                         Some(Candidate {
                             t: t[lane],
@@ -283,31 +301,32 @@ mod avx2 {
         }
     }
 
-    /// The watertight test of triangles `start..start + 8`, operation for operation as
+    /// The watertight test of triangles `start..start + 8` of `group`, operation for operation as
     /// [`LeafTriangle::intersect`](super::LeafTriangle::intersect): the block, the lanes
     /// that hit with t in `[ray.tmin, limit)`, and the lanes with a zero edge function
     /// (left to the scalar test).
     ///
     /// # Safety
-    /// The CPU must support AVX2, and `start` must be below the triangle count.
+    /// The CPU must support AVX2, and `start` must be below the group's count.
     #[inline(always)]
     unsafe fn test_block(
         triangles: &LeafTriangles,
         ray: &PreparedRay,
-        start: usize,
+        (group, start): (&LeafGroup, usize),
         limit: f32,
     ) -> (Block, u32, u32) {
-        // SAFETY: the caller guarantees AVX2; `start + 8` is within the padded plane.
+        // SAFETY: the caller guarantees AVX2; eight floats from any coordinate of the
+        // group's triangles stay within the padded buffer.
         unsafe {
             let [sx, sy, sz] = ray.shear.map(|s| _mm256_set1_ps(s));
             let [ox, oy, oz] = ray.origin_permuted.map(|o| _mm256_set1_ps(o));
             let [kx, ky, kz] = ray.axes;
-            // Unchecked loads from the block's first triangle: a checked slice of each
-            // plane per load put a bounds check on every load of the hot loop.
-            debug_assert!(start + 8 <= triangles.stride);
-            let block = triangles.coords.as_ptr().add(start);
+            // Unchecked loads: a checked slice per load put a bounds check on every load of
+            // the hot loop.
+            debug_assert!(LeafTriangles::index(group, 2, 2, start) + 8 <= triangles.coords.len());
+            let coords = triangles.coords.as_ptr();
             let load = |vertex: usize, axis: usize| {
-                _mm256_loadu_ps(block.add(triangles.plane_start(vertex, axis)))
+                _mm256_loadu_ps(coords.add(LeafTriangles::index(group, vertex, axis, start)))
             };
             let mut x = [_mm256_setzero_ps(); 3];
             let mut y = [_mm256_setzero_ps(); 3];
@@ -365,5 +384,44 @@ mod avx2 {
         // SAFETY: the caller guarantees AVX; `out` holds eight floats.
         unsafe { _mm256_storeu_ps(out.as_mut_ptr(), v) };
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3A;
+
+    use super::LeafGroup;
+    use crate::build::BuildPreset;
+    use crate::cpu::geometry::{LeafGeometry, small_triangle_soup};
+
+    #[test]
+    fn every_node_reads_back_its_own_leaf_triangles() {
+        let triangles = small_triangle_soup(3000, 11);
+        for preset in [
+            BuildPreset::Fastest,
+            BuildPreset::Fast,
+            BuildPreset::VerySlow,
+        ] {
+            let geometry = LeafGeometry::build(&triangles, preset).unwrap();
+            let mut read = 0;
+            for node in geometry.nodes.iter().filter(|node| node.triangle_count > 0) {
+                let group = LeafGroup {
+                    first: node.first_triangle as usize,
+                    count: node.triangle_count as usize,
+                    mask: 0,
+                };
+                for k in 0..group.count {
+                    let original = triangles[geometry.ids[group.first + k] as usize];
+                    let axes = geometry.triangles.get(&group, k).axes;
+                    for (a, axis) in axes.iter().enumerate() {
+                        let expected = Vec3A::from(original.map(|vertex| vertex[a]));
+                        assert_eq!(*axis, expected, "{preset:?}, leaf {}", group.first + k);
+                    }
+                }
+                read += group.count;
+            }
+            assert_eq!(read, geometry.triangles.len());
+        }
     }
 }

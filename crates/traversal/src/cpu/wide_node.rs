@@ -7,10 +7,9 @@
 //! child boxes as floats, ready for one 8-wide slab test, and each child's node index or leaf
 //! triangles directly.
 
+use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
-
-use super::triangle::LeafTriangles;
 
 /// Marks a [`WideNode::children`] entry as leaf triangles rather than a node index.
 pub(crate) const LEAF: u32 = 1 << 31;
@@ -28,6 +27,9 @@ pub(crate) struct WideNode {
     pub children: [u32; 8],
     /// The first leaf triangle of the node's leaf children.
     pub first_triangle: u32,
+    /// How many leaf triangles its leaf children hold, from `first_triangle` on: the size of
+    /// its block of [`LeafTriangles`](super::triangle::LeafTriangles).
+    pub triangle_count: u32,
 }
 
 impl WideNode {
@@ -43,6 +45,7 @@ impl WideNode {
         ],
         children: [0; 8],
         first_triangle: 0,
+        triangle_count: 0,
     };
 
     /// Fills `slot` with `bounds` holding `child`.
@@ -55,12 +58,13 @@ impl WideNode {
     }
 }
 
-/// The nodes of `bvh` (whose leaves index `triangles`) with exact child boxes: a leaf
-/// child's box bounds its triangles, an internal child's box bounds its own children.
+/// The nodes of `bvh` (whose leaves index `triangles`, in leaf order) with exact child
+/// boxes: a leaf child's box bounds its triangles, an internal child's box bounds its own
+/// children.
 ///
 /// # Panics
 /// If a node's children are stored before it (obvhs lays nodes out top-down).
-pub(crate) fn wide_nodes(bvh: &CwBvh, triangles: &LeafTriangles) -> Vec<WideNode> {
+pub(crate) fn wide_nodes(bvh: &CwBvh, triangles: &[[Vec3; 3]]) -> Vec<WideNode> {
     let mut nodes = vec![WideNode::EMPTY; bvh.nodes.len()];
     let mut bounds = vec![Aabb::empty(); bvh.nodes.len()];
     // Children come after their parent, so bottom-up is back to front.
@@ -73,8 +77,10 @@ pub(crate) fn wide_nodes(bvh: &CwBvh, triangles: &LeafTriangles) -> Vec<WideNode
             let (child, child_bounds) = if compressed.is_leaf(slot) {
                 let (first, count) = compressed.child_primitives(slot);
                 let offset = first - compressed.primitive_base_idx;
-                let leaves = (first..first + count).map(|leaf| triangles.bounds(leaf as usize));
+                let leaves =
+                    (first..first + count).map(|leaf| triangle_bounds(&triangles[leaf as usize]));
                 let bits = ((1 << count) - 1) << offset;
+                node.triangle_count = node.triangle_count.max(offset + count);
                 (LEAF | bits, leaves.fold(Aabb::empty(), |a, b| a.union(&b)))
             } else {
                 let child = compressed.child_node_index(slot);
@@ -92,6 +98,12 @@ pub(crate) fn wide_nodes(bvh: &CwBvh, triangles: &LeafTriangles) -> Vec<WideNode
     nodes
 }
 
+/// The bounding box of `triangle`.
+fn triangle_bounds(triangle: &[Vec3; 3]) -> Aabb {
+    let [a, b, c] = triangle.map(Vec3A::from);
+    Aabb::new(a.min(b).min(c), a.max(b).max(c))
+}
+
 #[cfg(test)]
 mod tests {
     use glam::Vec3;
@@ -99,7 +111,7 @@ mod tests {
 
     use super::{LEAF, WideNode};
     use crate::build::BuildPreset;
-    use crate::cpu::geometry::LeafGeometry;
+    use crate::cpu::geometry::{LeafGeometry, small_triangle_soup};
 
     /// The leaf triangles below `child`, an entry of `node.children`.
     fn leaves_below(nodes: &[WideNode], node: &WideNode, child: u32, out: &mut Vec<usize>) {
@@ -125,18 +137,7 @@ mod tests {
 
     #[test]
     fn every_child_box_is_the_exact_bound_of_the_triangles_below_it() {
-        // A reproducible soup of small triangles in the unit cube.
-        let mut state = 7_u32;
-        let mut next = || {
-            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (state >> 8) as f32 / (1 << 24) as f32
-        };
-        let triangles: Vec<[Vec3; 3]> = (0..2000)
-            .map(|_| {
-                let corner = Vec3::new(next(), next(), next());
-                [0, 1, 2].map(|_| corner + 0.05 * Vec3::new(next(), next(), next()))
-            })
-            .collect();
+        let triangles = small_triangle_soup(2000, 7);
         for preset in [BuildPreset::Fastest, BuildPreset::Fast] {
             let geometry = LeafGeometry::build(&triangles, preset).unwrap();
             let nodes = &geometry.nodes;
@@ -152,7 +153,9 @@ mod tests {
                     leaves_below(nodes, node, node.children[slot], &mut below);
                     let exact = below
                         .iter()
-                        .map(|&leaf| geometry.triangles.bounds(leaf))
+                        .map(|&leaf| {
+                            super::triangle_bounds(&triangles[geometry.ids[leaf] as usize])
+                        })
                         .fold(Aabb::empty(), |a, b| a.union(&b));
                     assert_eq!(bounds, exact);
                 }
