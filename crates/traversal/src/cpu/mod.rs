@@ -1,6 +1,6 @@
 //! The CPU backend: obvhs's 8-wide BVH (CWBVH) with exact single-precision child boxes,
-//! traversed nearest child first on rayon, one ray at a time per thread or, on hierarchies
-//! larger than the caches, several in turn, with a watertight triangle test.
+//! traversed nearest child first on rayon, one ray at a time per thread or several in turn
+//! (whichever measures faster), with a watertight triangle test.
 
 mod batch;
 mod filter;
@@ -8,6 +8,7 @@ mod geometry;
 mod kernel;
 mod node;
 mod options;
+mod pacing;
 mod ray;
 mod triangle;
 mod wide_node;
@@ -18,14 +19,21 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use self::batch::{Kernel, Simd};
+use self::batch::{Kernel, Pace, Simd};
 use self::filter::{HitFilter, Masked, Opaque};
 use self::geometry::LeafGeometry;
 pub use self::options::{CpuBvhOptions, CpuKernel, INTERLEAVE_ABOVE_BYTES, Interleave};
+use self::pacing::Pacing;
 use crate::alpha::AlphaTest;
 use crate::batch::{HitBatch, RayBatch};
 use crate::error::BuildError;
 use crate::traversal::Traversal;
+
+/// [`CpuBvh::pacing`]'s entry for closest-hit batches.
+const CLOSEST: usize = 0;
+
+/// [`CpuBvh::pacing`]'s entry for occlusion batches.
+const OCCLUSION: usize = 1;
 
 /// An alpha test with its answers to [`AlphaTest::is_masked`] cached in leaf order.
 struct AlphaState {
@@ -46,7 +54,12 @@ pub struct CpuBvh {
     alpha: Option<AlphaState>,
     simd: Simd,
     chunk_size: usize,
-    interleaved: bool,
+    interleave: Interleave,
+    /// Whether the traversal data outgrows [`INTERLEAVE_ABOVE_BYTES`].
+    large: bool,
+    /// What [`Interleave::Auto`] measured on a large hierarchy, for closest-hit and for
+    /// occlusion batches.
+    pacing: [Pacing; 2],
     build_time: Duration,
 }
 
@@ -58,12 +71,9 @@ impl CpuBvh {
     pub fn new(triangles: &[[Vec3; 3]], options: CpuBvhOptions) -> Result<Self, BuildError> {
         let start = Instant::now();
         let geometry = LeafGeometry::build(triangles, options.preset)?;
-        let interleaved = match options.interleave {
-            Interleave::Auto => geometry.memory_bytes() > INTERLEAVE_ABOVE_BYTES,
-            Interleave::Off => false,
-            Interleave::On => true,
-        };
         Ok(Self {
+            large: geometry.memory_bytes() > INTERLEAVE_ABOVE_BYTES,
+            pacing: [Pacing::new(), Pacing::new()],
             geometry,
             alpha: None,
             simd: match options.kernel {
@@ -71,7 +81,7 @@ impl CpuBvh {
                 CpuKernel::Portable => Simd::Portable,
             },
             chunk_size: options.chunk_size.max(1),
-            interleaved,
+            interleave: options.interleave,
             build_time: start.elapsed(),
         })
     }
@@ -107,22 +117,29 @@ impl CpuBvh {
         self.geometry.memory_bytes()
     }
 
-    fn kernel<F: HitFilter>(&self, filter: F) -> Kernel<'_, F> {
+    /// The kernel for a closest-hit (`query` 0) or occlusion (1) batch.
+    fn kernel<F: HitFilter>(&self, filter: F, query: usize) -> Kernel<'_, F> {
         Kernel {
             geometry: &self.geometry,
             filter,
             simd: self.simd,
             chunk_size: self.chunk_size,
-            interleaved: self.interleaved,
+            pace: match self.interleave {
+                Interleave::Auto if self.large => Pace::Measured(&self.pacing[query]),
+                Interleave::Auto => Pace::Fixed(false),
+                Interleave::Off => Pace::Fixed(false),
+                Interleave::On => Pace::Fixed(true),
+            },
         }
     }
 
-    fn masked<'a>(&'a self, alpha: &'a AlphaState) -> Kernel<'a, Masked<'a>> {
-        self.kernel(Masked {
+    fn masked<'a>(&'a self, alpha: &'a AlphaState, query: usize) -> Kernel<'a, Masked<'a>> {
+        let filter = Masked {
             alpha: alpha.test.as_ref(),
             masked: &alpha.masked,
             ids: &self.geometry.ids,
-        })
+        };
+        self.kernel(filter, query)
     }
 }
 
@@ -134,7 +151,8 @@ impl fmt::Debug for CpuBvh {
             .field("alpha_test", &self.alpha.is_some())
             .field("simd", &self.simd)
             .field("chunk_size", &self.chunk_size)
-            .field("interleaved", &self.interleaved)
+            .field("interleave", &self.interleave)
+            .field("pacing", &self.pacing)
             .field("build_time", &self.build_time)
             .finish()
     }
@@ -143,15 +161,15 @@ impl fmt::Debug for CpuBvh {
 impl Traversal for CpuBvh {
     fn intersect(&self, rays: &RayBatch, hits: &mut HitBatch) {
         match &self.alpha {
-            None => self.kernel(Opaque).intersect(rays, hits),
-            Some(alpha) => self.masked(alpha).intersect(rays, hits),
+            None => self.kernel(Opaque, CLOSEST).intersect(rays, hits),
+            Some(alpha) => self.masked(alpha, CLOSEST).intersect(rays, hits),
         }
     }
 
     fn occluded(&self, rays: &RayBatch, occluded: &mut Vec<bool>) {
         match &self.alpha {
-            None => self.kernel(Opaque).occluded(rays, occluded),
-            Some(alpha) => self.masked(alpha).occluded(rays, occluded),
+            None => self.kernel(Opaque, OCCLUSION).occluded(rays, occluded),
+            Some(alpha) => self.masked(alpha, OCCLUSION).occluded(rays, occluded),
         }
     }
 }

@@ -18,11 +18,14 @@ pub struct CpuBvhOptions {
 /// How many rays a thread traces at once. Taking several in turn, each step of a ray
 /// prefetches the node or triangles its next step reads, so that on a hierarchy too large
 /// for the caches one ray's cache misses overlap the others' work; where everything stays
-/// in cache it only costs the switching. All modes report the same hits.
+/// in cache, or the rays are coherent enough to share what is cached, it only costs the
+/// switching. All modes report the same hits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Interleave {
-    /// Several rays in turn where the traversal data (nodes, triangles, ids) outgrows
-    /// [`INTERLEAVE_ABOVE_BYTES`], one at a time below.
+    /// One at a time where the traversal data (nodes, triangles, ids) fits in
+    /// [`INTERLEAVE_ABOVE_BYTES`]; above, whichever measures faster: most chunks the way that
+    /// was faster on earlier chunks, one in sixteen the other way, timed per chunk
+    /// (separately for closest-hit and occlusion batches), several in turn until measured.
     #[default]
     Auto,
     /// One ray at a time.
@@ -31,10 +34,10 @@ pub enum Interleave {
     On,
 }
 
-/// Traversal data above which [`Interleave::Auto`] takes several rays in turn: a core's L2
-/// cache on current x86 CPUs (1 MiB on this project's machines). On the 1.0 M-triangle
-/// scene (48 MB) eight rays in turn made the path tracer 1.12× faster; on the Cornell box
-/// (2 kB) they cost 2–4%.
+/// Traversal data up to which [`Interleave::Auto`] takes one ray at a time, and above which it
+/// measures both ways: a core's L2 cache on current x86 CPUs (1 MiB on this project's
+/// machines), where every access hits the cache and rays in turn only cost the switching
+/// (2–4% on the Cornell box).
 pub const INTERLEAVE_ABOVE_BYTES: usize = 1 << 20;
 
 /// Node- and triangle-test implementations of the CPU backend. Both node tests are

@@ -113,3 +113,35 @@ fn barycentrics_reconstruct_hit_point() {
         assert!(hits.u[i] >= 0.0 && hits.v[i] >= 0.0 && hits.u[i] + hits.v[i] <= 1.0 + 1e-6);
     }
 }
+
+#[test]
+fn measured_interleaving_reports_the_hits_of_one_ray_at_a_time() {
+    // Large enough that `Interleave::Auto` measures both ways, chunk by chunk.
+    let mut rng = Rng::new(9, 0);
+    let mut tris = random_mesh(&mut rng);
+    tris.extend(height_field(&mut rng, 100));
+    let options = |interleave| CpuBvhOptions {
+        chunk_size: 16,
+        interleave,
+        ..CpuBvhOptions::default()
+    };
+    let measured = CpuBvh::new(&tris, options(Interleave::Auto)).unwrap();
+    let single = CpuBvh::new(&tris, options(Interleave::Off)).unwrap();
+    assert!(measured.memory_bytes() > vcm_traversal::INTERLEAVE_ABOVE_BYTES);
+    let (mut expected, mut hits) = (HitBatch::default(), HitBatch::default());
+    let (mut expected_occluded, mut occluded) = (Vec::new(), Vec::new());
+    // 30 batches of 64 chunks: one chunk in 16 runs the way not preferred, so every batch
+    // runs both ways, and the estimate is updated several times.
+    for _ in 0..30 {
+        let rays = random_rays(&mut rng, 1024);
+        single.intersect(&rays, &mut expected);
+        measured.intersect(&rays, &mut hits);
+        assert_eq!(hits.prim, expected.prim);
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&hits.t), bits(&expected.t));
+        assert_eq!(bits(&hits.u), bits(&expected.u));
+        single.occluded(&rays, &mut expected_occluded);
+        measured.occluded(&rays, &mut occluded);
+        assert_eq!(occluded, expected_occluded);
+    }
+}
