@@ -26,8 +26,8 @@ pub enum AlgorithmOption {
 }
 
 impl AlgorithmOption {
-    /// `auto`, then every algorithm, as `--help` lists them.
-    const ALL: [AlgorithmOption; 7] = [
+    /// `auto`, then every algorithm, as `--help` and the viewer list them.
+    pub const ALL: [AlgorithmOption; 7] = [
         AlgorithmOption::Auto,
         AlgorithmOption::Fixed(Algorithm::Pt),
         AlgorithmOption::Fixed(Algorithm::LightTracing),

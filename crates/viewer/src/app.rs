@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use eframe::egui;
 use vcm::image_io::RgbImage;
-use vcm_rs::integrators::image_size;
+use vcm_rs::integrators::{AlgorithmOption, image_size};
 use vcm_rs::state::RenderState;
 use vcm_scene::{Camera, Scene};
 
@@ -223,7 +223,12 @@ impl ViewerApp {
                     .as_ref()
                     .filter(|(continued, _)| *continued == generation)
                     .map(|(_, origin)| origin);
-                crate::render_state::state_to_save(loaded, view, origin)
+                let rendering = self
+                    .shown
+                    .as_ref()
+                    .filter(|shown| shown.snapshot.generation == generation)
+                    .map(|shown| shown.snapshot.algorithm);
+                crate::render_state::state_to_save(loaded, (view, rendering), origin)
             }
             _ => Err("cannot save the render state: nothing is rendering".into()),
         };
@@ -285,7 +290,7 @@ impl ViewerApp {
                     choice,
                 });
                 self.pending_resume = state.map(|Opened { path, state }| {
-                    self.settings.algorithm = state.settings.algorithm;
+                    self.settings.algorithm = AlgorithmOption::Fixed(state.settings.algorithm);
                     self.settings.integrator = state.settings.options.clone();
                     self.note = Some(format!(
                         "continuing {} (samples {})",

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::Parser;
-use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+use vcm_rs::integrators::{AlgorithmOption, IntegratorOptions};
 use vcm_rs::render_loop::ScheduleOptions;
 use vcm_rs::state::SETTING_OPTIONS;
 use vcm_rs::{Backend, Shading};
@@ -26,9 +26,10 @@ pub struct Options {
     /// algorithm and options, which therefore cannot be given as well.
     #[arg(long, value_name = "FILE", conflicts_with_all = SETTING_OPTIONS)]
     pub resume: Option<PathBuf>,
-    /// The light transport algorithm to start with.
-    #[arg(long, value_enum, default_value_t = Algorithm::Pt)]
-    pub algo: Algorithm,
+    /// The light transport algorithm to start with (`auto`: chosen by pilot renders, as by
+    /// `vcm render`).
+    #[arg(long, value_enum, default_value_t = AlgorithmOption::Auto)]
+    pub algo: AlgorithmOption,
     /// Ray traversal backend.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     pub backend: Backend,
@@ -83,7 +84,7 @@ impl Options {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vcm_rs::integrators::MergeRadius;
+    use vcm_rs::integrators::{Algorithm, MergeRadius};
     use vcm_rs::render_loop::SchedulerKind;
 
     fn parse(args: &[&str]) -> Result<Options, clap::Error> {
@@ -91,14 +92,14 @@ mod tests {
     }
 
     #[test]
-    fn defaults_render_the_cornell_box_with_the_path_tracer() {
+    fn defaults_render_the_cornell_box_with_the_algorithm_chosen_by_pilots() {
         let options = parse(&[]).unwrap();
         assert_eq!(
             options.scene, None,
             "the app opens crate::app::DEFAULT_SCENE"
         );
         assert_eq!(options.resume, None);
-        assert_eq!(options.settings().algorithm, Algorithm::Pt);
+        assert_eq!(options.settings().algorithm, AlgorithmOption::Auto);
         assert_eq!(options.settings().schedule, ScheduleOptions::default());
         assert_eq!(options.settings().shading, Shading::Cpu);
         assert_eq!(options.screenshot(), None);
@@ -123,7 +124,7 @@ mod tests {
         ])
         .unwrap();
         let settings = options.settings();
-        assert_eq!(settings.algorithm, Algorithm::Vcm);
+        assert_eq!(settings.algorithm, AlgorithmOption::Fixed(Algorithm::Vcm));
         assert_eq!(settings.integrator.max_depth, Some(5));
         assert_eq!(settings.integrator.radius, MergeRadius::SceneFraction(0.01));
         assert_eq!(settings.schedule.scheduler, Some(SchedulerKind::None));

@@ -8,7 +8,7 @@ use clap::ValueEnum;
 use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
 use vcm::{DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MergeRadius, Scheduler};
-use vcm_rs::integrators::Algorithm;
+use vcm_rs::integrators::{Algorithm, AlgorithmOption};
 use vcm_rs::render_loop::{Frames, ScheduleOptions, SchedulerKind};
 use vcm_rs::{Backend, Shading};
 
@@ -114,7 +114,7 @@ fn render_section(settings: &mut RenderSettings, ui: &mut egui::Ui) {
             egui::ComboBox::from_id_salt("algorithm")
                 .selected_text(settings.algorithm.name())
                 .show_ui(ui, |ui| {
-                    for algorithm in Algorithm::ALL {
+                    for algorithm in AlgorithmOption::ALL {
                         ui.selectable_value(&mut settings.algorithm, algorithm, algorithm.name());
                     }
                 });
@@ -147,10 +147,10 @@ fn render_section(settings: &mut RenderSettings, ui: &mut egui::Ui) {
             ui.end_row();
 
             ui.label("Merge radius");
-            let merges = matches!(
-                settings.algorithm,
-                Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm
-            );
+            // `auto` may choose VCM.
+            let merges = settings.algorithm.fixed().is_none_or(|algorithm| {
+                matches!(algorithm, Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm)
+            });
             ui.add_enabled_ui(merges, |ui| {
                 radius_row(&mut settings.integrator.radius, ui);
             });
@@ -183,9 +183,13 @@ fn radius_row(radius: &mut MergeRadius, ui: &mut egui::Ui) {
 }
 
 /// Where paths are shaded: on the GPU only for path tracing on the GPU backend (else back to
-/// the CPU).
+/// the CPU; `auto` renders path tracing there, as `vcm render` does).
 fn shading_row(settings: &mut RenderSettings, ui: &mut egui::Ui) {
-    let possible = settings.backend == Backend::Gpu && settings.algorithm == Algorithm::Pt;
+    let path_tracing = settings
+        .algorithm
+        .fixed()
+        .is_none_or(|a| a == Algorithm::Pt);
+    let possible = settings.backend == Backend::Gpu && path_tracing;
     if !possible {
         settings.shading = Shading::Cpu;
     }
@@ -324,6 +328,10 @@ fn stats_section(app: &ViewerApp, ui: &mut egui::Ui) {
             ui.label(value);
             ui.end_row();
         };
+        row("algorithm", snapshot.algorithm.name().to_string());
+        if let Some(chosen) = &snapshot.chosen {
+            row("chosen by", chosen.clone());
+        }
         row(
             "resolution",
             format!("{} × {}", snapshot.size.0, snapshot.size.1),

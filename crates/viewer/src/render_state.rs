@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, TryRecvError};
 
+use vcm_rs::integrators::Algorithm;
 use vcm_rs::state::{self, RenderState, scene_hash};
 use vcm_scene::{Camera, Scene};
 
@@ -89,12 +90,13 @@ pub fn camera_choice(
 }
 
 /// The state (without its film and samples, which the worker has) that saving the render of
-/// `view` on `loaded` writes, with `origin`'s output and target when it continues a state.
-/// An error, for the panel, when the render cannot be saved: its camera was moved, or it is
-/// a preview.
+/// `view` on `loaded` writes, with `origin`'s output and target when it continues a state;
+/// `rendering` is the algorithm the render's frames so far came from (with `auto`, the one
+/// chosen). An error, for the panel, when the render cannot be saved: its camera was moved,
+/// it is a preview, or `auto` has not chosen yet.
 pub fn state_to_save(
     loaded: &LoadedScene,
-    view: &View,
+    (view, rendering): (&View, Option<Algorithm>),
     origin: Option<&Origin>,
 ) -> Result<RenderState, String> {
     if view.scene != loaded.serial {
@@ -108,9 +110,13 @@ pub fn state_to_save(
                 .into(),
         );
     }
+    let algorithm = view.settings.algorithm.fixed().or(rendering).ok_or(
+        "cannot save the render state: the algorithm is still being chosen (auto); save once \
+         the first frame is shown",
+    )?;
     let (width, height) = view.size;
     let settings = state::RenderSettings {
-        algorithm: view.settings.algorithm,
+        algorithm,
         width,
         height,
         camera,

@@ -3,6 +3,8 @@
 //! replaces the current one between two frames: the accumulation restarts. A job may continue
 //! a saved render state's film, and the worker hands out a copy of its film between two
 //! frames ([`Renderer::request_film`]), so that a render state holds whole frames only.
+//! With `auto`, the worker chooses the algorithm by pilot renders before the first frame
+//! (`vcm_rs::integrators::choice`), and keeps the choice while only the camera moves.
 
 use std::sync::mpsc::{Receiver, Sender, TryRecvError};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -11,10 +13,12 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use vcm::image_io::RgbImage;
-use vcm::{Film, FrameStats, Integrator};
+use vcm::{Film, FrameStats, Integrator, StopFlag};
+use vcm_rs::integrators::choice::{self, Choice, Unpiloted};
+use vcm_rs::integrators::{Algorithm, IntegratorOptions};
 use vcm_rs::render_loop::{Frames, Remaining};
 use vcm_rs::state::SampleRanges;
-use vcm_rs::{Backend, BuiltTraversal};
+use vcm_rs::{Backend, BuiltTraversal, Shading};
 use vcm_scene::Scene;
 
 use crate::session::View;
@@ -71,6 +75,10 @@ pub struct Snapshot {
     pub generation: u64,
     /// Image (width, height) in pixels.
     pub size: (u32, u32),
+    /// The algorithm rendering (with `auto`, the one chosen).
+    pub algorithm: Algorithm,
+    /// With `auto`, how the algorithm was chosen (pilots and their time, or why none ran).
+    pub chosen: Option<String>,
     /// Mean radiance per pixel (W·sr⁻¹·m⁻², RGB), row by row from the top left.
     pub mean: Vec<Vec3>,
     /// Samples per pixel rendered by this job.
@@ -122,6 +130,7 @@ impl Renderer {
             notify: Box::new(notify),
             reference,
             traversal: None,
+            choices: Vec::new(),
         };
         let thread = std::thread::Builder::new()
             .name("render worker".into())
@@ -186,6 +195,46 @@ struct Worker {
     notify: Box<dyn Fn() + Send>,
     reference: Option<RgbImage>,
     traversal: Option<CachedTraversal>,
+    /// The latest `auto` choices, newest last (at most [`KEPT_CHOICES`]).
+    choices: Vec<(ChoiceKey, Algorithm, String)>,
+}
+
+/// `auto` choices kept: those of the full-size render and its preview while the camera
+/// moves, and a few settings before.
+const KEPT_CHOICES: usize = 8;
+
+/// What an `auto` choice is kept for: the scene as loaded (its serial number in the session,
+/// whatever the camera), the backend, the integrator's options and the image size.
+#[derive(PartialEq)]
+struct ChoiceKey {
+    scene: u64,
+    backend: Backend,
+    options: IntegratorOptions,
+    size: (u32, u32),
+}
+
+/// How `choice` was made, in a few words for the statistics panel.
+fn describe(choice: &Choice) -> String {
+    let (width, height) = choice.pilot_size;
+    match choice.unpiloted {
+        Some(Unpiloted::SmallImage) => "auto: too small an image for pilots".into(),
+        Some(Unpiloted::OnlyMergingFindsAllLight) => {
+            "auto: only merging finds all of the light".into()
+        }
+        None => format!(
+            "auto: pilots at {width}×{height}, {:.2} s",
+            choice.time().as_secs_f64()
+        ),
+    }
+}
+
+/// A job's integrator, ready to render.
+struct Started {
+    integrator: Box<dyn Integrator>,
+    /// The algorithm it renders.
+    algorithm: Algorithm,
+    /// With `auto`, how the algorithm was chosen.
+    chosen: Option<String>,
 }
 
 /// Why a render stopped.
@@ -201,7 +250,7 @@ impl Worker {
         let mut next = wait_for_job(inbox);
         while let Next::Job(job) = next {
             next = match self.start(&job) {
-                Ok(integrator) => self.render(*job, integrator, inbox),
+                Ok(started) => self.render(*job, started, inbox),
                 Err(message) => {
                     self.publish(Update::Failed {
                         generation: job.generation,
@@ -213,8 +262,8 @@ impl Worker {
         }
     }
 
-    /// Builds (or reuses) the BVH and the integrator of `job`.
-    fn start(&mut self, job: &Job) -> Result<Box<dyn Integrator>, String> {
+    /// Builds (or reuses) the BVH of `job`, settles its algorithm and builds its integrator.
+    fn start(&mut self, job: &Job) -> Result<Started, String> {
         let settings = &job.view.settings;
         let built = self.traversal(&job.scene, settings.backend)?;
         let scene = if job.scene.camera == job.view.camera {
@@ -225,17 +274,70 @@ impl Worker {
                 ..Scene::clone(&job.scene)
             })
         };
-        let name = settings.algorithm.name();
-        Frames::new(settings.schedule, settings.backend)
+        let (algorithm, chosen) = match settings.algorithm.fixed() {
+            Some(algorithm) => (algorithm, None),
+            // GPU shading has path tracing only, as `vcm render` settles it.
+            None if settings.shading == Shading::Gpu => (
+                Algorithm::Pt,
+                Some("auto: the only one shaded on the GPU".into()),
+            ),
+            None => {
+                let (algorithm, how) = self.choose(job, &scene, &built)?;
+                (algorithm, Some(how))
+            }
+        };
+        let name = algorithm.name();
+        let integrator = Frames::new(settings.schedule, settings.backend)
             .shaded_integrator(
-                (settings.algorithm, settings.shading),
+                (algorithm, settings.shading),
                 &scene,
                 &built,
                 job.view.size,
                 &settings.integrator,
                 None,
             )
-            .map_err(|e| format!("cannot start {name}: {e}"))
+            .map_err(|e| format!("cannot start {name}: {e}"))?;
+        Ok(Started {
+            integrator,
+            algorithm,
+            chosen,
+        })
+    }
+
+    /// The algorithm `auto` renders `job` with, and how it was chosen: kept from an earlier
+    /// job of the same scene, backend, options and size (a moved camera does not choose
+    /// again), else chosen by pilots on `scene` (the job's camera). The pilots run to their
+    /// end: a job that replaces this one waits for them (a few seconds at most).
+    fn choose(
+        &mut self,
+        job: &Job,
+        scene: &Arc<Scene>,
+        built: &BuiltTraversal,
+    ) -> Result<(Algorithm, String), String> {
+        let settings = &job.view.settings;
+        let key = ChoiceKey {
+            scene: job.view.scene,
+            backend: settings.backend,
+            options: settings.integrator.clone(),
+            size: job.view.size,
+        };
+        if let Some((_, algorithm, how)) = self.choices.iter().find(|(kept, ..)| *kept == key) {
+            return Ok((*algorithm, format!("{how} (kept)")));
+        }
+        let choice = choice::choose(
+            scene,
+            &built.traversal,
+            job.view.size,
+            &settings.integrator,
+            &StopFlag::default(),
+        )
+        .map_err(|e| format!("cannot choose the algorithm: {e}"))?;
+        let how = describe(&choice);
+        if self.choices.len() == KEPT_CHOICES {
+            self.choices.remove(0);
+        }
+        self.choices.push((key, choice.algorithm, how.clone()));
+        Ok((choice.algorithm, how))
     }
 
     /// The scene's BVH on `backend` (with the GPU backend's hierarchy), built or kept.
@@ -268,12 +370,12 @@ impl Worker {
 
     /// Renders frames of `job` until another job arrives or the renderer is dropped; once the
     /// frame limit is reached it keeps the film (for copies) and waits.
-    fn render(
-        &self,
-        job: Job,
-        mut integrator: Box<dyn Integrator>,
-        inbox: &Receiver<Request>,
-    ) -> Next {
+    fn render(&self, job: Job, started: Started, inbox: &Receiver<Request>) -> Next {
+        let Started {
+            mut integrator,
+            algorithm,
+            chosen,
+        } = started;
         let (width, height) = job.view.size;
         let settings = &job.view.settings;
         let Resume {
@@ -305,6 +407,8 @@ impl Worker {
             Snapshot {
                 generation: job.generation,
                 size: job.view.size,
+                algorithm,
+                chosen: chosen.clone(),
                 relmse: self.relmse(job.view.size, &mean),
                 mean,
                 spp: frames.samples(),
@@ -349,7 +453,7 @@ impl Worker {
             match frames.render_next(integrator.as_mut(), &mut film, Remaining::default()) {
                 Ok(stats) => totals.accumulate(&stats),
                 Err(e) => {
-                    let name = settings.algorithm.name();
+                    let name = algorithm.name();
                     self.publish(Update::Failed {
                         generation: job.generation,
                         message: format!("cannot schedule {name}: {e}"),
@@ -411,7 +515,7 @@ pub(crate) mod tests {
     use std::sync::mpsc;
 
     use vcm_rs::Shading;
-    use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, MergeRadius};
+    use vcm_rs::integrators::{self, Algorithm, AlgorithmOption, IntegratorOptions, MergeRadius};
     use vcm_rs::render_loop::ScheduleOptions;
 
     use crate::settings::RenderSettings;
@@ -423,7 +527,7 @@ pub(crate) mod tests {
 
     pub(crate) fn settings(algorithm: Algorithm) -> RenderSettings {
         RenderSettings {
-            algorithm,
+            algorithm: AlgorithmOption::Fixed(algorithm),
             backend: Backend::Cpu,
             shading: Shading::Cpu,
             integrator: IntegratorOptions {
@@ -532,6 +636,48 @@ pub(crate) mod tests {
             .request_film()
             .recv_timeout(Duration::from_secs(60))
             .expect("a copy of the film within a minute")
+    }
+
+    #[test]
+    fn auto_renders_the_algorithm_pilots_choose_and_keeps_it_while_the_camera_moves() {
+        let scene = cornell_box();
+        let size = (64, 64);
+        let (renderer, woken) = spawn(None);
+        let mut first = job(1, &scene, size, Some(1));
+        first.view.settings.algorithm = AlgorithmOption::Auto;
+        let options = first.view.settings.integrator.clone();
+        let mut moved = first.view.clone();
+        moved.camera.position.x += 0.05;
+        renderer.submit(first);
+        let shown = wait_for(&renderer, &woken, |u| frames(u, 1, 1));
+        let traversal = Backend::Cpu.traversal(&scene).unwrap();
+        let stop = StopFlag::default();
+        let expected = choice::choose(&scene, &traversal, size, &options, &stop).unwrap();
+        assert_eq!(shown.algorithm, expected.algorithm);
+        let chosen = shown.chosen.expect("auto says how it chose");
+        assert!(chosen.starts_with("auto: pilots at 64×64"), "{chosen}");
+        // The camera moved: the same algorithm, without pilots.
+        let second = Job {
+            generation: 2,
+            view: moved,
+            ..job(2, &scene, size, Some(1))
+        };
+        renderer.submit(second);
+        let shown = wait_for(&renderer, &woken, |u| frames(u, 2, 1));
+        assert_eq!(shown.algorithm, expected.algorithm);
+        assert_eq!(shown.chosen, Some(format!("{chosen} (kept)")));
+        // Other options choose again.
+        let mut third = job(3, &scene, size, Some(1));
+        third.view.settings.algorithm = AlgorithmOption::Auto;
+        third.view.settings.integrator.seed += 1;
+        renderer.submit(third);
+        let shown = wait_for(&renderer, &woken, |u| frames(u, 3, 1));
+        let chosen = shown.chosen.expect("auto says how it chose");
+        assert!(!chosen.ends_with("(kept)"), "{chosen}");
+        // A fixed algorithm says nothing of a choice.
+        renderer.submit(job(4, &scene, size, Some(1)));
+        let shown = wait_for(&renderer, &woken, |u| frames(u, 4, 1));
+        assert_eq!((shown.algorithm, shown.chosen), (Algorithm::Vcm, None));
     }
 
     #[test]

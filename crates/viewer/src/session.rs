@@ -51,7 +51,7 @@ impl Session {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vcm_rs::integrators::{Algorithm, IntegratorOptions, MergeRadius};
+    use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions, MergeRadius};
     use vcm_rs::render_loop::{ScheduleOptions, SchedulerKind};
     use vcm_rs::{Backend, Shading};
     use vcm_scene::Bounds;
@@ -64,7 +64,7 @@ mod tests {
         View {
             scene: 1,
             settings: RenderSettings {
-                algorithm: Algorithm::Pt,
+                algorithm: AlgorithmOption::Fixed(Algorithm::Pt),
                 backend: Backend::Cpu,
                 shading: Shading::Cpu,
                 integrator: IntegratorOptions {
@@ -96,7 +96,7 @@ mod tests {
     fn every_setting_camera_and_size_change_restarts() {
         let changes: [fn(&mut View); 11] = [
             |v| v.scene = 2,
-            |v| v.settings.algorithm = Algorithm::Vcm,
+            |v| v.settings.algorithm = AlgorithmOption::Auto,
             |v| v.settings.integrator.max_depth = Some(4),
             |v| v.settings.integrator.radius = MergeRadius::SceneFraction(0.01),
             |v| v.settings.integrator.seed = 7,

@@ -1,15 +1,16 @@
 //! What the user picks for a render besides the camera: algorithm, backend, shading,
 //! integrator options and the schedule (scheduler, tile size, samples per pixel per frame). Any change restarts the accumulation (see [`crate::session`]).
 
-use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+use vcm_rs::integrators::{AlgorithmOption, IntegratorOptions};
 use vcm_rs::render_loop::ScheduleOptions;
 use vcm_rs::{Backend, Shading};
 
 /// The render settings the viewer's controls edit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
-    /// The light transport algorithm.
-    pub algorithm: Algorithm,
+    /// The light transport algorithm, or `auto`: the one pilot renders find the most
+    /// efficient for the scene (`vcm_rs::integrators::choice`).
+    pub algorithm: AlgorithmOption,
     /// The ray traversal backend.
     pub backend: Backend,
     /// Where paths are shaded (on the GPU: path tracing on the GPU backend only).

@@ -64,10 +64,13 @@ impl ErrorHistory {
 mod tests {
     use super::*;
     use vcm::FrameStats;
+    use vcm_rs::integrators::Algorithm;
 
     fn snapshot(generation: u64, spp: u32, seconds: f64, relmse: Option<f64>) -> Snapshot {
         Snapshot {
             generation,
+            algorithm: Algorithm::Pt,
+            chosen: None,
             size: (2, 1),
             mean: vec![glam::Vec3::ZERO; 2],
             spp,

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use vcm_rs::integrators::Algorithm;
+use vcm_rs::integrators::{Algorithm, AlgorithmOption};
 use vcm_rs::state::SampleRanges;
 use vcm_scene::FileCamera;
 
@@ -125,14 +125,14 @@ fn a_moved_camera_or_a_preview_is_not_saved() {
     let scene = cornell_box();
     let mut loaded = loaded(&scene, (16, 10));
     let view = job(1, &scene, (16, 10), None).view;
-    let state = state_to_save(&loaded, &view, None).unwrap();
+    let state = state_to_save(&loaded, (&view, None), None).unwrap();
     assert_eq!(state.settings.camera, None);
     assert_eq!((state.output, state.target_spp), (None, None));
     let origin = Origin {
         output: Some("water.exr".into()),
         target_spp: Some(64),
     };
-    let state = state_to_save(&loaded, &view, Some(&origin)).unwrap();
+    let state = state_to_save(&loaded, (&view, None), Some(&origin)).unwrap();
     assert_eq!(
         state.output, origin.output,
         "a continued state keeps its output"
@@ -143,15 +143,31 @@ fn a_moved_camera_or_a_preview_is_not_saved() {
         size: (4, 2),
         ..view.clone()
     };
-    let error = state_to_save(&loaded, &preview, None).unwrap_err();
+    let error = state_to_save(&loaded, (&preview, None), None).unwrap_err();
     assert!(error.contains("preview"), "{error}");
     loaded.controller.pan(glam::Vec2::new(0.1, 0.0));
     let moved = View {
         camera: loaded.controller.camera(),
         ..preview
     };
-    let error = state_to_save(&loaded, &moved, None).unwrap_err();
+    let error = state_to_save(&loaded, (&moved, None), None).unwrap_err();
     assert_eq!(error, MOVED_CAMERA);
+}
+
+#[test]
+fn an_auto_render_is_saved_with_the_algorithm_it_chose() {
+    let scene = cornell_box();
+    let loaded = loaded(&scene, (16, 10));
+    let mut view = job(1, &scene, (16, 10), None).view;
+    view.settings.algorithm = AlgorithmOption::Auto;
+    let error = state_to_save(&loaded, (&view, None), None).unwrap_err();
+    assert!(error.contains("still being chosen"), "{error}");
+    let state = state_to_save(&loaded, (&view, Some(Algorithm::Bpt)), None).unwrap();
+    assert_eq!(state.settings.algorithm, Algorithm::Bpt);
+    // A fixed algorithm is the one saved.
+    view.settings.algorithm = AlgorithmOption::Fixed(Algorithm::Vcm);
+    let state = state_to_save(&loaded, (&view, Some(Algorithm::Vcm)), None).unwrap();
+    assert_eq!(state.settings.algorithm, Algorithm::Vcm);
 }
 
 /// Saving after n frames gives the state of a direct render of samples 0..n; opening that
@@ -167,7 +183,7 @@ fn a_saved_render_is_a_direct_render_and_continues_as_one() {
     let view = first.view.clone();
     renderer.submit(first);
     wait_for(&renderer, &woken, |u| frames(u, 1, 4));
-    let state = state_to_save(&loaded(&scene, size), &view, None).unwrap();
+    let state = state_to_save(&loaded(&scene, size), (&view, None), None).unwrap();
     let mut save = PendingSave::start(&renderer, 1, state, file.clone(), || {});
     let note = finish(&mut save).unwrap();
     assert!(
@@ -221,7 +237,7 @@ fn saving_a_render_that_restarted_or_failed_is_an_error() {
     let (renderer, woken) = spawn(None);
     let state = state_to_save(
         &loaded(&scene, (8, 8)),
-        &job(1, &scene, (8, 8), None).view,
+        (&job(1, &scene, (8, 8), None).view, None),
         None,
     );
     // Nothing renders: the worker has no film to give.
