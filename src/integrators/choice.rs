@@ -2,18 +2,26 @@
 //!
 //! Each candidate — path tracing, BPT and, where the scene has specular or near-specular
 //! surfaces for merging to serve, VCM — renders [`PILOT_FRAMES`] frames of one sample per
-//! pixel of the image scaled down to at most [`PILOT_PIXELS`] pixels. Its *relative variance per sample* is
-//! estimated from the spread of its frames per pixel,
+//! pixel of the image scaled down to at most [`PILOT_PIXELS`] pixels. Its *relative variance
+//! per sample* is estimated from the spread of its frames per pixel,
 //!
-//!   v = mean over pixels and channels of s² / (μ² + 0.01),
+//!   v₁ = mean over pixels and channels of s² / (μ² + 0.01),
 //!
 //! with s² the frames' sample variance at the pixel, 0.01 the ε of relMSE, and μ the most
 //! robust candidate's mean (the last: VCM, else BPT) averaged over the pixel's 3 × 3
-//! neighbourhood — a denominator that a candidate's own fireflies cannot inflate. Its *cost
-//! per sample* is the work its frames counted (rays and light vertices), weighted by
-//! [`COST_WEIGHTS`]. After a time T a render's relMSE is about v · cost / T, so the
-//! candidate with the least v · cost wins — with v taken two standard errors high, so that
-//! a variance resting on a few pixels' rare paths does not win on luck.
+//! neighbourhood — a denominator that a candidate's own fireflies cannot inflate. The frames
+//! are the points of a stratified sequence, so the error of a mean of N of them falls faster
+//! than v₁ / N where the integrand is smooth (path tracing's direct light) and not at all
+//! faster where it is not (light paths landing in pixels at random). The pilot measures how
+//! much: v₄, the same mean of 4 × the variance of the means of its two halves (frames 0–3 and
+//! 4–7, each a stratified set), gives γ = ln(v₁ / v₄) / ln 4 (clamped to [0, 1]), and the
+//! variance per sample after N samples is taken as v(N) = v₄ · (N / 4)^−γ. Its *cost per
+//! sample* is the work its frames counted (rays and light vertices), weighted by
+//! [`COST_WEIGHTS`]. After a time T a render's relMSE is about v(N) · cost / T, with N the
+//! samples it renders in T; the candidates are compared at the time in which the cheapest
+//! renders [`COMPARED_AT_SPP`] samples per pixel, and the one with the least v(N) · cost
+//! wins — with v₄ taken two standard errors high, so that a variance resting on a few
+//! pixels' rare paths does not win on luck.
 //!
 //! The choice is a pure function of the scene, the options and the seed — counts, not clock
 //! times, measure the cost — so shards of one render made on different machines choose the
@@ -33,8 +41,18 @@ use vcm_traversal::Traversal;
 
 use super::{Algorithm, IntegratorOptions, MergeRadius, build};
 
-/// Frames (one sample per pixel each) every candidate renders.
+/// Frames (one sample per pixel each) every candidate renders: two halves of 4, each a
+/// stratified set of the sequence's points.
 pub const PILOT_FRAMES: u32 = 8;
+
+/// Frames per half of a pilot: the block whose means measure how stratification lowers the
+/// variance.
+const HALF: usize = PILOT_FRAMES as usize / 2;
+
+/// Samples per pixel the cheapest candidate renders in the time at which the candidates are
+/// compared: a short render's worth (on the Cornell box path tracing reaches ~300 in 10 s
+/// at 256²); the others render fewer in that time, as many fewer as they cost more.
+pub const COMPARED_AT_SPP: f64 = 64.0;
 /// Most pixels of a pilot render (128²): the image scaled down to them, or a smaller image
 /// at its own size.
 pub const PILOT_PIXELS: u32 = 128 * 128;
@@ -55,13 +73,15 @@ pub struct CostWeights {
     pub merge: f64,
 }
 
-/// The cost model's weights: the least-squares fit of the time per sample of pt, bpt and vcm
-/// on the six scenes in `scenes/` at 512² (to within 12 % on each; `docs/algorithms.md`).
+/// The cost model's weights: the least-squares fit of the ratios of the time per sample of
+/// pt, bpt and vcm within each of the seven scenes in `scenes/` at 512² (each scene's own
+/// scale left free: only a scene's candidates are compared; within 10 % of the measured
+/// ratios on each; `docs/algorithms.md`).
 pub const COST_WEIGHTS: CostWeights = CostWeights {
     closest_hit_ray: 1.0,
-    shadow_ray: 1.0,
-    light_vertex: 0.5,
-    merge: 1.8,
+    shadow_ray: 0.8,
+    light_vertex: 1.25,
+    merge: 1.3,
 };
 
 /// One candidate's pilot: how much its samples vary and what they cost.
@@ -69,7 +89,15 @@ pub const COST_WEIGHTS: CostWeights = CostWeights {
 pub struct Candidate {
     /// The algorithm piloted.
     pub algorithm: Algorithm,
-    /// Relative variance of one sample per pixel, v (see the [module](self)).
+    /// Relative variance per sample measured on single frames, v₁, and on the means of the
+    /// pilot's two halves, v₄ (see the [module](self)).
+    pub measured: [Estimate; 2],
+    /// γ: how fast the variance per sample falls with the samples, v(N) ∝ N^−γ.
+    pub stratification: f64,
+    /// Samples per pixel it renders in the time the candidates are compared at.
+    pub samples: f64,
+    /// Relative variance per sample after [`Candidate::samples`], v(N) (see the
+    /// [module](self)).
     pub relative_variance: Estimate,
     /// Cost of one sample per pixel, in closest-hit rays ([`COST_WEIGHTS`]).
     pub cost: f64,
@@ -78,12 +106,31 @@ pub struct Candidate {
 }
 
 impl Candidate {
-    /// v · cost, with v two standard errors above its estimate: a render's relMSE after a
+    /// v(N) · cost, with v two standard errors above its estimate: a render's relMSE after a
     /// given time, up to a factor common to every candidate, as high as the pilot leaves
     /// likely. The smaller, the better: a candidate whose low variance rests on a few pixels
     /// of a short pilot is not trusted with the render.
     pub fn inefficiency(&self) -> f64 {
         self.relative_variance.upper() * self.cost
+    }
+}
+
+/// γ = ln(v₁ / v₄) / ln 4 from the relative variances per sample of single frames and of
+/// 4-frame means, clamped to [0, 1] (0 where either is not positive: nothing to compare).
+fn stratification(v1: f64, v4: f64) -> f64 {
+    if v1 > 0.0 && v4 > 0.0 {
+        ((v1 / v4).ln() / 4f64.ln()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
+/// v(N) = v₄ · (N / 4)^−γ, the value and its standard error alike.
+fn variance_after(v4: Estimate, gamma: f64, samples: f64) -> Estimate {
+    let factor = (samples / HALF as f64).powf(-gamma);
+    Estimate {
+        value: v4.value * factor,
+        standard_error: v4.standard_error * factor,
     }
 }
 
@@ -195,14 +242,33 @@ pub fn choose(
         return Ok(unpiloted(None));
     };
     let mean = smoothed(&robust.mean, pilot_size);
+    let samples = (mean.len() as f64) * f64::from(PILOT_FRAMES);
+    let costs: Vec<f64> = algorithms
+        .iter()
+        .zip(&pilots)
+        .map(|(&algorithm, pilot)| cost(&pilot.stats, algorithm) / samples)
+        .collect();
+    let cheapest = costs.iter().copied().fold(f64::INFINITY, f64::min);
     let candidates: Vec<_> = algorithms
         .iter()
         .zip(&pilots)
-        .map(|(&algorithm, pilot)| Candidate {
-            algorithm,
-            relative_variance: relative_variance(&pilot.variance, &mean),
-            cost: cost(&pilot.stats, algorithm) / (mean.len() as f64 * f64::from(PILOT_FRAMES)),
-            time: pilot.time,
+        .zip(&costs)
+        .map(|((&algorithm, pilot), &cost)| {
+            let measured = pilot
+                .variance
+                .each_ref()
+                .map(|v| relative_variance(v, &mean));
+            let gamma = stratification(measured[0].value, measured[1].value);
+            let samples = COMPARED_AT_SPP * cheapest / cost;
+            Candidate {
+                algorithm,
+                measured,
+                stratification: gamma,
+                samples,
+                relative_variance: variance_after(measured[1], gamma, samples),
+                cost,
+                time: pilot.time,
+            }
         })
         .collect();
     let best = candidates
@@ -252,8 +318,10 @@ fn pilot_options(options: &IntegratorOptions, width: u32, pilot_width: u32) -> I
 struct Pilot {
     /// The mean of the frames.
     mean: Vec<DVec3>,
-    /// s² = Σ (x − x̄)² / (n − 1): the unbiased sample variance of one frame's value.
-    variance: Vec<DVec3>,
+    /// The variance per sample from single frames, s² = Σ (x − x̄)² / (n − 1), the unbiased
+    /// sample variance of one frame's value; and from the means of the two halves,
+    /// 4 · (m₁ − m₂)² / 2, four times the unbiased sample variance of a half's mean.
+    variance: [Vec<DVec3>; 2],
     stats: FrameStats,
     time: Duration,
 }
@@ -292,14 +360,18 @@ fn pilot(
         frames.push(film.mean());
     }
     let n = f64::from(PILOT_FRAMES);
-    let (mean, variance) = (0..frames[0].len())
-        .map(|pixel| {
-            let values = frames.iter().map(|frame| frame[pixel].as_dvec3());
-            let mean = values.clone().sum::<DVec3>() / n;
-            let squares = values.map(|x| (x - mean) * (x - mean)).sum::<DVec3>();
-            (mean, squares / (n - 1.0))
-        })
-        .unzip();
+    let mut mean = Vec::new();
+    let mut variance = [Vec::new(), Vec::new()];
+    for pixel in 0..frames[0].len() {
+        let values: Vec<DVec3> = frames.iter().map(|frame| frame[pixel].as_dvec3()).collect();
+        let m = values.iter().sum::<DVec3>() / n;
+        let squares = values.iter().map(|&x| (x - m) * (x - m)).sum::<DVec3>();
+        let half = |k: usize| values[k * HALF..(k + 1) * HALF].iter().sum::<DVec3>() / HALF as f64;
+        let difference = half(0) - half(1);
+        mean.push(m);
+        variance[0].push(squares / (n - 1.0));
+        variance[1].push(HALF as f64 * difference * difference / 2.0);
+    }
     Ok(Some(Pilot {
         mean,
         variance,
@@ -399,6 +471,28 @@ mod tests {
     }
 
     #[test]
+    fn stratification_is_the_fall_of_the_variance_per_sample_from_one_frame_to_four() {
+        // v₄ = v₁ / 2: γ = ln 2 / ln 4 = 1/2, and v(16) = v₄ · 4^−½ = v₄ / 2.
+        let gamma = stratification(0.4, 0.2);
+        assert!((gamma - 0.5).abs() < 1e-12);
+        let v4 = Estimate {
+            value: 0.2,
+            standard_error: 0.02,
+        };
+        let v16 = variance_after(v4, gamma, 16.0);
+        assert!((v16.value - 0.1).abs() < 1e-12 && (v16.standard_error - 0.01).abs() < 1e-12);
+        // At 4 samples, v₄ itself; below, more (towards v₁ at 1).
+        assert_eq!(variance_after(v4, gamma, 4.0), v4);
+        assert!((variance_after(v4, gamma, 1.0).value - 0.4).abs() < 1e-12);
+        // Halves noisier than single frames (no stratification) give γ 0, never a negative
+        // one; nor does a zero variance; and γ stays at most 1.
+        assert_eq!(stratification(0.2, 0.3), 0.0);
+        assert_eq!(stratification(0.0, 0.3), 0.0);
+        assert_eq!(stratification(0.3, 0.0), 0.0);
+        assert_eq!(stratification(1.0, 1e-6), 1.0);
+    }
+
+    #[test]
     fn smoothing_averages_the_neighbours_within_the_image() {
         let image: Vec<_> = (0..6).map(|i| DVec3::splat(f64::from(i))).collect();
         // 3 × 2: the corner (0, 0) averages pixels 0, 1, 3, 4; the middle of the top row all 6.
@@ -408,7 +502,7 @@ mod tests {
     }
 
     #[test]
-    fn merging_costs_each_camera_vertex_and_light_vertices_cost_half_a_ray() {
+    fn merging_costs_each_camera_vertex_and_every_kind_of_work_has_its_weight() {
         let stats = FrameStats {
             camera_rays: 10,
             continuation_rays: 20,
@@ -417,10 +511,8 @@ mod tests {
             light_vertices: 50,
             ..FrameStats::default()
         };
-        assert_eq!(cost(&stats, Algorithm::Bpt), 60.0 + 40.0 + 25.0);
-        assert_eq!(
-            cost(&stats, Algorithm::Vcm),
-            60.0 + 40.0 + 25.0 + 1.8 * 30.0
-        );
+        let bpt = 60.0 + 0.8 * 40.0 + 1.25 * 50.0;
+        assert_eq!(cost(&stats, Algorithm::Bpt), bpt);
+        assert_eq!(cost(&stats, Algorithm::Vcm), bpt + 1.3 * 30.0);
     }
 }

@@ -42,6 +42,7 @@ fn the_choice_is_a_function_of_the_inputs_and_vcm_runs_only_where_it_merges() {
     assert_eq!(box_choice.pilot_size, (128, 128));
     let again = choose("cornell-box.gltf", 0);
     for (a, b) in box_choice.candidates.iter().zip(&again.candidates) {
+        assert_eq!(a.measured, b.measured);
         assert_eq!(a.relative_variance, b.relative_variance);
         assert_eq!(a.cost.to_bits(), b.cost.to_bits());
     }
@@ -52,6 +53,26 @@ fn the_choice_is_a_function_of_the_inputs_and_vcm_runs_only_where_it_merges() {
         assert!(v.standard_error < 0.1 * v.value, "{candidate:?}");
         // A path costs at least its camera ray and one light sample.
         assert!(candidate.cost >= 2.0, "{candidate:?}");
+    }
+}
+
+/// On a plain diffuse room path tracing is the most efficient at equal time (its direct
+/// light gains most from the stratified samples, and its samples cost a third of BPT's); the
+/// pilots see both, across seeds.
+#[test]
+fn a_plain_diffuse_room_is_left_to_path_tracing() {
+    for seed in [0, 1, 2] {
+        let choice = choose("cornell-box.gltf", seed);
+        assert_eq!(choice.algorithm, Algorithm::Pt, "{choice:?}");
+        let [pt, bpt] = &choice.candidates[..] else {
+            unreachable!()
+        };
+        // Stratification lowers path tracing's variance per sample more than BPT's, whose
+        // light paths land in pixels at random.
+        assert!(pt.stratification > bpt.stratification, "{choice:?}");
+        // The candidates are compared at equal time: BPT renders fewer samples in it.
+        assert_eq!(pt.samples, choice::COMPARED_AT_SPP);
+        assert!((bpt.samples * bpt.cost - pt.samples * pt.cost).abs() < 1e-9 * pt.cost);
     }
 }
 

@@ -597,11 +597,17 @@ pub fn settle_algorithm(
         choice.algorithm.name()
     );
     for candidate in &choice.candidates {
+        let [v1, v4] = candidate.measured;
         let v = candidate.relative_variance;
         let chosen = candidate.algorithm == choice.algorithm;
         say!(
-            "  {:<4} variance {:.4} ± {:.4} × cost {:.2} rays = {:.4}{}",
+            "  {:<4} variance per sample {:.4} (frames), {:.4} (halves): γ {:.2}; at {:.0} spp \
+             {:.4} ± {:.4} × cost {:.2} rays = {:.4}{}",
             candidate.algorithm.name(),
+            v1.value,
+            v4.value,
+            candidate.stratification,
+            candidate.samples,
             v.value,
             v.standard_error,
             candidate.cost,
