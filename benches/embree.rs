@@ -253,10 +253,12 @@ fn compare(scene: &Scene, rounds: usize) -> io::Result<()> {
             set.embree_own = set.embree.iter().map(|t| t - own).collect();
         }
     }
-    println!(
-        "  set      rays     vcm-rs M rays/s      Embree M rays/s      Embree* M rays/s     \
-         vcm-rs/Embree  vcm-rs/Embree*  agreeing"
-    );
+    let mut header = String::from("  set      rays     vcm-rs M rays/s");
+    if embree_missing.is_none() {
+        header += "      Embree M rays/s      Embree* M rays/s     vcm-rs/Embree  \
+                   vcm-rs/Embree*  agreeing";
+    }
+    println!("{header}");
     for set in &sets {
         let (vcm, vcm_low, vcm_high) = rates(set.rays.len(), &set.vcm);
         let mut line = format!(
