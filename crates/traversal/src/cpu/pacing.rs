@@ -22,7 +22,7 @@ pub(crate) const PROBE_EVERY: usize = 32;
 /// One chunk in this many runs the way not preferred once one is clearly faster.
 pub(crate) const PROBE_EVERY_CLEAR: usize = 256;
 
-/// The estimated log ratio beyond which one way is clearly faster (1.16×).
+/// The estimated log ratio beyond which one way is clearly faster (by 10.5%).
 const CLEAR: f64 = 0.1;
 
 /// Rays traced each way between two updates of the estimate: chunks differ in their rays
