@@ -23,6 +23,11 @@
 //! wins — with v₄ taken two standard errors high, so that a variance resting on a few
 //! pixels' rare paths does not win on luck.
 //!
+//! A candidate whose sample costs more than [`COMPARED_AT_SPP`] samples of the cheapest
+//! piloted before it would not render one sample in the time compared at: its pilot stops
+//! after its first frame and it is left out ([`Choice::too_costly`]), so that settings that
+//! make one candidate hundreds of times dearer (`--connections 1024`) cost one pilot frame.
+//!
 //! The choice is a pure function of the scene, the options and the seed — counts, not clock
 //! times, measure the cost — so shards of one render made on different machines choose the
 //! same algorithm. An image of fewer than [`MIN_PILOTED_PIXELS`] is not piloted: at 16
@@ -158,10 +163,25 @@ pub struct Choice {
     pub algorithm: Algorithm,
     /// Every candidate piloted, in the order they ran (none where nothing was piloted).
     pub candidates: Vec<Candidate>,
+    /// Candidates whose pilot stopped after its first frame, as a sample of theirs cost more
+    /// than [`COMPARED_AT_SPP`] samples of the cheapest piloted before them (so that in the
+    /// time the candidates are compared at they would not render one).
+    pub too_costly: Vec<TooCostly>,
     /// (width, height) of the pilot renders.
     pub pilot_size: (u32, u32),
     /// Why nothing was piloted, where nothing was (a stop before the first pilot aside).
     pub unpiloted: Option<Unpiloted>,
+}
+
+/// A candidate left out after its pilot's first frame ([`Choice::too_costly`]).
+#[derive(Clone, Debug)]
+pub struct TooCostly {
+    /// The algorithm.
+    pub algorithm: Algorithm,
+    /// Cost of one of its samples, in closest-hit rays ([`COST_WEIGHTS`]).
+    pub cost: f64,
+    /// Wall-clock time of its pilot.
+    pub time: Duration,
 }
 
 /// Why an algorithm is chosen without pilots.
@@ -176,9 +196,10 @@ pub enum Unpiloted {
 }
 
 impl Choice {
-    /// Wall-clock time of all pilots.
+    /// Wall-clock time of all pilots, those left out included.
     pub fn time(&self) -> Duration {
-        self.candidates.iter().map(|c| c.time).sum()
+        let left_out = self.too_costly.iter().map(|c| c.time);
+        self.candidates.iter().map(|c| c.time).chain(left_out).sum()
     }
 }
 
@@ -216,6 +237,7 @@ pub fn choose(
             _ => Algorithm::Pt,
         },
         candidates: Vec::new(),
+        too_costly: Vec::new(),
         pilot_size,
         unpiloted: why,
     };
@@ -231,23 +253,38 @@ pub fn choose(
         algorithms.push(Algorithm::Vcm);
     }
     let mut pilots = Vec::new();
+    let mut piloted = Vec::new();
+    let mut too_costly = Vec::new();
     for &algorithm in &algorithms {
-        match pilot(algorithm, scene, traversal, (pilot_size, &options), stop)? {
-            Some(pilot) => pilots.push(pilot),
-            None => break,
+        // A sample may cost at most COMPARED_AT_SPP samples of the cheapest so far.
+        let limit = pilots
+            .iter()
+            .map(|pilot: &Pilot| pilot.cost)
+            .fold(f64::INFINITY, f64::min)
+            * COMPARED_AT_SPP;
+        let run = (algorithm, pilot_size, &options);
+        match pilot(run, (scene, traversal), limit, stop)? {
+            Outcome::Done(pilot) => {
+                pilots.push(pilot);
+                piloted.push(algorithm);
+            }
+            Outcome::TooCostly { cost, time } => too_costly.push(TooCostly {
+                algorithm,
+                cost,
+                time,
+            }),
+            Outcome::Stopped => break,
         }
     }
-    algorithms.truncate(pilots.len());
+    let algorithms = piloted;
     let Some(robust) = pilots.last() else {
-        return Ok(unpiloted(None));
+        return Ok(Choice {
+            too_costly,
+            ..unpiloted(None)
+        });
     };
     let mean = smoothed(&robust.mean, pilot_size);
-    let samples = (mean.len() as f64) * f64::from(PILOT_FRAMES);
-    let costs: Vec<f64> = algorithms
-        .iter()
-        .zip(&pilots)
-        .map(|(&algorithm, pilot)| cost(&pilot.stats, algorithm) / samples)
-        .collect();
+    let costs: Vec<f64> = pilots.iter().map(|pilot| pilot.cost).collect();
     let cheapest = costs.iter().copied().fold(f64::INFINITY, f64::min);
     let candidates: Vec<_> = algorithms
         .iter()
@@ -279,6 +316,7 @@ pub fn choose(
         algorithm: best.algorithm,
         pilot_size,
         candidates,
+        too_costly,
         unpiloted: None,
     })
 }
@@ -314,6 +352,16 @@ fn pilot_options(options: &IntegratorOptions, width: u32, pilot_width: u32) -> I
     }
 }
 
+/// How a pilot ended.
+enum Outcome {
+    /// It rendered all its frames.
+    Done(Pilot),
+    /// Its samples cost this much each, over the limit it was given, after the time taken.
+    TooCostly { cost: f64, time: Duration },
+    /// A stop request cut a frame short.
+    Stopped,
+}
+
 /// A candidate's pilot, reduced per pixel.
 struct Pilot {
     /// The mean of the frames.
@@ -322,19 +370,20 @@ struct Pilot {
     /// sample variance of one frame's value; and from the means of the two halves,
     /// 4 · (m₁ − m₂)² / 2, four times the unbiased sample variance of a half's mean.
     variance: [Vec<DVec3>; 2],
-    stats: FrameStats,
+    /// Cost per sample ([`cost`]).
+    cost: f64,
     time: Duration,
 }
 
-/// Renders `PILOT_FRAMES` frames of `algorithm`, each into a film of its own; `None` if
-/// `stop` cut one short, an error if the device it traces or shades on failed.
+/// Renders `PILOT_FRAMES` frames of `algorithm` at `(width, height)`, each into a film of its
+/// own; stops as soon as its samples so far cost more than `limit` each ([`cost`]), or when
+/// `stop` cuts a frame short; an error if the device it traces or shades on failed.
 fn pilot(
-    algorithm: Algorithm,
-    scene: &Arc<Scene>,
-    traversal: &Arc<dyn Traversal>,
-    ((width, height), options): ((u32, u32), &IntegratorOptions),
+    (algorithm, (width, height), options): (Algorithm, (u32, u32), &IntegratorOptions),
+    (scene, traversal): (&Arc<Scene>, &Arc<dyn Traversal>),
+    limit: f64,
     stop: &StopFlag,
-) -> Result<Option<Pilot>, RenderError> {
+) -> Result<Outcome, RenderError> {
     let start = Instant::now();
     let mut integrator = build(
         algorithm,
@@ -354,10 +403,19 @@ fn pilot(
             return Err(RenderError::DeviceFailed(failure));
         }
         if frame.interrupted {
-            return Ok(None);
+            return Ok(Outcome::Stopped);
         }
         stats.accumulate(&frame);
         frames.push(film.mean());
+        let per_sample =
+            cost(&stats, algorithm) / (f64::from(width * height) * frames.len() as f64);
+        if per_sample > limit {
+            let time = start.elapsed();
+            return Ok(Outcome::TooCostly {
+                cost: per_sample,
+                time,
+            });
+        }
     }
     let n = f64::from(PILOT_FRAMES);
     let mut mean = Vec::new();
@@ -372,10 +430,10 @@ fn pilot(
         variance[0].push(squares / (n - 1.0));
         variance[1].push(HALF as f64 * difference * difference / 2.0);
     }
-    Ok(Some(Pilot {
+    Ok(Outcome::Done(Pilot {
         mean,
         variance,
-        stats,
+        cost: cost(&stats, algorithm) / (f64::from(width * height) * n),
         time: start.elapsed(),
     }))
 }

@@ -76,6 +76,40 @@ fn a_plain_diffuse_room_is_left_to_path_tracing() {
     }
 }
 
+/// With 1,024 connections per camera vertex a BPT sample costs hundreds of path-tracing
+/// samples: its pilot stops after one frame, and the candidates piloted choose.
+#[test]
+fn a_candidate_too_costly_to_compare_is_left_out_after_one_frame() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.gltf");
+    let scene = Arc::new(Scene::load(&path).unwrap());
+    let traversal: Arc<dyn Traversal> = Arc::new(vcm_rs::cpu_traversal(&scene).unwrap());
+    let options = IntegratorOptions {
+        connections: 1024,
+        ..IntegratorOptions::default()
+    };
+    let stop = StopFlag::new();
+    let choice = choice::choose(&scene, &traversal, (64, 64), &options, &stop).unwrap();
+    assert_eq!(algorithms(&choice), [Algorithm::Pt]);
+    assert_eq!(choice.algorithm, Algorithm::Pt);
+    let [left_out] = &choice.too_costly[..] else {
+        panic!("{choice:?}")
+    };
+    assert_eq!(left_out.algorithm, Algorithm::Bpt);
+    assert!(left_out.cost > choice::COMPARED_AT_SPP * choice.candidates[0].cost);
+    assert!(choice.time() >= left_out.time);
+    // With the default connection, BPT is compared as usual.
+    let usual = choice::choose(
+        &scene,
+        &traversal,
+        (64, 64),
+        &IntegratorOptions::default(),
+        &stop,
+    );
+    let usual = usual.unwrap();
+    assert!(usual.too_costly.is_empty());
+    assert_eq!(algorithms(&usual), [Algorithm::Pt, Algorithm::Bpt]);
+}
+
 /// Through water, path tracing meets the caustics only by chance: its fireflies make its
 /// variance × cost tens of times VCM's (measured 84 against 2.6 at seed 0), across seeds.
 #[test]

@@ -571,6 +571,16 @@ pub fn settle_algorithm(
         ),
         None => {}
     }
+    for left_out in &choice.too_costly {
+        tell!(
+            "algorithm: {} left out after one pilot frame ({:.2} s): a sample costs {:.0} rays, \
+             more than {} samples of the cheapest candidate",
+            left_out.algorithm.name(),
+            left_out.time.as_secs_f64(),
+            left_out.cost,
+            choice::COMPARED_AT_SPP
+        );
+    }
     if choice.candidates.is_empty() {
         return Ok(choice.algorithm);
     }
