@@ -252,31 +252,21 @@ pub fn choose(
     if options.no_prune || scene.features.materials.specular_or_near() {
         algorithms.push(Algorithm::Vcm);
     }
-    let mut pilots = Vec::new();
-    let mut piloted = Vec::new();
+    let mut pilots: Vec<Pilot> = Vec::new();
     let mut too_costly = Vec::new();
+    let mut cheapest = f64::INFINITY;
     for &algorithm in &algorithms {
         // A sample may cost at most COMPARED_AT_SPP samples of the cheapest so far.
-        let limit = pilots
-            .iter()
-            .map(|pilot: &Pilot| pilot.cost)
-            .fold(f64::INFINITY, f64::min)
-            * COMPARED_AT_SPP;
         let run = (algorithm, pilot_size, &options);
-        match pilot(run, (scene, traversal), limit, stop)? {
+        match pilot(run, (scene, traversal), cheapest * COMPARED_AT_SPP, stop)? {
             Outcome::Done(pilot) => {
+                cheapest = cheapest.min(pilot.cost);
                 pilots.push(pilot);
-                piloted.push(algorithm);
             }
-            Outcome::TooCostly { cost, time } => too_costly.push(TooCostly {
-                algorithm,
-                cost,
-                time,
-            }),
+            Outcome::TooCostly(left_out) => too_costly.push(left_out),
             Outcome::Stopped => break,
         }
     }
-    let algorithms = piloted;
     let Some(robust) = pilots.last() else {
         return Ok(Choice {
             too_costly,
@@ -284,26 +274,22 @@ pub fn choose(
         });
     };
     let mean = smoothed(&robust.mean, pilot_size);
-    let costs: Vec<f64> = pilots.iter().map(|pilot| pilot.cost).collect();
-    let cheapest = costs.iter().copied().fold(f64::INFINITY, f64::min);
-    let candidates: Vec<_> = algorithms
+    let candidates: Vec<_> = pilots
         .iter()
-        .zip(&pilots)
-        .zip(&costs)
-        .map(|((&algorithm, pilot), &cost)| {
+        .map(|pilot| {
             let measured = pilot
                 .variance
                 .each_ref()
                 .map(|v| relative_variance(v, &mean));
             let gamma = stratification(measured[0].value, measured[1].value);
-            let samples = COMPARED_AT_SPP * cheapest / cost;
+            let samples = COMPARED_AT_SPP * cheapest / pilot.cost;
             Candidate {
-                algorithm,
+                algorithm: pilot.algorithm,
                 measured,
                 stratification: gamma,
                 samples,
                 relative_variance: variance_after(measured[1], gamma, samples),
-                cost,
+                cost: pilot.cost,
                 time: pilot.time,
             }
         })
@@ -356,14 +342,16 @@ fn pilot_options(options: &IntegratorOptions, width: u32, pilot_width: u32) -> I
 enum Outcome {
     /// It rendered all its frames.
     Done(Pilot),
-    /// Its samples cost this much each, over the limit it was given, after the time taken.
-    TooCostly { cost: f64, time: Duration },
+    /// Its samples cost more each than the limit it was given.
+    TooCostly(TooCostly),
     /// A stop request cut a frame short.
     Stopped,
 }
 
 /// A candidate's pilot, reduced per pixel.
 struct Pilot {
+    /// The algorithm piloted.
+    algorithm: Algorithm,
     /// The mean of the frames.
     mean: Vec<DVec3>,
     /// The variance per sample from single frames, s² = Σ (x − x̄)² / (n − 1), the unbiased
@@ -396,6 +384,7 @@ fn pilot(
     integrator.set_stop(stop.clone());
     let mut stats = FrameStats::default();
     let mut frames: Vec<Vec<Vec3>> = Vec::new();
+    let mut cost_per_sample = 0.0;
     for sample in 0..PILOT_FRAMES {
         let mut film = Film::new(width, height);
         let frame = integrator.render_frame(&mut film, sample);
@@ -407,21 +396,23 @@ fn pilot(
         }
         stats.accumulate(&frame);
         frames.push(film.mean());
-        let per_sample =
+        cost_per_sample =
             cost(&stats, algorithm) / (f64::from(width * height) * frames.len() as f64);
-        if per_sample > limit {
-            let time = start.elapsed();
-            return Ok(Outcome::TooCostly {
-                cost: per_sample,
-                time,
-            });
+        if cost_per_sample > limit {
+            return Ok(Outcome::TooCostly(TooCostly {
+                algorithm,
+                cost: cost_per_sample,
+                time: start.elapsed(),
+            }));
         }
     }
     let n = f64::from(PILOT_FRAMES);
     let mut mean = Vec::new();
     let mut variance = [Vec::new(), Vec::new()];
-    for pixel in 0..frames[0].len() {
-        let values: Vec<DVec3> = frames.iter().map(|frame| frame[pixel].as_dvec3()).collect();
+    let pixel = |p: usize| -> [DVec3; PILOT_FRAMES as usize] {
+        std::array::from_fn(|k| frames[k][p].as_dvec3())
+    };
+    for values in (0..frames[0].len()).map(pixel) {
         let m = values.iter().sum::<DVec3>() / n;
         let squares = values.iter().map(|&x| (x - m) * (x - m)).sum::<DVec3>();
         let half = |k: usize| values[k * HALF..(k + 1) * HALF].iter().sum::<DVec3>() / HALF as f64;
@@ -431,9 +422,10 @@ fn pilot(
         variance[1].push(HALF as f64 * difference * difference / 2.0);
     }
     Ok(Outcome::Done(Pilot {
+        algorithm,
         mean,
         variance,
-        cost: cost(&stats, algorithm) / (f64::from(width * height) * n),
+        cost: cost_per_sample,
         time: start.elapsed(),
     }))
 }
