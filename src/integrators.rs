@@ -52,6 +52,16 @@ impl AlgorithmOption {
             AlgorithmOption::Fixed(algorithm) => Some(algorithm),
         }
     }
+
+    /// The algorithm it renders with GPU shading: path tracing, the only one the GPU's
+    /// kernels have so far, which `auto` means there; `Err` with the algorithm named, which
+    /// GPU shading cannot render.
+    pub fn shaded_on_gpu(self) -> Result<Algorithm, Algorithm> {
+        match self {
+            AlgorithmOption::Auto | AlgorithmOption::Fixed(Algorithm::Pt) => Ok(Algorithm::Pt),
+            AlgorithmOption::Fixed(other) => Err(other),
+        }
+    }
 }
 
 impl clap::ValueEnum for AlgorithmOption {
@@ -223,4 +233,18 @@ pub fn image_size(scene: &Scene, width: u32, height: Option<u32>) -> (u32, u32) 
         ((width as f32 / aspect).round() as u32).max(1)
     });
     (width, height)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_shading_renders_path_tracing_for_auto_and_refuses_other_algorithms() {
+        assert_eq!(AlgorithmOption::Auto.shaded_on_gpu(), Ok(Algorithm::Pt));
+        let fixed = |algorithm| AlgorithmOption::Fixed(algorithm).shaded_on_gpu();
+        assert_eq!(fixed(Algorithm::Pt), Ok(Algorithm::Pt));
+        assert_eq!(fixed(Algorithm::Vcm), Err(Algorithm::Vcm));
+        assert_eq!(fixed(Algorithm::Bpt), Err(Algorithm::Bpt));
+    }
 }

@@ -120,11 +120,9 @@ impl Request {
                 ));
             }
             // The GPU shades path tracing only so far; "auto" means it there.
-            algorithm = match algorithm {
-                AlgorithmOption::Auto | AlgorithmOption::Fixed(Algorithm::Pt) => {
-                    AlgorithmOption::Fixed(Algorithm::Pt)
-                }
-                AlgorithmOption::Fixed(other) => {
+            algorithm = match algorithm.shaded_on_gpu() {
+                Ok(path_tracing) => AlgorithmOption::Fixed(path_tracing),
+                Err(other) => {
                     return Err(PyValueError::new_err(format!(
                         "shading: \"gpu\" renders path tracing only so far (algo \"pt\" or \"auto\"), not \"{}\"",
                         other.name()

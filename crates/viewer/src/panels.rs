@@ -185,11 +185,8 @@ fn radius_row(radius: &mut MergeRadius, ui: &mut egui::Ui) {
 /// Where paths are shaded: on the GPU only for path tracing on the GPU backend (else back to
 /// the CPU; `auto` renders path tracing there, as `vcm render` does).
 fn shading_row(settings: &mut RenderSettings, ui: &mut egui::Ui) {
-    let path_tracing = settings
-        .algorithm
-        .fixed()
-        .is_none_or(|a| a == Algorithm::Pt);
-    let possible = settings.backend == Backend::Gpu && path_tracing;
+    let shaded = settings.algorithm.shaded_on_gpu().is_ok();
+    let possible = settings.backend == Backend::Gpu && shaded;
     if !possible {
         settings.shading = Shading::Cpu;
     }

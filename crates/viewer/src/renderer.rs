@@ -15,7 +15,7 @@ use glam::Vec3;
 use vcm::image_io::RgbImage;
 use vcm::{Film, FrameStats, Integrator, StopFlag};
 use vcm_rs::integrators::choice::{self, Choice, Unpiloted};
-use vcm_rs::integrators::{Algorithm, IntegratorOptions};
+use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions};
 use vcm_rs::render_loop::{Frames, Remaining};
 use vcm_rs::state::SampleRanges;
 use vcm_rs::{Backend, BuiltTraversal, Shading};
@@ -274,14 +274,17 @@ impl Worker {
                 ..Scene::clone(&job.scene)
             })
         };
-        let (algorithm, chosen) = match settings.algorithm.fixed() {
-            Some(algorithm) => (algorithm, None),
-            // GPU shading has path tracing only, as `vcm render` settles it.
-            None if settings.shading == Shading::Gpu => (
-                Algorithm::Pt,
-                Some("auto: the only one shaded on the GPU".into()),
-            ),
-            None => {
+        let (algorithm, chosen) = match (settings.algorithm, settings.shading) {
+            (AlgorithmOption::Fixed(algorithm), _) => (algorithm, None),
+            (AlgorithmOption::Auto, Shading::Gpu) => {
+                // What GPU shading renders for `auto` (never refused).
+                let (Ok(algorithm) | Err(algorithm)) = settings.algorithm.shaded_on_gpu();
+                (
+                    algorithm,
+                    Some("auto: the only one shaded on the GPU".into()),
+                )
+            }
+            (AlgorithmOption::Auto, Shading::Cpu) => {
                 let (algorithm, how) = self.choose(job, &scene, &built)?;
                 (algorithm, Some(how))
             }

@@ -667,13 +667,12 @@ fn build_backend(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<BuiltTr
 /// The algorithm `--shading gpu` renders for `--algo`: path tracing, the only one its kernels
 /// have so far.
 pub fn gpu_shaded_algorithm(algorithm: AlgorithmOption) -> anyhow::Result<Algorithm> {
-    match algorithm {
-        AlgorithmOption::Auto | AlgorithmOption::Fixed(Algorithm::Pt) => Ok(Algorithm::Pt),
-        AlgorithmOption::Fixed(other) => bail!(
+    algorithm.shaded_on_gpu().or_else(|other| {
+        bail!(
             "--shading gpu renders path tracing only so far (--algo pt or auto), not {}",
             other.name()
-        ),
-    }
+        )
+    })
 }
 
 /// Says what a traversal backend just built runs on.
