@@ -43,7 +43,7 @@ impl Continuations {
             throughput: throughput.mul(next.eval.f_cos.div(next.eval.pdf)),
             origin: vertex.spawn(next.wi),
             roulette: numbers.first(Draw::Roulette),
-            to_roulette: numbers.to_roulette,
+            to_roulette: numbers.lane_draws.to_roulette,
             next,
         }
     }

@@ -155,19 +155,17 @@ pub(crate) fn lane_of(group: &[(usize, Hit)], lane: usize) -> (usize, Hit) {
 
 /// The numbers a lane group's vertices draw, read ahead ([`start_vertices`]).
 pub(crate) struct VertexNumbers<const N: usize> {
-    /// The decisions read, in the order of `pairs`.
-    draws: [Draw; N],
-    /// Each decision's pair in every lane.
+    /// What the vertices read of their layout.
+    pub lane_draws: &'static LaneDraws<N>,
+    /// Each of `lane_draws.draws`'s pair in every lane.
     pairs: [[[f32; LANES]; 2]; N],
-    /// The index of Russian roulette's pair in the vertices' layout.
-    pub to_roulette: u32,
 }
 
 impl<const N: usize> VertexNumbers<N> {
     /// The pair of `draw` in every lane (one the vertices read).
     #[inline(always)]
     pub fn pair(&self, draw: Draw) -> (F32s, F32s) {
-        let k = self.draws.iter().position(|&d| d == draw);
+        let k = self.lane_draws.draws.iter().position(|&d| d == draw);
         let [first, second] = self.pairs[k.expect("a decision the vertices read")];
         (F32s(first), F32s(second))
     }
@@ -185,7 +183,7 @@ impl<const N: usize> VertexNumbers<N> {
 #[inline(always)]
 pub(crate) fn start_vertices<P: Walker, const N: usize>(
     (paths, group): (&mut [P], &[(usize, Hit)]),
-    lane_draws: &LaneDraws<N>,
+    lane_draws: &'static LaneDraws<N>,
 ) -> VertexNumbers<N> {
     debug_assert!(!group.is_empty() && group.len() <= LANES);
     for &(i, _) in group {
@@ -193,9 +191,8 @@ pub(crate) fn start_vertices<P: Walker, const N: usize>(
     }
     let samplers = std::array::from_fn(|lane| &paths[lane_of(group, lane).0].walk().rng);
     VertexNumbers {
-        draws: lane_draws.draws,
+        lane_draws,
         pairs: SobolSampler::peek_lanes(samplers, lane_draws.indices),
-        to_roulette: lane_draws.to_roulette,
     }
 }
 
