@@ -6,31 +6,48 @@ use std::sync::Arc;
 use vcm::{Algorithm, Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
 use vcm_gpu::GpuPathTracer;
 use vcm_traversal::Traversal;
-use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions};
+use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
 
 use crate::common::{gpu, scene};
 
+/// Renders a frame with each of `integrators`, destroys the device under them, and checks
+/// that each then drops its next frame whole, keeps a failure that starts with `prefix`, and
+/// renders no frame after it.
+fn assert_a_lost_device_drops_frames(
+    gpu: &GpuDevice,
+    integrators: &mut [Box<dyn Integrator + '_>],
+    prefix: &str,
+) {
+    let mut films = vec![Film::new(8, 8); integrators.len()];
+    for (integrator, film) in integrators.iter_mut().zip(&mut films) {
+        assert!(!integrator.render_frame(film, 0).interrupted);
+        assert_eq!(integrator.failure(), None);
+    }
+    let before = films.clone();
+    gpu.device.destroy();
+    for (k, (integrator, film)) in integrators.iter_mut().zip(&mut films).enumerate() {
+        assert!(
+            integrator.render_frame(film, 1).interrupted,
+            "integrator {k}"
+        );
+        let failure = integrator.failure().expect("the failure is kept");
+        assert!(failure.starts_with(prefix), "{failure}");
+        assert_eq!(*film, before[k], "the failed frame added nothing");
+        // No frame renders after it.
+        assert!(integrator.render_frame(film, 2).interrupted);
+    }
+}
+
+/// The GPU's path tracer, whose kernels fail.
 #[test]
 fn a_lost_device_drops_the_frame_and_names_the_failure() {
     let Some(gpu) = gpu() else { return };
     let scene = scene("cornell-box");
     let options = GpuBvhOptions::default();
     let bvh = GpuBvh::new(Arc::clone(&gpu), &scene.triangle_corners(), options).unwrap();
-    let mut tracer = GpuPathTracer::new(Arc::clone(&scene), &bvh, PtSettings::new(8, 8)).unwrap();
-    let mut film = Film::new(8, 8);
-    assert!(!tracer.render_frame(&mut film, 0).interrupted);
-    assert_eq!(tracer.failure(), None);
-    let before = film.clone();
-    gpu.device.destroy();
-    assert!(tracer.render_frame(&mut film, 1).interrupted);
-    let failure = tracer.failure().expect("the failure is kept");
-    assert!(
-        failure.starts_with("path tracing on the GPU: "),
-        "{failure}"
-    );
-    assert_eq!(film, before, "the failed frame added nothing");
-    // No frame renders after it.
-    assert!(tracer.render_frame(&mut film, 2).interrupted);
+    let tracer = GpuPathTracer::new(Arc::clone(&scene), &bvh, PtSettings::new(8, 8)).unwrap();
+    let mut integrators: [Box<dyn Integrator + '_>; 1] = [Box::new(tracer)];
+    assert_a_lost_device_drops_frames(&gpu, &mut integrators, "path tracing on the GPU: ");
 }
 
 /// Shading on the CPU over the GPU's traversal: the traversal's failure drops the frame that
@@ -54,21 +71,5 @@ fn a_lost_device_under_cpu_shading_drops_the_frame_and_names_the_failure() {
     );
     let mut integrators: [Box<dyn Integrator>; 2] =
         [Box::new(path_tracer.unwrap()), Box::new(vcm.unwrap())];
-    let mut films = [Film::new(8, 8), Film::new(8, 8)];
-    for (integrator, film) in integrators.iter_mut().zip(&mut films) {
-        assert!(!integrator.render_frame(film, 0).interrupted);
-        assert_eq!(integrator.failure(), None);
-    }
-    let before = films.clone();
-    gpu.device.destroy();
-    for (k, (integrator, film)) in integrators.iter_mut().zip(&mut films).enumerate() {
-        assert!(
-            integrator.render_frame(film, 1).interrupted,
-            "integrator {k}"
-        );
-        let failure = integrator.failure().expect("the failure is kept");
-        assert!(failure.starts_with("ray traversal failed: "), "{failure}");
-        assert_eq!(*film, before[k], "the failed frame added nothing");
-        assert!(integrator.render_frame(film, 2).interrupted);
-    }
+    assert_a_lost_device_drops_frames(&gpu, &mut integrators, "ray traversal failed: ");
 }
