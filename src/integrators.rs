@@ -8,7 +8,7 @@ pub mod choice;
 
 pub use vcm::{Algorithm, MergeRadius};
 use vcm::{DEFAULT_ALPHA, Integrator, PathTracer, PtSettings, RenderError, Vcm, VcmSettings};
-use vcm_gpu::{GpuPathTracer, GpuRenderError};
+use vcm_gpu::{GpuLightTracer, GpuPathTracer, GpuRenderError};
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Scene, ShadingPlan};
 use vcm_traversal::Traversal;
@@ -53,15 +53,21 @@ impl AlgorithmOption {
         }
     }
 
-    /// The algorithm it renders with GPU shading: path tracing, the only one the GPU's
-    /// kernels have so far, which `auto` means there; `Err` with the algorithm named, which
-    /// GPU shading cannot render.
+    /// The algorithm it renders with GPU shading: path tracing or light tracing, the ones
+    /// the GPU's kernels have so far (`auto` means path tracing there); `Err` with the
+    /// algorithm named, which GPU shading cannot render.
     pub fn shaded_on_gpu(self) -> Result<Algorithm, Algorithm> {
         match self {
-            AlgorithmOption::Auto | AlgorithmOption::Fixed(Algorithm::Pt) => Ok(Algorithm::Pt),
+            AlgorithmOption::Auto => Ok(Algorithm::Pt),
+            AlgorithmOption::Fixed(algorithm) if Self::GPU_SHADED.contains(&algorithm) => {
+                Ok(algorithm)
+            }
             AlgorithmOption::Fixed(other) => Err(other),
         }
     }
+
+    /// The algorithms GPU shading renders.
+    pub const GPU_SHADED: [Algorithm; 2] = [Algorithm::Pt, Algorithm::LightTracing];
 }
 
 impl clap::ValueEnum for AlgorithmOption {
@@ -181,20 +187,29 @@ pub fn build(
             Box::new(PathTracer::new(scene, traversal, settings)?)
         }
         bidirectional => {
-            let settings = VcmSettings {
-                seed: options.seed,
-                sequence: options.sampler.sequence(),
-                max_depth: options.max_depth,
-                connections: options.connections,
-                radius: options.radius,
-                alpha: options.alpha,
-                prune: !options.no_prune,
-                lambert_lanes: !options.no_prune,
-                ..VcmSettings::new(bidirectional, width, height)
-            };
+            let settings = vcm_settings(bidirectional, options, (width, height));
             Box::new(Vcm::new(scene, traversal, settings)?)
         }
     })
+}
+
+/// The settings of a bidirectional `algorithm` for `options` at `width` × `height`.
+fn vcm_settings(
+    algorithm: Algorithm,
+    options: &IntegratorOptions,
+    (width, height): (u32, u32),
+) -> VcmSettings {
+    VcmSettings {
+        seed: options.seed,
+        sequence: options.sampler.sequence(),
+        max_depth: options.max_depth,
+        connections: options.connections,
+        radius: options.radius,
+        alpha: options.alpha,
+        prune: !options.no_prune,
+        lambert_lanes: !options.no_prune,
+        ..VcmSettings::new(algorithm, width, height)
+    }
 }
 
 /// The path tracer's settings for `options` at `width` × `height`.
@@ -208,21 +223,31 @@ fn pt_settings(options: &IntegratorOptions, (width, height): (u32, u32)) -> PtSe
     }
 }
 
-/// The path tracer with every path shaded on the GPU ([`GpuPathTracer`]), on the GPU
-/// backend's hierarchy `bvh`, for a `width` × `height` image: the same image as
-/// [`build`]'s path tracer up to rounding. Fails for scenes the GPU cannot shade yet.
+/// `algorithm` with every path shaded on the GPU ([`GpuPathTracer`], [`GpuLightTracer`]), on
+/// the GPU backend's hierarchy `bvh`, for a `width` × `height` image: the same image as
+/// [`build`]'s integrator up to rounding. Refuses the algorithms the GPU has no kernel for
+/// ([`AlgorithmOption::GPU_SHADED`]).
 pub fn build_on_gpu(
+    algorithm: Algorithm,
     scene: &Arc<Scene>,
     bvh: &GpuBvh,
     size: (u32, u32),
     options: &IntegratorOptions,
 ) -> Result<Box<dyn Integrator>, GpuRenderError> {
-    let settings = pt_settings(options, size);
-    Ok(Box::new(GpuPathTracer::new(
-        Arc::clone(scene),
-        bvh,
-        settings,
-    )?))
+    let scene = Arc::clone(scene);
+    Ok(match algorithm {
+        Algorithm::Pt => Box::new(GpuPathTracer::new(scene, bvh, pt_settings(options, size))?),
+        Algorithm::LightTracing => {
+            let settings = vcm_settings(algorithm, options, size);
+            Box::new(GpuLightTracer::new(scene, bvh, settings)?)
+        }
+        other => {
+            return Err(GpuRenderError::Refused(format!(
+                "renders path tracing and light tracing only so far, not {}",
+                other.name()
+            )));
+        }
+    })
 }
 
 /// The image size: `width`, and `height` or else the one the camera's aspect ratio gives
@@ -240,10 +265,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn gpu_shading_renders_path_tracing_for_auto_and_refuses_other_algorithms() {
+    fn gpu_shading_renders_path_tracing_for_auto_light_tracing_and_refuses_the_others() {
         assert_eq!(AlgorithmOption::Auto.shaded_on_gpu(), Ok(Algorithm::Pt));
         let fixed = |algorithm| AlgorithmOption::Fixed(algorithm).shaded_on_gpu();
         assert_eq!(fixed(Algorithm::Pt), Ok(Algorithm::Pt));
+        assert_eq!(fixed(Algorithm::LightTracing), Ok(Algorithm::LightTracing));
         assert_eq!(fixed(Algorithm::Vcm), Err(Algorithm::Vcm));
         assert_eq!(fixed(Algorithm::Bpt), Err(Algorithm::Bpt));
     }

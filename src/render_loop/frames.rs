@@ -90,9 +90,9 @@ impl Frames {
     }
 
     /// [`integrator`](Self::integrator) with its paths shaded where `shading` says: on the
-    /// GPU, the path tracer with every path shaded in one kernel on the GPU backend's
-    /// hierarchy in `built` ([`integrators::build_on_gpu`]). GPU shading of another
-    /// algorithm, or on the CPU backend, is [`GpuRenderError::Refused`].
+    /// GPU, every path shaded in one kernel on the GPU backend's hierarchy in `built`
+    /// ([`integrators::build_on_gpu`]). GPU shading of an algorithm without a kernel, or on
+    /// the CPU backend, is [`GpuRenderError::Refused`].
     pub fn shaded_integrator(
         &self,
         (algorithm, shading): (Algorithm, Shading),
@@ -118,15 +118,9 @@ impl Frames {
                     "needs the gpu backend, whose hierarchy it traces".into(),
                 ));
             }
-            (Shading::Gpu, Some(_)) if algorithm != Algorithm::Pt => {
-                return Err(GpuRenderError::Refused(format!(
-                    "renders path tracing only so far, not {}",
-                    algorithm.name()
-                )));
-            }
             (Shading::Gpu, Some(bvh)) => bvh,
         };
-        let mut integrator = integrators::build_on_gpu(scene, bvh, size, options)?;
+        let mut integrator = integrators::build_on_gpu(algorithm, scene, bvh, size, options)?;
         let schedule = self.options.first_schedule_on(self.backend, samples_left);
         integrator.set_schedule(schedule)?;
         Ok(integrator)

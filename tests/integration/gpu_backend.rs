@@ -234,9 +234,9 @@ fn assert_masks_agree(scene: &Arc<vcm_rs::scene::Scene>) -> Vec<u32> {
 }
 
 /// `--shading gpu`: the GPU path tracer renders the CPU path tracer's image up to rounding
-/// (`--algo auto` becomes pt, with no pilots), `--explain` says where paths are shaded, what
-/// it cannot do fails with the reason before anything is written, and a scene with an
-/// environment map renders.
+/// (`--algo auto` becomes pt, with no pilots), `--explain` says where paths are shaded, light
+/// tracing renders on the GPU too, what it cannot do fails with the reason before anything is
+/// written, and a scene with an environment map renders.
 #[test]
 fn gpu_shading_renders_the_cpu_path_tracers_image() {
     if !have_gpu() {
@@ -283,11 +283,25 @@ fn gpu_shading_renders_the_cpu_path_tracers_image() {
         a.pixels.len()
     );
 
+    let light_tracing = [
+        "--algo",
+        "lt",
+        "--backend",
+        "gpu",
+        "--shading",
+        "gpu",
+        "--explain",
+    ];
+    let (stdout, _) = run(&light_tracing, &path("lt.exr"));
+    for said in ["shading on the GPU: runs", "light tracing splats: runs"] {
+        assert!(stdout.contains(said), "{said}: {stdout}");
+    }
+
     let refused = [
         (&["--shading", "gpu"][..], "give --backend gpu too"),
         (
             &["--backend", "gpu", "--shading", "gpu", "--algo", "bpt"],
-            "path tracing only",
+            "light tracing only so far",
         ),
     ];
     for (extra, message) in refused {
@@ -363,13 +377,14 @@ fn gpu_shading_renders_the_cpu_path_tracers_image() {
     assert!(dir.path().join("sky.exr").exists());
 }
 
-/// Alpha masks with GPU shading: the kernel traces with the GPU backend's mask test, so on
-/// the Khronos alpha-mode model (lit by a point light and a sky) it renders the CPU path
-/// tracer's paths, which test the masks on the CPU: at least 99% of the pixels within 10⁻⁴.
+/// Alpha masks with GPU shading: the kernels trace with the GPU backend's mask test, so on
+/// the Khronos alpha-mode model (lit by a point light and a sky) they render the paths of the
+/// CPU's path tracer and light tracer, which test the masks on the CPU: at least 99% of the
+/// pixels within 10⁻⁴ (98% for light tracing, whose paths each reach several pixels).
 #[test]
 fn gpu_shading_tests_alpha_masks_as_the_cpu_does() {
-    use vcm::{Film, Integrator, PathTracer, PtSettings, Schedule};
-    use vcm_rs::integrators::{IntegratorOptions, build_on_gpu};
+    use vcm::{Algorithm, Film, Integrator, Schedule};
+    use vcm_rs::integrators::{AlgorithmOption, IntegratorOptions, build, build_on_gpu};
     use vcm_rs::scene::Scene;
     use vcm_rs::scene::testing::lit_by_bulb_and_sky;
 
@@ -395,21 +410,29 @@ fn gpu_shading_tests_alpha_masks_as_the_cpu_does() {
     };
     let options = IntegratorOptions::default();
     let cpu_traversal = Arc::new(vcm_rs::cpu_traversal(&scene).unwrap());
-    let settings = PtSettings::new(size.0, size.1);
-    let mut cpu = PathTracer::new(Arc::clone(&scene), cpu_traversal, settings).unwrap();
     let bvh = vcm_rs::gpu_traversal(&scene).unwrap();
-    let mut gpu = build_on_gpu(&scene, &bvh, size, &options).unwrap();
-    let (a, b) = (render(&mut cpu), render(gpu.as_mut()));
-    let close = a
-        .iter()
-        .zip(&b)
-        .filter(|(p, q)| (**p - **q).abs().max_element() <= 1e-4 * p.max_element().max(1e-2))
-        .count();
-    assert!(
-        close * 100 >= 99 * a.len(),
-        "{close} of {} pixels agree",
-        a.len()
-    );
+    for algorithm in AlgorithmOption::GPU_SHADED {
+        let traversal = Arc::clone(&cpu_traversal) as Arc<dyn vcm_rs::traversal::Traversal>;
+        let mut cpu = build(algorithm, &scene, traversal, size, &options).unwrap();
+        let mut gpu = build_on_gpu(algorithm, &scene, &bvh, size, &options).unwrap();
+        let (a, b) = (render(cpu.as_mut()), render(gpu.as_mut()));
+        let close = a
+            .iter()
+            .zip(&b)
+            .filter(|(p, q)| (**p - **q).abs().max_element() <= 1e-4 * p.max_element().max(1e-2))
+            .count();
+        let least = if algorithm == Algorithm::LightTracing {
+            98
+        } else {
+            99
+        };
+        assert!(
+            close * 100 >= least * a.len(),
+            "{}: {close} of {} pixels agree",
+            algorithm.name(),
+            a.len()
+        );
+    }
 }
 
 /// `vcm experiment` runs with `--shading gpu` too: PT shaded on the GPU and on the CPU render

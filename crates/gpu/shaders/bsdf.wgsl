@@ -1,4 +1,5 @@
-// The surface scattering model of vcm-scene (bsdf/), radiance transport with forward pdfs:
+// The surface scattering model of vcm-scene (bsdf/), radiance or importance transport
+// (`importance`: light paths) with forward pdfs:
 // the glTF metallic-roughness mixture of a Schlick reflection lobe (mirror or GGX), a
 // diffuse base (plain Lambert or energy-compensated under a specular layer) and a dielectric
 // interface (thick or thin-walled, smooth or GGX). Each function is the CPU's of the same
@@ -433,7 +434,12 @@ fn transmission_half_vector(wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec3<f32>
     return select(vec3(0.0), mh, dot3(wo, mh) > 0.0 && dot3(wi, mh) < 0.0);
 }
 
-fn dielectric_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> BsdfEval {
+// Radiance scaling of refracted transport, 1/η², or 1 for importance (`refraction_scale`).
+fn refraction_scale(eta: f32, importance: bool) -> f32 {
+    return select(1.0 / (eta * eta), 1.0, importance);
+}
+
+fn dielectric_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>, eta: f32, importance: bool) -> BsdfEval {
     let none = BsdfEval(vec3(0.0), 0.0);
     let alpha = m.dielectric_alpha;
     if alpha == 0.0 {
@@ -461,7 +467,7 @@ fn dielectric_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> BsdfE
     }
     let t = 1.0 - fresnel_dielectric(wo_m, eta);
     let f_cos = t * ggx_d(alpha, mh) * ggx_g2(alpha, wo, wi) * abs(wi_m * wo_m) / (wo.z * denom)
-        * (1.0 / (eta * eta)) * m.dielectric_weight;
+        * refraction_scale(eta, importance) * m.dielectric_weight;
     let pdf = ggx_visible_pdf(alpha, wo, mh) * abs(wi_m) / denom * t;
     return BsdfEval(m.dielectric_tint * f_cos, pdf);
 }
@@ -482,7 +488,14 @@ fn thin_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> BsdfEval {
 }
 
 // Every lobe's f·|cos| summed, and the selection-weighted pdf (`Mixture::eval`).
-fn mixture_eval(m: Material, p: vec4<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> BsdfEval {
+fn mixture_eval(
+    m: Material,
+    p: vec4<f32>,
+    wo: vec3<f32>,
+    wi: vec3<f32>,
+    eta: f32,
+    importance: bool,
+) -> BsdfEval {
     var f_cos = vec3(0.0);
     var pdf = 0.0;
     if (m.flags & HAS_SPECULAR) != 0u {
@@ -496,7 +509,7 @@ fn mixture_eval(m: Material, p: vec4<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f3
         pdf += p.y * e.pdf_fwd;
     }
     if (m.flags & HAS_DIELECTRIC) != 0u {
-        let e = dielectric_eval(m, wo, wi, eta);
+        let e = dielectric_eval(m, wo, wi, eta, importance);
         f_cos += e.f_cos;
         pdf += p.z * e.pdf_fwd;
     }
@@ -508,13 +521,31 @@ fn mixture_eval(m: Material, p: vec4<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f3
     return BsdfEval(f_cos, pdf);
 }
 
-fn bsdf_eval(b: Bsdf, out: Outgoing, wi: vec3<f32>) -> BsdfEval {
+// Veach's shading-normal correction of importance transport (`Bsdf::adjoint`, Veach 1997
+// §5.3): f·|wi·n_s| becomes f·|wo·n_s||wi·n_g| / |wo·n_g|; `cos_gi` = |wi·n_g|.
+fn adjoint(
+    b: Bsdf,
+    f_cos: vec3<f32>,
+    importance: bool,
+    out: Outgoing,
+    wi_local: vec3<f32>,
+    cos_gi: f32,
+) -> vec3<f32> {
+    if !importance {
+        return f_cos;
+    }
+    return f_cos * (out.local.z * cos_gi / (abs(dot3(out.world, b.n_g)) * abs(wi_local.z)));
+}
+
+fn bsdf_eval(b: Bsdf, out: Outgoing, wi: vec3<f32>, importance: bool) -> BsdfEval {
     let none = BsdfEval(vec3(0.0), 0.0);
     let wi_l = local_on_side(b, out.back, wi);
-    if consistent(b, out.back, wi, wi_l) < 0.0 {
+    let cos_gi = consistent(b, out.back, wi, wi_l);
+    if cos_gi < 0.0 {
         return none;
     }
-    let e = mixture_eval(b.m, out.selection, out.local, wi_l, out.eta);
+    var e = mixture_eval(b.m, out.selection, out.local, wi_l, out.eta, importance);
+    e.f_cos = adjoint(b, e.f_cos, importance, out, wi_l, cos_gi);
     if !(all_finite(e.f_cos) && is_finite(e.pdf_fwd) && e.pdf_fwd > 0.0) {
         return none;
     }
@@ -561,7 +592,14 @@ fn specular_sample(m: Material, wo: vec3<f32>, u: vec2<f32>) -> LobeSample {
     return direction_sample(wi, !is_zero(mh) && wi.z > 0.0);
 }
 
-fn dielectric_sample(m: Material, wo: vec3<f32>, eta: f32, u_sub: f32, u: vec2<f32>) -> LobeSample {
+fn dielectric_sample(
+    m: Material,
+    wo: vec3<f32>,
+    eta: f32,
+    u_sub: f32,
+    u: vec2<f32>,
+    importance: bool,
+) -> LobeSample {
     let alpha = m.dielectric_alpha;
     if alpha == 0.0 {
         let r = fresnel_dielectric(wo.z, eta);
@@ -570,7 +608,7 @@ fn dielectric_sample(m: Material, wo: vec3<f32>, eta: f32, u_sub: f32, u: vec2<f
         }
         let wi = refract(wo, vec3(0.0, 0.0, 1.0), eta);
         let t = 1.0 - r;
-        let weight = m.dielectric_tint * (m.dielectric_weight * t * (1.0 / (eta * eta)));
+        let weight = m.dielectric_tint * (m.dielectric_weight * t * refraction_scale(eta, importance));
         return LobeSample(!is_zero(wi), true, wi, weight, t, true, eta);
     }
     let mh = ggx_sample_visible(alpha, wo, u);
@@ -622,7 +660,7 @@ fn lobe_kind(m: Material, k: u32) -> u32 {
     return select(KIND_SPECULAR, KIND_GLOSSY, alpha > 0.0);
 }
 
-fn bsdf_sample(b: Bsdf, out: Outgoing, u_lobe: f32, u: vec2<f32>) -> BsdfSample {
+fn bsdf_sample(b: Bsdf, out: Outgoing, u_lobe: f32, u: vec2<f32>, importance: bool) -> BsdfSample {
     var s = BsdfSample(false, vec3(0.0), vec3(0.0), 0.0, KIND_SPECULAR, 1.0);
     let m = b.m;
     let p = out.selection;
@@ -657,7 +695,7 @@ fn bsdf_sample(b: Bsdf, out: Outgoing, u_lobe: f32, u: vec2<f32>) -> BsdfSample 
             lobe = direction_sample(wi, wi.z > 0.0);
         }
         case 2u: {
-            lobe = dielectric_sample(m, wo, out.eta, u_sub, u);
+            lobe = dielectric_sample(m, wo, out.eta, u_sub, u, importance);
         }
         default: {
             lobe = thin_sample(m, wo, u_sub, u);
@@ -679,13 +717,14 @@ fn bsdf_sample(b: Bsdf, out: Outgoing, u_lobe: f32, u: vec2<f32>) -> BsdfSample 
     }
     let wi = normalized(world_on_side(b, out.back, lobe.wi));
     if lobe.delta {
-        if consistent(b, out.back, wi, lobe.wi) < 0.0 {
+        let cos_gi = consistent(b, out.back, wi, lobe.wi);
+        if cos_gi < 0.0 {
             return s;
         }
-        s.f_cos = lobe.weight;
+        s.f_cos = adjoint(b, lobe.weight, importance, out, lobe.wi, cos_gi);
         s.pdf_fwd = lobe.prob;
     } else {
-        let eval = bsdf_eval(b, out, wi);
+        let eval = bsdf_eval(b, out, wi, importance);
         if !(eval.pdf_fwd > 0.0) {
             return s;
         }

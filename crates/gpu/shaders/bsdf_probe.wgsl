@@ -11,11 +11,13 @@ struct ProbeInput {
     u: vec4<f32>,
 }
 
-// Its answer: the direction (w: the lobe kind, as bits), f·|cos| (w: the pdf), and in
-// `valid.x` 1 where sampling succeeded.
+// Its answer: the direction (w: the lobe kind, as bits), f·|cos| of radiance transport (w:
+// the pdf), f·|cos| of importance transport (w: the pdf), and in `valid.x` 1 where sampling
+// succeeded.
 struct ProbeOutput {
     wi: vec4<f32>,
     f_cos: vec4<f32>,
+    importance: vec4<f32>,
     valid: vec4<u32>,
 }
 
@@ -33,12 +35,14 @@ fn probe_bsdf(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = probe_inputs[i];
     let b = bsdf_new(materials[bitcast<u32>(p.n_g.w)], p.n_g.xyz, p.n_s.xyz);
     let out = outgoing(b, p.wo.xyz);
-    var answer = ProbeOutput(vec4(0.0), vec4(0.0), vec4(0u));
+    var answer = ProbeOutput(vec4(0.0), vec4(0.0), vec4(0.0), vec4(0u));
     if out.valid {
-        let s = bsdf_sample(b, out, p.u.x, p.u.yz);
+        let s = bsdf_sample(b, out, p.u.x, p.u.yz, false);
+        let t = bsdf_sample(b, out, p.u.x, p.u.yz, true);
         answer = ProbeOutput(
             vec4(s.wi, bitcast<f32>(s.kind)),
             vec4(s.f_cos, s.pdf_fwd),
+            vec4(t.f_cos, t.pdf_fwd),
             vec4(u32(s.valid), 0u, 0u, 0u),
         );
     }

@@ -43,11 +43,22 @@ fn splitmix64(x: vec2<u32>) -> vec2<u32> {
     return z ^ shr64(z, 31u);
 }
 
+// One more element `k` folded into a key's hash `h` (a step of `hash_key` in rng.rs).
+fn hash_more(h: vec2<u32>, k: vec2<u32>) -> vec2<u32> {
+    return splitmix64(h ^ splitmix64(k));
+}
+
+// The start of `hash_key`.
+const KEY_START: vec2<u32> = vec2(0x85A308D3u, 0x243F6A88u);
+
 // `hash_key` of rng.rs for a key of two elements.
 fn hash_key2(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
-    var h = vec2(0x85A308D3u, 0x243F6A88u);
-    h = splitmix64(h ^ splitmix64(a));
-    return splitmix64(h ^ splitmix64(b));
+    return hash_more(hash_more(KEY_START, a), b);
+}
+
+// `hash_key` of rng.rs for a key of three elements.
+fn hash_key3(a: vec2<u32>, b: vec2<u32>, c: vec2<u32>) -> vec2<u32> {
+    return hash_more(hash_key2(a, b), c);
 }
 
 // The numbers of one path: `SobolSampler` without its prefetching.
@@ -67,14 +78,18 @@ fn sampler_from_hash(key_hash: vec2<u32>, index: vec2<u32>) -> Sampler {
     return Sampler(seed.x ^ seed.y, reverseBits(index.x & 0xffffu), 0u);
 }
 
-// `SampleSequence::sampler(&[seed, pixel], index)`: Sobol (`independent` false) or
-// independent samples.
-fn path_sampler(seed: vec2<u32>, pixel: u32, index: u32, independent: bool) -> Sampler {
-    let key = hash_key2(seed, vec2(pixel, 0u));
+// `SampleSequence::sampler(key, index)` for a key hashed to `key_hash`: Sobol (`independent`
+// false) or independent samples.
+fn sequence_sampler(key_hash: vec2<u32>, index: u32, independent: bool) -> Sampler {
     if independent {
-        return sampler_from_hash(hash_key2(key, vec2(index, 0u)), vec2(0u));
+        return sampler_from_hash(hash_key2(key_hash, vec2(index, 0u)), vec2(0u));
     }
-    return sampler_from_hash(key, vec2(index, 0u));
+    return sampler_from_hash(key_hash, vec2(index, 0u));
+}
+
+// The path tracer's sampler of a pixel's sample `index` (key [seed, pixel]).
+fn path_sampler(seed: vec2<u32>, pixel: u32, index: u32, independent: bool) -> Sampler {
+    return sequence_sampler(hash_key2(seed, vec2(pixel, 0u)), index, independent);
 }
 
 // Moves on to the pairs of step `step` of a path, `pairs` per step (`start_step`).

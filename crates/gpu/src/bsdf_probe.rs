@@ -1,6 +1,7 @@
 //! The GPU's BSDF sampling checked with the shared chi-square harness: bsdf.wgsl samples a
 //! batch of directions on the GPU (`shaders/bsdf_probe.wgsl`), the CPU histograms them
-//! against the CPU's pdf, and each sample's pdf and f·|cos| are compared with the CPU's.
+//! against the CPU's pdf, and each sample's pdf and f·|cos| (of radiance and of importance
+//! transport) are compared with the CPU's.
 //! Skipped without a graphics adapter unless `VCM_REQUIRE_GPU=1`.
 
 use bytemuck::{Pod, Zeroable};
@@ -33,18 +34,19 @@ struct ProbeInput {
 struct ProbeOutput {
     wi: [f32; 4],
     f_cos: [f32; 4],
+    importance: [f32; 4],
     valid: [u32; 4],
 }
 
 /// `KIND_SPECULAR` of `bsdf.wgsl`.
 const KIND_SPECULAR: u32 = 2;
 
-/// Samples `material` (one side unless `double_sided`) at the surface with normal `n_g`
-/// from `wo` with each of `numbers` (u_lobe, u) on the GPU.
+/// Samples `material` (one side unless `double_sided`) at the surface with normals `n_g`
+/// (geometric) and `n_s` (shading) from `wo` with each of `numbers` (u_lobe, u) on the GPU.
 fn sample_on_gpu(
     gpu: &GpuDevice,
     (params, double_sided): (&BsdfParams, bool),
-    (n_g, wo): (Vec3, Vec3),
+    (n_g, n_s, wo): (Vec3, Vec3, Vec3),
     numbers: &[[f32; 3]],
 ) -> Vec<ProbeOutput> {
     let device = &gpu.device;
@@ -66,7 +68,7 @@ fn sample_on_gpu(
         .iter()
         .map(|&[u_lobe, ux, uy]| ProbeInput {
             n_g: n_g.extend(0.0).to_array(),
-            n_s: n_g.extend(0.0).to_array(),
+            n_s: n_s.extend(0.0).to_array(),
             wo: wo.extend(0.0).to_array(),
             u: [u_lobe, ux, uy, 0.0],
         })
@@ -129,9 +131,12 @@ const FAMILY: usize = 24;
 const SAMPLES: usize = 200_000;
 
 /// The GPU's samples of `params` from `wo` follow the CPU's pdf (chi-square over the
-/// sphere), and each sampled direction's pdf and f·|cos| are the CPU's up to rounding.
+/// sphere), and each sampled direction's pdf and f·|cos| in both transport modes are the
+/// CPU's up to rounding. The shading normal leans off the geometric one, so that importance
+/// transport's correction for it matters.
 fn check(gpu: &GpuDevice, name: &str, params: &BsdfParams, wo: Vec3) {
     let n_g = Vec3::new(0.2, 0.3, 0.93).normalize();
+    let n_s = Vec3::new(0.3, 0.25, 0.92).normalize();
     let config = Chi2Config {
         frame: Frame::from_z(n_g),
         sample_count: SAMPLES,
@@ -145,18 +150,20 @@ fn check(gpu: &GpuDevice, name: &str, params: &BsdfParams, wo: Vec3) {
             [u_lobe, u.x, u.y]
         })
         .collect();
-    let samples = sample_on_gpu(gpu, (params, false), (n_g, wo), &numbers);
-    let cpu = Bsdf::new(params, n_g, n_g, false);
+    let samples = sample_on_gpu(gpu, (params, false), (n_g, n_s, wo), &numbers);
+    let cpu = Bsdf::new(params, n_g, n_s, false);
     let glossy = |s: &ProbeOutput| s.valid[0] == 1 && s.wi[3].to_bits() != KIND_SPECULAR;
     let mut differing = 0;
     for s in samples.iter().filter(|s| glossy(s)) {
         let wi = Vec3::from_slice(&s.wi[..3]);
-        let eval = cpu.eval_with(wo, wi, TransportMode::Radiance, Pdfs::Forward);
         let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-7;
-        let f_cos = Vec3::from_slice(&s.f_cos[..3]);
-        let same =
-            close(eval.pdf_fwd, s.f_cos[3]) && (0..3).all(|k| close(eval.f_cos[k], f_cos[k]));
-        differing += usize::from(!same);
+        let same = |mode, gpu: &[f32; 4]| {
+            let eval = cpu.eval_with(wo, wi, mode, Pdfs::Forward);
+            close(eval.pdf_fwd, gpu[3]) && (0..3).all(|k| close(eval.f_cos[k], gpu[k]))
+        };
+        let alike = same(TransportMode::Radiance, &s.f_cos)
+            && same(TransportMode::Importance, &s.importance);
+        differing += usize::from(!alike);
     }
     assert!(
         differing * 1000 <= SAMPLES,

@@ -148,7 +148,7 @@ impl KernelPlan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shader::PATH_TRACER_WGSL;
+    use crate::shader::SCENE_WGSL;
 
     #[test]
     fn every_constant_is_an_override_of_the_kernel() {
@@ -162,10 +162,7 @@ mod tests {
             environment_map: false,
         };
         for (name, _) in plan.constants() {
-            assert!(
-                PATH_TRACER_WGSL.contains(&format!("override {name}:")),
-                "{name}"
-            );
+            assert!(SCENE_WGSL.contains(&format!("override {name}:")), "{name}");
         }
         assert_eq!(plan.decisions().iter().filter(|d| d.runs).count(), 4);
     }

@@ -492,7 +492,11 @@ fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
         Light::Directional(l) => unlit(
             DIRECTIONAL_LIGHT,
             l.irradiance,
-            [vec4(l.direction, 0.0), zero, zero],
+            [
+                vec4(l.direction, 0.0),
+                vec4(l.scene_center, l.scene_radius),
+                zero,
+            ],
         ),
         Light::Environment(l) => {
             // The map's size (as bits), whether there is one, and whether it has a
@@ -502,7 +506,8 @@ fn pack_light(light: &Light, refs: &mut Vec<GpuTextureRef>) -> GpuLight {
                 let sampled = f32::from(u8::from(map.distribution().is_some()));
                 [f32::from_bits(size.x), f32::from_bits(size.y), 1.0, sampled]
             });
-            unlit(ENVIRONMENT_LIGHT, l.radiance, [description, zero, zero])
+            let bounds = vec4(l.scene_center, l.scene_radius);
+            unlit(ENVIRONMENT_LIGHT, l.radiance, [description, bounds, zero])
         }
     }
 }

@@ -1,5 +1,5 @@
-//! Composing the path tracing kernel from the WGSL sources in this crate's `shaders/` and
-//! the traversal functions of vcm-traversal-wgpu (WGSL has no includes).
+//! Composing the kernels from the WGSL sources in this crate's `shaders/` and the traversal
+//! functions of vcm-traversal-wgpu (WGSL has no includes).
 
 use vcm::ray_offset::gamma;
 use vcm_scene::bsdf::{ALBEDO_TABLE_SIZE, MIN_ALPHA};
@@ -10,13 +10,46 @@ pub const SAMPLER_WGSL: &str = include_str!("../shaders/sampler.wgsl");
 pub const BSDF_WGSL: &str = include_str!("../shaders/bsdf.wgsl");
 /// Textures, and materials that vary over their surface.
 pub const MATERIAL_WGSL: &str = include_str!("../shaders/material.wgsl");
-/// The path tracing kernel and the scene's shading data.
+/// The dispatch's parameters, the scene's shading data and what every kernel does with it.
+pub const SCENE_WGSL: &str = include_str!("../shaders/scene.wgsl");
+/// The path tracing kernel.
 pub const PATH_TRACER_WGSL: &str = include_str!("../shaders/path_tracer.wgsl");
+/// The light tracing kernel.
+pub const LIGHT_TRACER_WGSL: &str = include_str!("../shaders/light_tracer.wgsl");
 
-/// The kernel's entry point.
-pub const PATH_TRACER_ENTRY: &str = "render_paths";
-/// Invocations per workgroup (`WORKGROUP` in `path_tracer.wgsl`).
+/// Invocations per workgroup (`WORKGROUP` in `scene.wgsl`).
 pub const WORKGROUP_SIZE: u32 = 64;
+
+/// A kernel of this crate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernel {
+    /// Each invocation follows one camera path to its end (`path_tracer.wgsl`).
+    PathTracer,
+    /// Each invocation takes one camera sample's first hit and follows one light path to
+    /// its end (`light_tracer.wgsl`).
+    LightTracer,
+}
+
+impl Kernel {
+    /// Every kernel.
+    pub const ALL: [Kernel; 2] = [Kernel::PathTracer, Kernel::LightTracer];
+
+    /// Its entry point.
+    pub fn entry(self) -> &'static str {
+        match self {
+            Kernel::PathTracer => "render_paths",
+            Kernel::LightTracer => "trace_light_paths",
+        }
+    }
+
+    /// Its own source, which follows [`SCENE_WGSL`].
+    fn source(self) -> &'static str {
+        match self {
+            Kernel::PathTracer => PATH_TRACER_WGSL,
+            Kernel::LightTracer => LIGHT_TRACER_WGSL,
+        }
+    }
+}
 
 /// The bind group of the scene's shading data: 2, or 3 where the traversal functions test
 /// alpha masks, whose buffers are their group 2.
@@ -24,15 +57,18 @@ pub fn shading_group(alpha_masks: bool) -> u32 {
     if alpha_masks { 3 } else { 2 }
 }
 
-/// The path tracing module over `traversal` (the traversal functions of the scene's
+/// The module of `kernel` over `traversal` (the traversal functions of the scene's
 /// hierarchy, [`vcm_traversal_wgpu::GpuBvh::traversal_functions`], with or without
 /// `alpha_masks`).
-pub fn path_tracer_module(traversal: &str, alpha_masks: bool) -> String {
+pub fn kernel_module(kernel: Kernel, traversal: &str, alpha_masks: bool) -> String {
     let constants = host_constants();
-    // The shading data's bindings are written as group 2 in path_tracer.wgsl.
+    // The shading data's bindings are written as group 2 in scene.wgsl.
     let group = shading_group(alpha_masks);
-    let kernel = PATH_TRACER_WGSL.replace("@group(2)", &format!("@group({group})"));
-    format!("{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{kernel}")
+    let scene = SCENE_WGSL.replace("@group(2)", &format!("@group({group})"));
+    let kernel = kernel.source();
+    format!(
+        "{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{scene}\n{kernel}"
+    )
 }
 
 /// The constants the host defines for the shaders: the CPU's rounding-error factors and
@@ -63,19 +99,17 @@ mod tests {
     use vcm_traversal_wgpu::NodeLayout;
     use vcm_traversal_wgpu::shader::{traversal_functions, validate_module};
 
-    /// Validates a module (panics with naga's message).
-    fn validate(source: &str) {
-        if let Err(error) = validate_module(source, &[PATH_TRACER_ENTRY]) {
-            panic!("{error}");
-        }
-    }
-
     #[test]
-    fn the_kernel_validates_over_both_node_layouts_with_and_without_alpha_masks() {
-        for layout in [NodeLayout::Binary, NodeLayout::Wide] {
-            for masks in [false, true] {
-                let traversal = traversal_functions(layout, 32, masks);
-                validate(&path_tracer_module(&traversal, masks));
+    fn every_kernel_validates_over_both_node_layouts_with_and_without_alpha_masks() {
+        for kernel in Kernel::ALL {
+            for layout in [NodeLayout::Binary, NodeLayout::Wide] {
+                for masks in [false, true] {
+                    let traversal = traversal_functions(layout, 32, masks);
+                    let module = kernel_module(kernel, &traversal, masks);
+                    if let Err(error) = validate_module(&module, &[kernel.entry()]) {
+                        panic!("{kernel:?}: {error}");
+                    }
+                }
             }
         }
     }
@@ -83,7 +117,7 @@ mod tests {
     #[test]
     fn workgroup_size_matches_the_shader() {
         let line = format!("const WORKGROUP: u32 = {WORKGROUP_SIZE}u;");
-        assert!(PATH_TRACER_WGSL.contains(&line));
+        assert!(SCENE_WGSL.contains(&line));
     }
 
     #[test]

@@ -119,12 +119,13 @@ impl Request {
                     "shading: \"gpu\" shades on the GPU backend's device: give backend=\"gpu\" too",
                 ));
             }
-            // The GPU shades path tracing only so far; "auto" means it there.
+            // The GPU shades path tracing and light tracing only so far; "auto" means path
+            // tracing there.
             algorithm = match algorithm.shaded_on_gpu() {
-                Ok(path_tracing) => AlgorithmOption::Fixed(path_tracing),
+                Ok(shaded) => AlgorithmOption::Fixed(shaded),
                 Err(other) => {
                     return Err(PyValueError::new_err(format!(
-                        "shading: \"gpu\" renders path tracing only so far (algo \"pt\" or \"auto\"), not \"{}\"",
+                        "shading: \"gpu\" renders path tracing and light tracing only so far (algo \"pt\", \"lt\" or \"auto\"), not \"{}\"",
                         other.name()
                     )));
                 }

@@ -797,7 +797,8 @@ pub(crate) mod tests {
         let copy = film_copy(&renderer);
         let settings = settings(Algorithm::Pt);
         let mut direct =
-            integrators::build_on_gpu(&scene, &bvh, size, &settings.integrator).unwrap();
+            integrators::build_on_gpu(Algorithm::Pt, &scene, &bvh, size, &settings.integrator)
+                .unwrap();
         let mut film = Film::new(size.0, size.1);
         for sample in 0..copy.samples.count() as u32 {
             direct.render_frame(&mut film, sample);

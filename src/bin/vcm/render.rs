@@ -190,7 +190,7 @@ pub struct RenderArgs {
     setup: RenderSetup,
     /// Where paths are shaded: `gpu` follows each whole path in one WGSL kernel on the GPU
     /// backend's device and brings back only radiances (needs --backend gpu; path tracing
-    /// only so far; see docs/gpu.md).
+    /// and light tracing only so far; see docs/gpu.md).
     #[arg(long, value_enum, default_value_t = Shading::Cpu)]
     shading: Shading,
     /// Output EXR (linear radiance); a tone-mapped PNG is written beside it (default out.exr,
@@ -664,12 +664,13 @@ fn build_backend(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<BuiltTr
     Ok(built)
 }
 
-/// The algorithm `--shading gpu` renders for `--algo`: path tracing, the only one its kernels
-/// have so far.
+/// The algorithm `--shading gpu` renders for `--algo`: path tracing or light tracing, the
+/// ones its kernels have so far (`auto`: path tracing).
 pub fn gpu_shaded_algorithm(algorithm: AlgorithmOption) -> anyhow::Result<Algorithm> {
     algorithm.shaded_on_gpu().or_else(|other| {
         bail!(
-            "--shading gpu renders path tracing only so far (--algo pt or auto), not {}",
+            "--shading gpu renders path tracing and light tracing only so far (--algo pt, lt \
+             or auto), not {}",
             other.name()
         )
     })

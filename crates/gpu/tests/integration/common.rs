@@ -1,11 +1,12 @@
-//! Shared helpers: the adapter (or a clear skip), scenes and both path tracers' images.
+//! Shared helpers: the adapter (or a clear skip), scenes, and the images of the CPU's and
+//! the GPU's path tracers and light tracers.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::Vec3;
-use vcm::{Film, Integrator, PathTracer, PtSettings, Schedule};
-use vcm_gpu::GpuPathTracer;
+use vcm::{Film, Integrator, PathTracer, PtSettings, Schedule, Vcm, VcmSettings};
+use vcm_gpu::{GpuLightTracer, GpuPathTracer};
 use vcm_scene::Scene;
 use vcm_traversal::{CpuBvh, CpuBvhOptions};
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
@@ -72,10 +73,24 @@ pub fn render(integrator: &mut dyn Integrator, frames: u32, samples: u32) -> Vec
     film.mean()
 }
 
+/// The CPU's hierarchy over `scene`.
+fn cpu_bvh(scene: &Scene) -> Arc<CpuBvh> {
+    Arc::new(CpuBvh::new(&scene.triangle_corners(), CpuBvhOptions::default()).unwrap())
+}
+
+/// The GPU backend's hierarchy over `scene`.
+fn gpu_bvh(gpu: &Arc<GpuDevice>, scene: &Scene) -> GpuBvh {
+    GpuBvh::new(
+        Arc::clone(gpu),
+        &scene.triangle_corners(),
+        GpuBvhOptions::default(),
+    )
+    .unwrap()
+}
+
 /// The CPU path tracer's image of `scene`.
 pub fn cpu_image(scene: &Arc<Scene>, settings: PtSettings, frames: u32, samples: u32) -> Vec<Vec3> {
-    let traversal = CpuBvh::new(&scene.triangle_corners(), CpuBvhOptions::default()).unwrap();
-    let mut tracer = PathTracer::new(Arc::clone(scene), Arc::new(traversal), settings).unwrap();
+    let mut tracer = PathTracer::new(Arc::clone(scene), cpu_bvh(scene), settings).unwrap();
     render(&mut tracer, frames, samples)
 }
 
@@ -87,12 +102,31 @@ pub fn gpu_image(
     frames: u32,
     samples: u32,
 ) -> Vec<Vec3> {
-    let bvh = GpuBvh::new(
-        Arc::clone(gpu),
-        &scene.triangle_corners(),
-        GpuBvhOptions::default(),
-    )
-    .unwrap();
+    let bvh = gpu_bvh(gpu, scene);
     let mut tracer = GpuPathTracer::new(Arc::clone(scene), &bvh, settings).unwrap();
+    render(&mut tracer, frames, samples)
+}
+
+/// The CPU's image of `scene` with a bidirectional algorithm (`settings.algorithm`).
+pub fn cpu_bidir_image(
+    scene: &Arc<Scene>,
+    settings: VcmSettings,
+    frames: u32,
+    samples: u32,
+) -> Vec<Vec3> {
+    let mut integrator = Vcm::new(Arc::clone(scene), cpu_bvh(scene), settings).unwrap();
+    render(&mut integrator, frames, samples)
+}
+
+/// The GPU light tracer's image of `scene`.
+pub fn gpu_light_image(
+    gpu: &Arc<GpuDevice>,
+    scene: &Arc<Scene>,
+    settings: VcmSettings,
+    frames: u32,
+    samples: u32,
+) -> Vec<Vec3> {
+    let bvh = gpu_bvh(gpu, scene);
+    let mut tracer = GpuLightTracer::new(Arc::clone(scene), &bvh, settings).unwrap();
     render(&mut tracer, frames, samples)
 }

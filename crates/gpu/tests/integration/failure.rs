@@ -4,19 +4,19 @@
 use std::sync::Arc;
 
 use vcm::{Algorithm, Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
-use vcm_gpu::GpuPathTracer;
+use vcm_gpu::{GpuLightTracer, GpuPathTracer};
 use vcm_traversal::Traversal;
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
 
 use crate::common::{gpu, scene};
 
 /// Renders a frame with each of `integrators`, destroys the device under them, and checks
-/// that each then drops its next frame whole, keeps a failure that starts with `prefix`, and
-/// renders no frame after it.
+/// that each then drops its next frame whole, keeps a failure that starts with its entry of
+/// `prefixes`, and renders no frame after it.
 fn assert_a_lost_device_drops_frames(
     gpu: &GpuDevice,
     integrators: &mut [Box<dyn Integrator + '_>],
-    prefix: &str,
+    prefixes: &[&str],
 ) {
     let mut films = vec![Film::new(8, 8); integrators.len()];
     for (integrator, film) in integrators.iter_mut().zip(&mut films) {
@@ -31,23 +31,29 @@ fn assert_a_lost_device_drops_frames(
             "integrator {k}"
         );
         let failure = integrator.failure().expect("the failure is kept");
-        assert!(failure.starts_with(prefix), "{failure}");
+        assert!(failure.starts_with(prefixes[k]), "{failure}");
         assert_eq!(*film, before[k], "the failed frame added nothing");
         // No frame renders after it.
         assert!(integrator.render_frame(film, 2).interrupted);
     }
 }
 
-/// The GPU's path tracer, whose kernels fail.
+/// The GPU's path tracer and light tracer, whose kernels fail.
 #[test]
 fn a_lost_device_drops_the_frame_and_names_the_failure() {
     let Some(gpu) = gpu() else { return };
     let scene = scene("cornell-box");
     let options = GpuBvhOptions::default();
     let bvh = GpuBvh::new(Arc::clone(&gpu), &scene.triangle_corners(), options).unwrap();
-    let tracer = GpuPathTracer::new(Arc::clone(&scene), &bvh, PtSettings::new(8, 8)).unwrap();
-    let mut integrators: [Box<dyn Integrator + '_>; 1] = [Box::new(tracer)];
-    assert_a_lost_device_drops_frames(&gpu, &mut integrators, "path tracing on the GPU: ");
+    let path_tracer = GpuPathTracer::new(Arc::clone(&scene), &bvh, PtSettings::new(8, 8));
+    let light_settings = VcmSettings::new(Algorithm::LightTracing, 8, 8);
+    let light_tracer = GpuLightTracer::new(Arc::clone(&scene), &bvh, light_settings);
+    let mut integrators: [Box<dyn Integrator + '_>; 2] = [
+        Box::new(path_tracer.unwrap()),
+        Box::new(light_tracer.unwrap()),
+    ];
+    let prefixes = ["path tracing on the GPU: ", "light tracing on the GPU: "];
+    assert_a_lost_device_drops_frames(&gpu, &mut integrators, &prefixes);
 }
 
 /// Shading on the CPU over the GPU's traversal: the traversal's failure drops the frame that
@@ -71,5 +77,6 @@ fn a_lost_device_under_cpu_shading_drops_the_frame_and_names_the_failure() {
     );
     let mut integrators: [Box<dyn Integrator>; 2] =
         [Box::new(path_tracer.unwrap()), Box::new(vcm.unwrap())];
-    assert_a_lost_device_drops_frames(&gpu, &mut integrators, "ray traversal failed: ");
+    let prefix = "ray traversal failed: ";
+    assert_a_lost_device_drops_frames(&gpu, &mut integrators, &[prefix; 2]);
 }

@@ -1,0 +1,324 @@
+//! [`SceneKernel`]: one of this crate's kernels compiled for a scene, with the scene's
+//! shading data uploaded and bound, and the parameters of its dispatches.
+
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+use vcm::memory::{AvailableMemory, MemoryEstimate, check_budget};
+use vcm::{Film, RenderError};
+use vcm_scene::Scene;
+use vcm_scene::sampling::SampleSequence;
+use vcm_traversal_wgpu::{GpuBvh, GpuDevice, GpuError, dispatch_shape};
+
+use crate::error::GpuRenderError;
+use crate::plan::KernelPlan;
+use crate::scene_data::{SceneData, check_scene};
+use crate::shader::{Kernel, kernel_module, shading_group};
+
+/// `Params` of `scene.wgsl`.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct Params {
+    camera_position: [f32; 3],
+    width: u32,
+    camera_forward: [f32; 3],
+    height: u32,
+    camera_right: [f32; 3],
+    first_sample: u32,
+    camera_up: [f32; 3],
+    samples: u32,
+    half_extent: [f32; 2],
+    size: [f32; 2],
+    seed: [u32; 2],
+    first_path: u32,
+    path_count: u32,
+    row_threads: u32,
+    max_segments: u32,
+    independent: u32,
+    light_count: u32,
+    environment: u32,
+    environment_rows: u32,
+    environment_columns: u32,
+    pixel_area: f32,
+    light_paths: f32,
+    /// Up to the WGSL struct's size, a multiple of 16 bytes.
+    padding: [u32; 3],
+}
+
+const _: () = assert!(
+    size_of::<Params>() == 144,
+    "the size of Params in scene.wgsl"
+);
+
+/// What a dispatch's parameters take from an integrator's settings.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Sampling {
+    pub width: u32,
+    pub height: u32,
+    pub seed: u64,
+    pub sequence: SampleSequence,
+    pub max_depth: Option<u32>,
+}
+
+/// [`Sampling`] from each integrator's settings type, which name the same fields.
+macro_rules! sampling_from {
+    ($settings:ty) => {
+        impl From<&$settings> for Sampling {
+            fn from(s: &$settings) -> Sampling {
+                Sampling {
+                    width: s.width,
+                    height: s.height,
+                    seed: s.seed,
+                    sequence: s.sequence,
+                    max_depth: s.max_depth,
+                }
+            }
+        }
+    };
+}
+
+sampling_from!(vcm::PtSettings);
+sampling_from!(vcm::VcmSettings);
+
+/// A kernel compiled for one scene, with the scene's shading data on the device.
+pub(crate) struct SceneKernel {
+    pub gpu: Arc<GpuDevice>,
+    pub scene: Arc<Scene>,
+    pub pipeline: wgpu::ComputePipeline,
+    /// The scene's bind groups with their indices: 1 the hierarchy, 2 the alpha masks where
+    /// there are any, then the shading data ([`shading_group`]).
+    scene_groups: Vec<(u32, wgpu::BindGroup)>,
+    light_count: u32,
+    environment: u32,
+    /// Where the environment map's rows and its rows' texels start in the picks buffer.
+    environment_offsets: [u32; 2],
+    /// The parts of the kernel the scene needs.
+    pub plan: KernelPlan,
+}
+
+impl SceneKernel {
+    /// `kernel` for `scene` on the hierarchy `bvh` (built over
+    /// [`Scene::triangle_corners`]): compiles it and uploads the scene's shading data.
+    pub fn new(kernel: Kernel, scene: Arc<Scene>, bvh: &GpuBvh) -> Result<Self, GpuRenderError> {
+        check_scene(&scene).map_err(GpuRenderError::Unsupported)?;
+        if scene.features.alpha_masks && !bvh.has_alpha_masks() {
+            return Err(GpuRenderError::Unsupported(
+                "a hierarchy built without the scene's alpha masks".into(),
+            ));
+        }
+        let hierarchy = bvh
+            .hierarchy_buffers()
+            .ok_or_else(|| GpuRenderError::Unsupported("a scene without triangles".into()))?;
+        let gpu = Arc::clone(bvh.device());
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(kernel.entry()),
+            source: wgpu::ShaderSource::Wgsl(
+                kernel_module(kernel, &bvh.traversal_functions(), bvh.has_alpha_masks()).into(),
+            ),
+        });
+        let plan = KernelPlan::for_scene(&scene);
+        let constants = plan.constants();
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(kernel.entry()),
+            layout: None,
+            module: &module,
+            entry_point: Some(kernel.entry()),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            },
+            cache: None,
+        });
+        let data = SceneData::new(&scene, &plan);
+        let shading = [
+            upload(&gpu, "shading triangles", &data.triangles)?,
+            upload(&gpu, "materials", &data.materials)?,
+            upload(&gpu, "lights", &data.lights)?,
+            upload(&gpu, "picks", &data.picks)?,
+            upload(&gpu, "lookup tables", &data.tables)?,
+            upload(&gpu, "textures", &data.textures)?,
+            upload(&gpu, "texels", &data.texels)?,
+            upload(&gpu, "texture references", &data.texture_refs)?,
+            upload(&gpu, "material inputs", &data.material_inputs)?,
+            upload(&gpu, "triangle attributes", &data.attributes)?,
+            upload(&gpu, "environment texels", &data.environment_texels)?,
+        ];
+        let mut scene_groups = vec![(1, bind(device, &pipeline, 1, hierarchy.iter()))];
+        if let Some(masks) = bvh.alpha_mask_buffers() {
+            scene_groups.push((2, bind(device, &pipeline, 2, masks.iter())));
+        }
+        let group = shading_group(bvh.has_alpha_masks());
+        scene_groups.push((group, bind(device, &pipeline, group, shading.iter())));
+        Ok(SceneKernel {
+            gpu,
+            scene,
+            pipeline,
+            scene_groups,
+            light_count: data.light_count,
+            environment: data.environment,
+            environment_offsets: data.environment_offsets,
+            plan,
+        })
+    }
+
+    /// The parameters of invocations `first_path …` (`count` of them) of a frame of
+    /// `samples` samples per pixel starting at sample `first_sample`, and the workgroups to
+    /// dispatch for them in x and y.
+    fn params(
+        &self,
+        sampling: &Sampling,
+        (first_sample, samples): (u32, u32),
+        (first_path, count): (u64, u64),
+    ) -> (Params, (u32, u32)) {
+        let Sampling {
+            width,
+            height,
+            seed,
+            sequence,
+            max_depth,
+        } = *sampling;
+        let camera = &self.scene.camera;
+        let projection = camera.projection(width, height);
+        let max_per_dimension = self
+            .gpu
+            .device
+            .limits()
+            .max_compute_workgroups_per_dimension;
+        let (x, y, row_threads) = dispatch_shape(count, max_per_dimension);
+        let params = Params {
+            camera_position: camera.position.to_array(),
+            width,
+            camera_forward: camera.forward.to_array(),
+            height,
+            camera_right: camera.right.to_array(),
+            first_sample,
+            camera_up: camera.up.to_array(),
+            samples,
+            half_extent: projection.half_extent().to_array(),
+            size: [width as f32, height as f32],
+            seed: [seed as u32, (seed >> 32) as u32],
+            first_path: first_path as u32,
+            path_count: count as u32,
+            row_threads,
+            max_segments: max_depth.unwrap_or(u32::MAX),
+            independent: u32::from(sequence == SampleSequence::Independent),
+            light_count: self.light_count,
+            environment: self.environment,
+            environment_rows: self.environment_offsets[0],
+            environment_columns: self.environment_offsets[1],
+            pixel_area: projection.pixel_area(),
+            // As the CPU's bidirectional algorithms count them: one per pixel.
+            light_paths: (width * height) as f32,
+            padding: [0; 3],
+        };
+        (params, (x, y))
+    }
+
+    /// A command encoder that writes the parameters of invocations `range` (first, count) of
+    /// the frame `frame` (first sample, samples per pixel) into `params`, clears `outputs`
+    /// and dispatches the kernel with `dispatch` as bind group 0.
+    pub fn encode(
+        &self,
+        (params, dispatch): (&wgpu::Buffer, &wgpu::BindGroup),
+        sampling: &Sampling,
+        frame: (u32, u32),
+        range: (u64, u64),
+        outputs: &[&wgpu::Buffer],
+    ) -> wgpu::CommandEncoder {
+        let (values, (x, y)) = self.params(sampling, frame, range);
+        self.gpu
+            .queue
+            .write_buffer(params, 0, bytemuck::bytes_of(&values));
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        for output in outputs {
+            encoder.clear_buffer(output, 0, None);
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("scene kernel"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, dispatch, &[]);
+            for (index, group) in &self.scene_groups {
+                pass.set_bind_group(*index, group, &[]);
+            }
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        encoder
+    }
+
+    /// Binds `buffers` to bindings 0, 1, … of the kernel's bind group `group`.
+    pub fn bind<'a>(
+        &self,
+        group: u32,
+        buffers: impl Iterator<Item = &'a wgpu::Buffer>,
+    ) -> wgpu::BindGroup {
+        bind(&self.gpu.device, &self.pipeline, group, buffers)
+    }
+
+    /// A buffer of `size` bytes with `usage`.
+    pub fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage,
+            mapped_at_creation: false,
+        })
+    }
+}
+
+/// Uploads `items` as a read-only storage buffer, one zeroed item if there are none (a
+/// binding holds at least one element of its array).
+fn upload<T: Pod>(
+    gpu: &GpuDevice,
+    label: &'static str,
+    items: &[T],
+) -> Result<wgpu::Buffer, GpuError> {
+    let zero = [T::zeroed()];
+    let items = if items.is_empty() { &zero[..] } else { items };
+    gpu.storage_buffer(label, bytemuck::cast_slice(items))
+}
+
+/// Binds `buffers` to bindings 0, 1, … of bind group `group` of `pipeline`.
+fn bind<'a>(
+    device: &wgpu::Device,
+    pipeline: &wgpu::ComputePipeline,
+    group: u32,
+    buffers: impl Iterator<Item = &'a wgpu::Buffer>,
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = (0u32..)
+        .zip(buffers)
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("scene kernel"),
+        layout: &pipeline.get_bind_group_layout(group),
+        entries: &entries,
+    })
+}
+
+/// The host memory of the two films of a `width` × `height` render: the render's and the
+/// frame's, to which a frame's dispatches add before it is whole.
+pub(crate) fn film_estimate((width, height): (u32, u32)) -> MemoryEstimate {
+    let pixels = u64::from(width) * u64::from(height);
+    let films = pixels.saturating_mul(Film::BYTES_PER_PIXEL);
+    MemoryEstimate::default()
+        .with("film", films)
+        .with("frame film", films)
+}
+
+/// Fails when `estimate` (which only the image size changes) needs more host memory than
+/// this process may allocate.
+pub(crate) fn check_host_estimate(estimate: MemoryEstimate) -> Result<(), RenderError> {
+    let shortfall = check_budget(
+        |cause| cause.is_none().then(|| estimate.clone()),
+        AvailableMemory::of_this_process(),
+        0,
+    );
+    Ok(shortfall?)
+}
