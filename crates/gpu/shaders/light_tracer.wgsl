@@ -4,10 +4,8 @@
 // of iteration first_sample + k % samples: pixel i's camera sample and the iteration's light
 // path i, each drawing the CPU's numbers for it, so that both backends follow the same
 // paths. A light path's vertices that scatter toward the camera and see it make splats.
-// Outputs (group 0): 1 the camera samples' radiance, 2 the rays traced (camera, light,
-// shadow), 3 the splats, 4 how many splats were made:
-// those beyond the buffer's length are counted, not stored, and the host renders those paths
-// again in smaller dispatches.
+// Camera samples and splats go to the film (film.wgsl). Outputs (group 0): 1–4 the film, 5
+// the rays traced (camera, light, shadow).
 
 // The light paths' random stream (`LIGHT_STREAM` of light_pass.rs).
 const LIGHT_STREAM: u32 = 1u;
@@ -15,16 +13,7 @@ const LIGHT_STREAM: u32 = 1u;
 // emission's `EMISSION` layout has as many: light pick, light point, direction).
 const LIGHT_PAIRS: u32 = 3u;
 
-@group(0) @binding(1) var<storage, read_write> radiance_out: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> ray_counts: array<atomic<u32>, 3>;
-// A splat as the host reads it.
-struct SplatOut {
-    contribution: vec3<f32>,
-    pixel: u32,
-}
-
-@group(0) @binding(3) var<storage, read_write> splats: array<SplatOut>;
-@group(0) @binding(4) var<storage, read_write> splat_count: atomic<u32>;
+@group(0) @binding(5) var<storage, read_write> ray_counts: array<atomic<u32>, 3>;
 
 // The raster position `p` projects to, or (−1, −1) where it lies behind the camera or
 // outside the image (`Projection::raster_of`).
@@ -111,8 +100,8 @@ fn seen_directly(pixel: u32, iteration: u32) -> vec3<f32> {
     return emission(s, hit, direction, -1.0);
 }
 
-// Follows light path `index` of `iteration` from its light to its end, storing the splats
-// that reach the camera, and returns the closest-hit and shadow rays it traced.
+// Follows light path `index` of `iteration` from its light to its end, adding the splats
+// that reach the camera to the film, and returns the closest-hit and shadow rays it traced.
 fn trace_light_path(index: u32, iteration: u32) -> vec2<u32> {
     var rays = vec2(0u);
     let key = hash_key3(params.seed, vec2(iteration, 0u), vec2(LIGHT_STREAM, 0u));
@@ -182,10 +171,7 @@ fn trace_light_path(index: u32, iteration: u32) -> vec2<u32> {
             let shadow = splat.shadow;
             let blocker = trace(Ray(shadow.origin, 0.0, shadow.direction, shadow.tmax), true);
             if blocker.prim == NO_HIT {
-                let slot = atomicAdd(&splat_count, 1u);
-                if slot < arrayLength(&splats) {
-                    splats[slot] = SplatOut(shadow.contribution, splat.pixel);
-                }
+                film_add(splat.pixel, shadow.contribution);
             }
         }
         if !alive {
@@ -204,7 +190,7 @@ fn trace_light_paths(@builtin(global_invocation_id) id: vec3<u32>) {
     let path = params.first_path + local;
     let index = path / params.samples;
     let iteration = params.first_sample + path % params.samples;
-    radiance_out[local] = vec4(seen_directly(index, iteration), 0.0);
+    film_add(index, seen_directly(index, iteration));
     let rays = trace_light_path(index, iteration);
     atomicAdd(&ray_counts[0], 1u);
     atomicAdd(&ray_counts[1], rays.x);

@@ -1,17 +1,16 @@
 // The path tracer as one kernel: an invocation follows one path from the camera to its end,
 // tracing its rays with `trace` (the traversal functions of vcm-traversal-wgpu), shading each
 // vertex as the CPU's `shade` does (vcm's shade.rs, walk.rs, roulette.rs, shadow.rs), and
-// writes the path's radiance. Paths are numbered pixel · samples + sample, the CPU's key:
-// path k draws the CPU's numbers for that pixel and sample. Outputs (group 0): 1 the paths'
-// radiance, 2 the closest-hit and shadow rays traced.
+// adds the path's radiance to its pixel in the film (film.wgsl). Paths are numbered
+// pixel · samples + sample, the CPU's key: path k draws the CPU's numbers for that pixel and
+// sample. Outputs (group 0): 1–4 the film, 5 the closest-hit and shadow rays traced.
 
 // Pairs of numbers per path vertex (vcm's `PATH_TRACER` layout: light pick, light point,
 // lobe, direction, roulette).
 const PAIRS_PER_VERTEX: u32 = 5u;
 
-@group(0) @binding(1) var<storage, read_write> radiance_out: array<vec4<f32>>;
 // Closest-hit and shadow rays traced by this dispatch.
-@group(0) @binding(2) var<storage, read_write> ray_counts: array<atomic<u32>, 2>;
+@group(0) @binding(5) var<storage, read_write> ray_counts: array<atomic<u32>, 2>;
 
 // One light sample from `s` (`next_event` of shade.rs).
 fn next_event(
@@ -141,7 +140,7 @@ fn render_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         segments += 1u;
         medium = medium_toward(medium, s, sample.wi);
     }
-    radiance_out[local] = vec4(radiance, 0.0);
+    film_add(pixel, radiance);
     atomicAdd(&ray_counts[0], closest_rays);
     atomicAdd(&ray_counts[1], shadow_rays);
 }

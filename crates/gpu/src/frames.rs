@@ -1,129 +1,185 @@
 //! [`GpuFrames`]: what every GPU integrator does with a frame — dispatches of consecutive
-//! invocations of its kernel, their radiances and splats added to a frame's film, merged into
-//! the render's film once the frame is whole — and the state that goes with it.
+//! invocations of its kernel, which add their samples and splats to the film on the device
+//! (`film.wgsl`: exact sums, the same whatever the order), and the film read back and merged
+//! into the render's once the frame is whole — and the state that goes with it.
 
-use std::time::Instant;
+use std::sync::Arc;
 
-use glam::Vec3;
-use vcm::{Film, FrameStats, RenderError, Schedule, StopFlag};
+use vcm::exact_sum::{ExactSum, WORDS};
+use vcm::{Film, FrameStats, PixelSum, RenderError, Schedule, StopFlag};
+use vcm_scene::Scene;
+use vcm_traversal_wgpu::GpuBvh;
 
-use crate::kernel::SceneKernel;
+use crate::error::GpuRenderError;
+use crate::kernel::{Params, Sampling, SceneKernel, check_host_estimate, film_estimate};
+use crate::shader::Kernel;
 
-/// What one dispatch brought back.
-pub(crate) struct Dispatched {
-    /// One radiance per invocation, added to pixel invocation / samples per frame.
-    pub radiance: Vec<Vec3>,
-    /// (pixel, contribution) of each light tracing splat.
-    pub splats: Vec<(u32, Vec3)>,
-    /// Rays traced, by the integrator's own three kinds.
-    pub rays: [u64; 3],
-}
+/// u32 limbs of one exact sum on the device (`SUM_LIMBS` of `film.wgsl`).
+const SUM_LIMBS: usize = 2 * WORDS;
+/// Bytes of one pixel's sum of one channel on the device.
+const CHANNEL_BYTES_PER_PIXEL: u64 = 4 * SUM_LIMBS as u64;
+/// Bytes of the ray counts (up to three kinds).
+const RAY_COUNT_BYTES: u64 = 12;
+/// Invocations per dispatch on a hardware GPU: enough to fill one, few enough that a frame
+/// can stop between dispatches.
+const PATHS_PER_DISPATCH: u64 = 1 << 20;
+/// Invocations per dispatch on a CPU implementation (lavapipe), which runs them on a few
+/// cores.
+const PATHS_PER_SOFTWARE_DISPATCH: u64 = 1 << 15;
 
-/// A GPU integrator's kernel and frames.
+/// A GPU integrator's kernel, its frames' film on the device, and the state of its frames.
 pub(crate) struct GpuFrames {
     pub kernel: SceneKernel,
     /// The image size.
     pub size: (u32, u32),
-    /// Invocations per dispatch: the buffers' capacity, halved for good when a dispatch's
-    /// output overflows.
     paths_per_dispatch: u64,
+    buffers: FrameBuffers,
     samples_per_frame: u32,
     stop: StopFlag,
     /// What failed on the GPU, once something has: no frame renders after it.
     failure: Option<String>,
 }
 
+/// The dispatches' parameters, the film's sums per channel, the dropped samples and the ray
+/// counts, the read-back copy of all but the parameters, and the bind group of them all.
+struct FrameBuffers {
+    params: wgpu::Buffer,
+    /// The sums of each channel, then the dropped samples, then the ray counts: what a frame
+    /// clears and reads back, in the read-back's order.
+    outputs: [wgpu::Buffer; 5],
+    readback: wgpu::Buffer,
+    group: wgpu::BindGroup,
+}
+
 impl GpuFrames {
-    /// Frames of `kernel` at `size`, dispatching up to `paths_per_dispatch` invocations.
-    pub fn new(kernel: SceneKernel, size: (u32, u32), paths_per_dispatch: u64) -> GpuFrames {
-        GpuFrames {
+    /// `kernel` compiled for `scene` on the hierarchy `bvh`, and its frames at `size`. Fails
+    /// where a channel's sums (40 bytes a pixel) exceed the device's largest binding, or the
+    /// films the host's memory.
+    pub fn new(
+        kernel: Kernel,
+        scene: Arc<Scene>,
+        bvh: &GpuBvh,
+        size: (u32, u32),
+    ) -> Result<GpuFrames, GpuRenderError> {
+        vcm::check_image_size(size.0, size.1)?;
+        let pixels = u64::from(size.0) * u64::from(size.1);
+        let channel_bytes = pixels * CHANNEL_BYTES_PER_PIXEL;
+        // The read-back copy of the device's film is mapped into the host's memory.
+        check_host_estimate(film_estimate(size).with("film read-back", 3 * channel_bytes))?;
+        let gpu = bvh.device();
+        if channel_bytes > gpu.max_binding_bytes() {
+            return Err(GpuRenderError::Unsupported(format!(
+                "an image of {pixels} pixels, whose film on the device takes {channel_bytes} \
+                 bytes a channel, more than {} can bind ({} bytes): render a smaller image \
+                 or shade on the CPU",
+                gpu.describe(),
+                gpu.max_binding_bytes()
+            )));
+        }
+        let paths_per_dispatch = if gpu.is_software() {
+            PATHS_PER_SOFTWARE_DISPATCH
+        } else {
+            PATHS_PER_DISPATCH
+        };
+        let kernel = SceneKernel::new(kernel, scene, bvh)?;
+        let buffers = FrameBuffers::new(&kernel, channel_bytes);
+        Ok(GpuFrames {
             kernel,
             size,
             paths_per_dispatch,
+            buffers,
             samples_per_frame: 1,
             stop: StopFlag::new(),
             failure: None,
-        }
+        })
     }
 
-    /// Invocations per dispatch now.
-    #[cfg(test)]
-    pub fn paths_per_dispatch(&self) -> u64 {
-        self.paths_per_dispatch
-    }
-
-    /// Renders the frame starting at sample `first_sample`: one invocation per pixel and
-    /// sample, in dispatches that `dispatch` renders (`(first_sample, samples per frame)`,
-    /// `(first invocation, count)`; `Ok(None)` where its output overflowed: those
-    /// invocations are rendered again, half as many at a time from then on), and adds them
-    /// to `film`. Returns the statistics `stats` makes of the rays traced and the
-    /// invocations, with the time it took, or [`FrameStats::INTERRUPTED`] where the frame
-    /// was stopped or failed (`algorithm` names it in the failure), leaving `film` as it was.
+    /// Renders the frame starting at sample `first_sample` with `sampling`: one invocation
+    /// per pixel and sample, in dispatches of consecutive invocations, and adds the film
+    /// they made to `film`. Returns the statistics `stats` makes of the rays traced (by the
+    /// kernel's kinds) and the invocations, with the time it took, or
+    /// [`FrameStats::INTERRUPTED`] where the frame was stopped or failed (`algorithm` names it
+    /// in the failure), leaving `film` as it was.
     pub fn render(
         &mut self,
         film: &mut Film,
         first_sample: u32,
-        algorithm: &str,
-        mut dispatch: impl FnMut(
-            &SceneKernel,
-            (u32, u32),
-            (u64, u64),
-        ) -> Result<Option<Dispatched>, String>,
+        (algorithm, sampling): (&str, &Sampling),
         stats: impl FnOnce([u64; 3], u64) -> FrameStats,
     ) -> FrameStats {
-        let start = Instant::now();
-        let (width, height) = self.size;
         assert_eq!(
             (film.width(), film.height()),
             self.size,
             "film size differs from the settings"
         );
-        let samples = u64::from(self.samples_per_frame);
-        let invocations = u64::from(width) * u64::from(height) * samples;
-        // The frame's samples, added to `film` once the frame is whole (an interrupted one
-        // leaves it as it was); the host holds one dispatch's output at a time.
-        let mut frame = Film::new(width, height);
-        let mut rays = [0u64; 3];
-        let mut first = 0;
-        while first < invocations {
+        let start = std::time::Instant::now();
+        match self.render_frame(first_sample, sampling) {
+            Ok(Some((frame, rays, invocations))) => {
+                // Exact sums: the same film as adding each sample and splat to `film`.
+                film.merge(&frame);
+                FrameStats {
+                    shading_time: start.elapsed(),
+                    ..stats(rays, invocations)
+                }
+            }
+            Ok(None) => FrameStats::INTERRUPTED,
+            Err(error) => {
+                self.failure = Some(format!("{algorithm} on the GPU: {error}"));
+                FrameStats::INTERRUPTED
+            }
+        }
+    }
+
+    /// The frame's film, rays and invocations; `None` where it was stopped.
+    fn render_frame(
+        &self,
+        first_sample: u32,
+        sampling: &Sampling,
+    ) -> Result<Option<(Film, [u64; 3], u64)>, String> {
+        let (width, height) = self.size;
+        let b = &self.buffers;
+        let gpu = &self.kernel.gpu;
+        let samples = self.samples_per_frame;
+        let invocations = u64::from(width) * u64::from(height) * u64::from(samples);
+        let frame = (first_sample, samples);
+        let mut cleared: Vec<&wgpu::Buffer> = b.outputs.iter().collect();
+        for first in (0..invocations).step_by(self.paths_per_dispatch as usize) {
             if self.stop.is_raised() || self.failure.is_some() {
-                return FrameStats::INTERRUPTED;
+                return Ok(None);
             }
-            let count = self.paths_per_dispatch.min(invocations - first);
-            let frame_samples = (first_sample, self.samples_per_frame);
-            let dispatched = match dispatch(&self.kernel, frame_samples, (first, count)) {
-                Ok(Some(dispatched)) => dispatched,
-                Ok(None) if count > 1 => {
-                    self.paths_per_dispatch = count / 2;
-                    continue;
-                }
-                Ok(None) => {
-                    let error = "one invocation's output overflows the dispatch's buffer";
-                    self.failure = Some(format!("{algorithm} on the GPU: {error}"));
-                    return FrameStats::INTERRUPTED;
-                }
-                Err(error) => {
-                    self.failure = Some(format!("{algorithm} on the GPU: {error}"));
-                    return FrameStats::INTERRUPTED;
-                }
+            let range = (first, self.paths_per_dispatch.min(invocations - first));
+            let dispatch = (&b.params, &b.group);
+            let encoder = self
+                .kernel
+                .encode(dispatch, sampling, frame, range, &cleared);
+            // The first dispatch clears the film; the others add to it.
+            cleared.clear();
+            gpu.wait(gpu.queue.submit([encoder.finish()]))?;
+        }
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let mut at = 0;
+        for buffer in &b.outputs {
+            encoder.copy_buffer_to_buffer(buffer, 0, &b.readback, at, buffer.size());
+            at += buffer.size();
+        }
+        let pixels = width as usize * height as usize;
+        let read = |bytes: &[u8]| {
+            let limbs: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
+            let (sums, counts) = limbs.split_at(3 * pixels * SUM_LIMBS);
+            let (dropped, rays) = (counts[0], &counts[1..]);
+            let channel = |c: usize, pixel: usize| {
+                let at = (c * pixels + pixel) * SUM_LIMBS;
+                exact_sum(&sums[at..at + SUM_LIMBS])
             };
-            for (invocation, rgb) in (first..).zip(dispatched.radiance) {
-                frame.add((invocation / samples) as usize, rgb);
-            }
-            for (pixel, contribution) in dispatched.splats {
-                frame.add_splat(pixel as usize, contribution);
-            }
-            for (total, traced) in rays.iter_mut().zip(dispatched.rays) {
-                *total += traced;
-            }
-            first += count;
-        }
-        // Exact sums: the same film as adding each sample and splat to `film` directly.
-        film.merge(&frame);
-        FrameStats {
-            shading_time: start.elapsed(),
-            ..stats(rays, invocations)
-        }
+            let sums: Vec<PixelSum> = (0..pixels)
+                .map(|pixel| [0, 1, 2].map(|c| channel(c, pixel)))
+                .collect();
+            let counts = vec![u64::from(samples); pixels];
+            let film = Film::from_parts(self.size, sums, counts, u64::from(dropped));
+            let rays = [rays[0], rays[1], rays[2]].map(u64::from);
+            (film.expect("a sum per pixel"), rays, invocations)
+        };
+        gpu.read_back(encoder, (&b.readback, at), read).map(Some)
     }
 
     /// Takes the samples per pixel per frame of `schedule` (its scheduler, a CPU matter,
@@ -157,6 +213,52 @@ impl GpuFrames {
     pub fn failure(&self) -> Option<String> {
         self.failure.clone()
     }
+
+    /// Dispatches of at most `paths` invocations from now on.
+    #[cfg(test)]
+    pub fn set_paths_per_dispatch(&mut self, paths: u64) {
+        self.paths_per_dispatch = paths;
+    }
+}
+
+/// The exact sum held by ten u32 limbs, least significant first.
+fn exact_sum(limbs: &[u32]) -> ExactSum {
+    let mut words = [0u64; WORDS];
+    for (word, pair) in words.iter_mut().zip(limbs.chunks_exact(2)) {
+        *word = u64::from(pair[0]) | u64::from(pair[1]) << 32;
+    }
+    ExactSum::from_words(words)
+}
+
+impl FrameBuffers {
+    /// Buffers for `kernel`'s frames with `channel_bytes` of sums per channel.
+    fn new(kernel: &SceneKernel, channel_bytes: u64) -> FrameBuffers {
+        use wgpu::BufferUsages as U;
+        let output = U::STORAGE | U::COPY_SRC | U::COPY_DST;
+        let params = kernel.buffer(
+            "frame parameters",
+            size_of::<Params>() as u64,
+            U::UNIFORM | U::COPY_DST,
+        );
+        let [red, green, blue] = ["film red", "film green", "film blue"]
+            .map(|label| kernel.buffer(label, channel_bytes, output));
+        let dropped = kernel.buffer("dropped samples", 4, output);
+        let rays = kernel.buffer("ray counts", RAY_COUNT_BYTES, output);
+        let outputs = [red, green, blue, dropped, rays];
+        let readback = kernel.buffer(
+            "film read-back",
+            outputs.iter().map(wgpu::Buffer::size).sum(),
+            U::MAP_READ | U::COPY_DST,
+        );
+        // Bindings: 0 the parameters, 1–3 the channels, 4 the dropped samples, 5 the rays.
+        let group = kernel.bind(0, [&params].into_iter().chain(&outputs));
+        FrameBuffers {
+            params,
+            outputs,
+            readback,
+            group,
+        }
+    }
 }
 
 /// The [`Integrator`](vcm::Integrator) methods that a GPU integrator leaves to its
@@ -185,3 +287,182 @@ macro_rules! integrator_methods_of_frames {
     };
 }
 pub(crate) use integrator_methods_of_frames;
+
+#[cfg(test)]
+mod tests {
+    use std::path::PathBuf;
+
+    use vcm::PtSettings;
+    use vcm_scene::sampling::Rng;
+    use vcm_traversal_wgpu::{GpuBvhOptions, GpuDevice, device_or_skip};
+    use wgpu::util::DeviceExt;
+
+    use super::*;
+    use crate::shader::{BSDF_WGSL, FILM_WGSL, host_constants};
+
+    /// Adds `values` on the GPU, value i to channel i mod 3 of pixel (i / 3) mod `pixels`,
+    /// all at once, and returns the sums.
+    fn add_on_gpu(gpu: &GpuDevice, values: &[f32], pixels: usize) -> Vec<ExactSum> {
+        let probe = format!(
+            // bsdf.wgsl (for `all_finite`) reads lookup tables, declared and never bound.
+            "{}{BSDF_WGSL}\n{FILM_WGSL}\n\
+             @group(1) @binding(0) var<storage, read> tables: array<f32>;\n\
+             @group(0) @binding(0) var<storage, read> values: array<f32>;\n\
+             @compute @workgroup_size(64)\n\
+             fn probe_film(@builtin(global_invocation_id) id: vec3<u32>) {{\n\
+                 if id.x >= arrayLength(&values) {{ return; }}\n\
+                 exact_add(id.x % 3u, (id.x / 3u) % {pixels}u, values[id.x]);\n\
+             }}\n",
+            host_constants()
+        );
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("film probe"),
+            source: wgpu::ShaderSource::Wgsl(probe.into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("film probe"),
+            layout: None,
+            module: &module,
+            entry_point: Some("probe_film"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        use wgpu::BufferUsages as U;
+        let values_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("values"),
+            contents: bytemuck::cast_slice(values),
+            usage: U::STORAGE,
+        });
+        let bytes = (pixels * SUM_LIMBS * 4) as u64;
+        let buffer = |size, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: None,
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let output = U::STORAGE | U::COPY_SRC | U::COPY_DST;
+        let channels = [0; 3].map(|_| buffer(bytes, output));
+        let readback = buffer(3 * bytes, U::MAP_READ | U::COPY_DST);
+        let entries: Vec<_> = (0u32..)
+            .zip([&values_buffer].into_iter().chain(&channels))
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            })
+            .collect();
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        for channel in &channels {
+            encoder.clear_buffer(channel, 0, None);
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups((values.len() as u32).div_ceil(64), 1, 1);
+        }
+        for (c, channel) in channels.iter().enumerate() {
+            encoder.copy_buffer_to_buffer(channel, 0, &readback, c as u64 * bytes, bytes);
+        }
+        let limbs: Vec<u32> = gpu
+            .read_back(
+                encoder,
+                (&readback, 3 * bytes),
+                bytemuck::pod_collect_to_vec,
+            )
+            .unwrap_or_else(|e| panic!("{e}: {:?}", gpu.failure()));
+        limbs.chunks_exact(SUM_LIMBS).map(exact_sum).collect()
+    }
+
+    /// The device's exact sums are the CPU's `ExactSum`s bit for bit, however the
+    /// invocations interleave their atomic additions: values of every sign and magnitude
+    /// (zeros, subnormals, the largest floats, cancelling pairs) added at once to a few sums.
+    #[test]
+    fn device_sums_are_the_cpus_exact_sums() {
+        let Some(gpu) = device_or_skip() else { return };
+        let mut rng = Rng::new(7, 0);
+        let mut values: Vec<f32> = (0..30_000)
+            .map(|_| {
+                let bits = rng.next_u32();
+                // Any finite float: a non-finite one becomes its largest neighbour.
+                let value = f32::from_bits(bits);
+                if value.is_finite() {
+                    value
+                } else {
+                    f32::MAX.copysign(value)
+                }
+            })
+            .collect();
+        values.extend([
+            0.0,
+            -0.0,
+            f32::MIN_POSITIVE,
+            1e-45,
+            -1e-45,
+            1.0,
+            -1.0,
+            3.0e38,
+        ]);
+        let pixels = 4;
+        let on_gpu = add_on_gpu(&gpu, &values, pixels);
+        let mut on_cpu = vec![ExactSum::ZERO; 3 * pixels];
+        for (i, &value) in values.iter().enumerate() {
+            on_cpu[(i % 3) * pixels + (i / 3) % pixels].add_f32(value);
+        }
+        assert_eq!(on_gpu, on_cpu);
+    }
+
+    /// A scene of `scenes/` on `gpu`'s hierarchy.
+    fn scene_on(gpu: &Arc<GpuDevice>, name: &str) -> (Arc<Scene>, GpuBvh) {
+        let path =
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenes/{name}.gltf"));
+        let scene = Arc::new(Scene::load(&path).unwrap());
+        let corners = scene.triangle_corners();
+        let bvh = GpuBvh::new(Arc::clone(gpu), &corners, GpuBvhOptions::default()).unwrap();
+        (scene, bvh)
+    }
+
+    /// The film of two frames of 3 samples per pixel of `kernel` on `scene` at 24 × 18,
+    /// rendered in dispatches of at most `paths` invocations.
+    fn film_of(kernel: Kernel, (scene, bvh): &(Arc<Scene>, GpuBvh), paths: u64) -> Film {
+        let size = (24, 18);
+        let mut frames = GpuFrames::new(kernel, Arc::clone(scene), bvh, size).unwrap();
+        frames.set_paths_per_dispatch(paths);
+        let schedule = Schedule {
+            samples_per_frame: 3,
+            ..Schedule::ONE_BATCH
+        };
+        frames.set_schedule(schedule, "paths").unwrap();
+        let sampling = Sampling::from(&PtSettings::new(size.0, size.1));
+        let mut film = Film::new(size.0, size.1);
+        for frame in 0..2 {
+            let stats = frames.render(&mut film, 3 * frame, ("test", &sampling), |_, _| {
+                FrameStats::default()
+            });
+            assert!(!stats.interrupted, "{:?}", frames.failure());
+        }
+        film
+    }
+
+    /// Each kernel's film is the same bit for bit whether a frame is one dispatch or many
+    /// (the device's sums are exact), and not black.
+    #[test]
+    fn the_film_does_not_depend_on_the_dispatches() {
+        let Some(gpu) = device_or_skip().map(Arc::new) else {
+            return;
+        };
+        let scene = scene_on(&gpu, "cornell-box");
+        for kernel in Kernel::ALL {
+            let whole = film_of(kernel, &scene, 1 << 20);
+            assert_eq!(film_of(kernel, &scene, 97), whole, "{kernel:?}");
+            assert!(whole.mean().iter().any(|p| p.max_element() > 0.0));
+        }
+    }
+}

@@ -12,6 +12,8 @@ pub const BSDF_WGSL: &str = include_str!("../shaders/bsdf.wgsl");
 pub const MATERIAL_WGSL: &str = include_str!("../shaders/material.wgsl");
 /// The dispatch's parameters, the scene's shading data and what every kernel does with it.
 pub const SCENE_WGSL: &str = include_str!("../shaders/scene.wgsl");
+/// The frame's film on the device: exact sums with atomic additions.
+pub const FILM_WGSL: &str = include_str!("../shaders/film.wgsl");
 /// The path tracing kernel.
 pub const PATH_TRACER_WGSL: &str = include_str!("../shaders/path_tracer.wgsl");
 /// The light tracing kernel.
@@ -42,7 +44,7 @@ impl Kernel {
         }
     }
 
-    /// Its own source, which follows [`SCENE_WGSL`].
+    /// Its own source, which follows [`SCENE_WGSL`] and [`FILM_WGSL`].
     fn source(self) -> &'static str {
         match self {
             Kernel::PathTracer => PATH_TRACER_WGSL,
@@ -67,7 +69,8 @@ pub fn kernel_module(kernel: Kernel, traversal: &str, alpha_masks: bool) -> Stri
     let scene = SCENE_WGSL.replace("@group(2)", &format!("@group({group})"));
     let kernel = kernel.source();
     format!(
-        "{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{scene}\n{kernel}"
+        "{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{scene}\n\
+         {FILM_WGSL}\n{kernel}"
     )
 }
 
