@@ -8,7 +8,7 @@ pub mod choice;
 
 pub use vcm::{Algorithm, MergeRadius};
 use vcm::{DEFAULT_ALPHA, Integrator, PathTracer, PtSettings, RenderError, Vcm, VcmSettings};
-use vcm_gpu::{GpuLightTracer, GpuPathTracer, GpuRenderError};
+use vcm_gpu::{GpuBidirectional, GpuPathTracer, GpuRenderError};
 use vcm_scene::sampling::SampleSequence;
 use vcm_scene::{Scene, ShadingPlan};
 use vcm_traversal::Traversal;
@@ -53,8 +53,8 @@ impl AlgorithmOption {
         }
     }
 
-    /// The algorithm it renders with GPU shading: path tracing or light tracing, the ones
-    /// the GPU's kernels have so far (`auto` means path tracing there); `Err` with the
+    /// The algorithm it renders with GPU shading: path tracing, light tracing or BPT, the
+    /// ones the GPU's kernels have so far (`auto` means path tracing there); `Err` with the
     /// algorithm named, which GPU shading cannot render.
     pub fn shaded_on_gpu(self) -> Result<Algorithm, Algorithm> {
         match self {
@@ -67,7 +67,7 @@ impl AlgorithmOption {
     }
 
     /// The algorithms GPU shading renders.
-    pub const GPU_SHADED: [Algorithm; 2] = [Algorithm::Pt, Algorithm::LightTracing];
+    pub const GPU_SHADED: [Algorithm; 3] = [Algorithm::Pt, Algorithm::LightTracing, Algorithm::Bpt];
 }
 
 impl clap::ValueEnum for AlgorithmOption {
@@ -223,7 +223,7 @@ fn pt_settings(options: &IntegratorOptions, (width, height): (u32, u32)) -> PtSe
     }
 }
 
-/// `algorithm` with every path shaded on the GPU ([`GpuPathTracer`], [`GpuLightTracer`]), on
+/// `algorithm` with every path shaded on the GPU ([`GpuPathTracer`], [`GpuBidirectional`]), on
 /// the GPU backend's hierarchy `bvh`, for a `width` × `height` image: the same image as
 /// [`build`]'s integrator up to rounding. Refuses the algorithms the GPU has no kernel for
 /// ([`AlgorithmOption::GPU_SHADED`]).
@@ -237,13 +237,13 @@ pub fn build_on_gpu(
     let scene = Arc::clone(scene);
     Ok(match algorithm {
         Algorithm::Pt => Box::new(GpuPathTracer::new(scene, bvh, pt_settings(options, size))?),
-        Algorithm::LightTracing => {
+        Algorithm::LightTracing | Algorithm::Bpt => {
             let settings = vcm_settings(algorithm, options, size);
-            Box::new(GpuLightTracer::new(scene, bvh, settings)?)
+            Box::new(GpuBidirectional::new(scene, bvh, settings)?)
         }
         other => {
             return Err(GpuRenderError::Refused(format!(
-                "renders path tracing and light tracing only so far, not {}",
+                "renders path tracing, light tracing and bpt only so far, not {}",
                 other.name()
             )));
         }
@@ -265,12 +265,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn gpu_shading_renders_path_tracing_for_auto_light_tracing_and_refuses_the_others() {
+    fn gpu_shading_renders_path_tracing_for_auto_lt_and_bpt_and_refuses_the_others() {
         assert_eq!(AlgorithmOption::Auto.shaded_on_gpu(), Ok(Algorithm::Pt));
         let fixed = |algorithm| AlgorithmOption::Fixed(algorithm).shaded_on_gpu();
         assert_eq!(fixed(Algorithm::Pt), Ok(Algorithm::Pt));
         assert_eq!(fixed(Algorithm::LightTracing), Ok(Algorithm::LightTracing));
+        assert_eq!(fixed(Algorithm::Bpt), Ok(Algorithm::Bpt));
         assert_eq!(fixed(Algorithm::Vcm), Err(Algorithm::Vcm));
-        assert_eq!(fixed(Algorithm::Bpt), Err(Algorithm::Bpt));
+        assert_eq!(fixed(Algorithm::Ppm), Err(Algorithm::Ppm));
     }
 }

@@ -235,8 +235,8 @@ fn assert_masks_agree(scene: &Arc<vcm_rs::scene::Scene>) -> Vec<u32> {
 
 /// `--shading gpu`: the GPU path tracer renders the CPU path tracer's image up to rounding
 /// (`--algo auto` becomes pt, with no pilots), `--explain` says where paths are shaded, light
-/// tracing renders on the GPU too, what it cannot do fails with the reason before anything is
-/// written, and a scene with an environment map renders.
+/// tracing and BPT render on the GPU too, what it cannot do fails with the reason before
+/// anything is written, and a scene with an environment map renders.
 #[test]
 fn gpu_shading_renders_the_cpu_path_tracers_image() {
     if !have_gpu() {
@@ -283,25 +283,32 @@ fn gpu_shading_renders_the_cpu_path_tracers_image() {
         a.pixels.len()
     );
 
-    let light_tracing = [
-        "--algo",
-        "lt",
-        "--backend",
-        "gpu",
-        "--shading",
-        "gpu",
-        "--explain",
-    ];
-    let (stdout, _) = run(&light_tracing, &path("lt.exr"));
-    for said in ["shading on the GPU: runs", "light tracing splats: runs"] {
-        assert!(stdout.contains(said), "{said}: {stdout}");
+    for (algo, cache) in [("lt", "left out"), ("bpt", "runs")] {
+        let args = [
+            "--algo",
+            algo,
+            "--backend",
+            "gpu",
+            "--shading",
+            "gpu",
+            "--explain",
+        ];
+        let (stdout, _) = run(&args, &path(&format!("{algo}.exr")));
+        let cache = format!("light vertex cache: {cache}");
+        for said in [
+            "shading on the GPU: runs",
+            "light tracing splats: runs",
+            &cache,
+        ] {
+            assert!(stdout.contains(said), "{algo}, {said}: {stdout}");
+        }
     }
 
     let refused = [
         (&["--shading", "gpu"][..], "give --backend gpu too"),
         (
-            &["--backend", "gpu", "--shading", "gpu", "--algo", "bpt"],
-            "light tracing only so far",
+            &["--backend", "gpu", "--shading", "gpu", "--algo", "vcm"],
+            "pt, lt and bpt only so far",
         ),
     ];
     for (extra, message) in refused {
@@ -380,7 +387,8 @@ fn gpu_shading_renders_the_cpu_path_tracers_image() {
 /// Alpha masks with GPU shading: the kernels trace with the GPU backend's mask test, so on
 /// the Khronos alpha-mode model (lit by a point light and a sky) they render the paths of the
 /// CPU's path tracer and light tracer, which test the masks on the CPU: at least 99% of the
-/// pixels within 10⁻⁴ (98% for light tracing, whose paths each reach several pixels).
+/// pixels within 10⁻⁴ (98% for light tracing, whose paths each reach several pixels); BPT's
+/// image the CPU's in expectation (sums within 1%).
 #[test]
 fn gpu_shading_tests_alpha_masks_as_the_cpu_does() {
     use vcm::{Algorithm, Film, Integrator, Schedule};
@@ -421,10 +429,23 @@ fn gpu_shading_tests_alpha_masks_as_the_cpu_does() {
             .zip(&b)
             .filter(|(p, q)| (**p - **q).abs().max_element() <= 1e-4 * p.max_element().max(1e-2))
             .count();
-        let least = if algorithm == Algorithm::LightTracing {
-            98
-        } else {
-            99
+        let least = match algorithm {
+            Algorithm::LightTracing => 98,
+            Algorithm::Bpt => {
+                // A light path that a rounding difference sends elsewhere (lt: 5 pixels of
+                // 1,728 differ here) moves the cache's later vertices, which BPT picks by
+                // index: its images agree in expectation.
+                let sum = |image: &[glam::Vec3]| {
+                    image
+                        .iter()
+                        .map(|p| f64::from(p.element_sum()))
+                        .sum::<f64>()
+                };
+                let (x, y) = (sum(&a), sum(&b));
+                assert!((x - y).abs() <= 0.01 * x, "bpt: sums {x} and {y}");
+                continue;
+            }
+            _ => 99,
         };
         assert!(
             close * 100 >= least * a.len(),

@@ -1,5 +1,5 @@
 // The surface scattering model of vcm-scene (bsdf/), radiance or importance transport
-// (`importance`: light paths) with forward pdfs:
+// (`importance`: light paths) with forward pdfs and, where asked (`reverse`), reverse ones:
 // the glTF metallic-roughness mixture of a Schlick reflection lobe (mirror or GGX), a
 // diffuse base (plain Lambert or energy-compensated under a specular layer) and a dielectric
 // interface (thick or thin-walled, smooth or GGX). Each function is the CPU's of the same
@@ -380,12 +380,17 @@ fn outgoing(b: Bsdf, wo: vec3<f32>) -> Outgoing {
         return out;
     }
     out.valid = true;
-    if (m.flags & CONSTANT_SELECTION) != 0u {
-        out.selection = m.selection;
-    } else {
-        out.selection = selection_at(m, out.local, out.eta);
-    }
+    out.selection = selection(m, out.local, out.eta);
     return out;
+}
+
+// Lobe selection probabilities at local `wo` (`Mixture::selection`): the material's own
+// where they do not depend on `wo`.
+fn selection(m: Material, wo: vec3<f32>, eta: f32) -> vec4<f32> {
+    if (m.flags & CONSTANT_SELECTION) != 0u {
+        return m.selection;
+    }
+    return selection_at(m, wo, eta);
 }
 
 // |cos| of `wi` with the geometric normal where `wi` and its local form lie on the same
@@ -537,28 +542,100 @@ fn adjoint(
     return f_cos * (out.local.z * cos_gi / (abs(dot3(out.world, b.n_g)) * abs(wi_local.z)));
 }
 
-fn bsdf_eval(b: Bsdf, out: Outgoing, wi: vec3<f32>, importance: bool) -> BsdfEval {
-    let none = BsdfEval(vec3(0.0), 0.0);
+// The BSDF's value at a pair of directions (`BsdfEval`): f·|cos|, the forward pdf and the
+// reverse pdf (0 unless asked for).
+struct Evaluation {
+    f_cos: vec3<f32>,
+    pdf_fwd: f32,
+    pdf_rev: f32,
+}
+
+// The pdf where it is positive and finite, else 0 (`Bsdf::mixture_pdf`).
+fn positive_pdf(pdf: f32) -> f32 {
+    return select(0.0, pdf, is_finite(pdf) && pdf > 0.0);
+}
+
+// The solid-angle pdf of sampling `wi` from `wo` (`Bsdf::pdf`).
+fn bsdf_pdf(b: Bsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let out = outgoing(b, wo);
+    if !out.valid {
+        return 0.0;
+    }
+    let wi_l = local_on_side(b, out.back, wi);
+    if consistent(b, out.back, wi, wi_l) < 0.0 {
+        return 0.0;
+    }
+    return positive_pdf(mixture_eval(b.m, out.selection, out.local, wi_l, out.eta, false).pdf_fwd);
+}
+
+// The pdf of sampling `out`'s direction back from `wi` (`Bsdf::reverse_pdf`), `wi_l` its
+// local form and `cos_gi` its |cos| with the geometric normal: a reflection keeps `out`'s
+// side and η, the rest takes the general way.
+fn reverse_pdf(b: Bsdf, out: Outgoing, wi: vec3<f32>, wi_l: vec3<f32>, cos_gi: f32) -> f32 {
+    if !(wi_l.z > 0.0 && cos_gi > GRAZING_COS) {
+        return bsdf_pdf(b, wi, out.world);
+    }
+    let p = selection(b.m, wi_l, out.eta);
+    return positive_pdf(mixture_eval(b.m, p, wi_l, out.local, out.eta, false).pdf_fwd);
+}
+
+fn bsdf_eval(b: Bsdf, out: Outgoing, wi: vec3<f32>, importance: bool, reverse: bool) -> Evaluation {
+    let none = Evaluation(vec3(0.0), 0.0, 0.0);
     let wi_l = local_on_side(b, out.back, wi);
     let cos_gi = consistent(b, out.back, wi, wi_l);
     if cos_gi < 0.0 {
         return none;
     }
-    var e = mixture_eval(b.m, out.selection, out.local, wi_l, out.eta, importance);
-    e.f_cos = adjoint(b, e.f_cos, importance, out, wi_l, cos_gi);
-    if !(all_finite(e.f_cos) && is_finite(e.pdf_fwd) && e.pdf_fwd > 0.0) {
+    let e = mixture_eval(b.m, out.selection, out.local, wi_l, out.eta, importance);
+    let f_cos = adjoint(b, e.f_cos, importance, out, wi_l, cos_gi);
+    if !(all_finite(f_cos) && is_finite(e.pdf_fwd) && e.pdf_fwd > 0.0) {
         return none;
     }
-    return e;
+    var pdf_rev = 0.0;
+    if reverse {
+        pdf_rev = reverse_pdf(b, out, wi, wi_l, cos_gi);
+    }
+    return Evaluation(f_cos, e.pdf_fwd, pdf_rev);
 }
 
-// A sampled direction (`BsdfSample` without the reverse pdf); `valid` false where sampling
-// failed.
+// The probability of sampling the same delta of lobe `k` (`transmitted` or not) back from
+// `wi` to `wo` (`Bsdf::delta_pdf_rev`, `Mixture::delta_pdf`).
+fn delta_pdf_rev(b: Bsdf, wo: vec3<f32>, wi: vec3<f32>, k: u32, transmitted: bool) -> f32 {
+    let rev = outgoing(b, wi);
+    if !rev.valid {
+        return 0.0;
+    }
+    let wi_rev = local_on_side(b, rev.back, wo);
+    if abs(wi_rev.z) < GRAZING_COS {
+        return 0.0;
+    }
+    let m = b.m;
+    var prob = 0.0;
+    switch k {
+        case 0u: {
+            prob = select(0.0, 1.0, m.specular_alpha == 0.0 && !transmitted);
+        }
+        case 2u: {
+            let r = fresnel_dielectric(rev.local.z, rev.eta);
+            prob = select(0.0, select(r, 1.0 - r, transmitted), m.dielectric_alpha == 0.0);
+        }
+        case 3u: {
+            let r = thin_sheet_reflectance(fresnel_dielectric(rev.local.z, m.ior));
+            prob = select(0.0, select(r, 1.0 - r, transmitted), m.thin_alpha == 0.0);
+        }
+        default: {}
+    }
+    return rev.selection[k] * prob;
+}
+
+// A sampled direction (`BsdfSample`, the reverse pdf 0 unless asked for); `valid` false where
+// sampling failed.
 struct BsdfSample {
     valid: bool,
     wi: vec3<f32>,
     f_cos: vec3<f32>,
     pdf_fwd: f32,
+    pdf_rev: f32,
     kind: u32,
     eta: f32,
 }
@@ -660,8 +737,15 @@ fn lobe_kind(m: Material, k: u32) -> u32 {
     return select(KIND_SPECULAR, KIND_GLOSSY, alpha > 0.0);
 }
 
-fn bsdf_sample(b: Bsdf, out: Outgoing, u_lobe: f32, u: vec2<f32>, importance: bool) -> BsdfSample {
-    var s = BsdfSample(false, vec3(0.0), vec3(0.0), 0.0, KIND_SPECULAR, 1.0);
+fn bsdf_sample(
+    b: Bsdf,
+    out: Outgoing,
+    u_lobe: f32,
+    u: vec2<f32>,
+    importance: bool,
+    reverse: bool,
+) -> BsdfSample {
+    var s = BsdfSample(false, vec3(0.0), vec3(0.0), 0.0, 0.0, KIND_SPECULAR, 1.0);
     let m = b.m;
     let p = out.selection;
     // The lobe: the first k with u_lobe < p₀ + … + p_k among those with p_k > 0.
@@ -723,13 +807,17 @@ fn bsdf_sample(b: Bsdf, out: Outgoing, u_lobe: f32, u: vec2<f32>, importance: bo
         }
         s.f_cos = adjoint(b, lobe.weight, importance, out, lobe.wi, cos_gi);
         s.pdf_fwd = lobe.prob;
+        if reverse {
+            s.pdf_rev = delta_pdf_rev(b, out.world, wi, k, lobe.transmitted);
+        }
     } else {
-        let eval = bsdf_eval(b, out, wi, importance);
+        let eval = bsdf_eval(b, out, wi, importance, reverse);
         if !(eval.pdf_fwd > 0.0) {
             return s;
         }
         s.f_cos = eval.f_cos;
         s.pdf_fwd = eval.pdf_fwd;
+        s.pdf_rev = eval.pdf_rev;
     }
     s.wi = wi;
     s.eta = lobe.eta;

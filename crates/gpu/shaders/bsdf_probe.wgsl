@@ -12,8 +12,8 @@ struct ProbeInput {
 }
 
 // Its answer: the direction (w: the lobe kind, as bits), f·|cos| of radiance transport (w:
-// the pdf), f·|cos| of importance transport (w: the pdf), and in `valid.x` 1 where sampling
-// succeeded.
+// the pdf), f·|cos| of importance transport (w: the pdf), in `valid.x` 1 where sampling
+// succeeded and in `valid.y` the reverse pdf (as bits).
 struct ProbeOutput {
     wi: vec4<f32>,
     f_cos: vec4<f32>,
@@ -37,13 +37,13 @@ fn probe_bsdf(@builtin(global_invocation_id) id: vec3<u32>) {
     let out = outgoing(b, p.wo.xyz);
     var answer = ProbeOutput(vec4(0.0), vec4(0.0), vec4(0.0), vec4(0u));
     if out.valid {
-        let s = bsdf_sample(b, out, p.u.x, p.u.yz, false);
-        let t = bsdf_sample(b, out, p.u.x, p.u.yz, true);
+        let s = bsdf_sample(b, out, p.u.x, p.u.yz, false, true);
+        let t = bsdf_sample(b, out, p.u.x, p.u.yz, true, true);
         answer = ProbeOutput(
             vec4(s.wi, bitcast<f32>(s.kind)),
             vec4(s.f_cos, s.pdf_fwd),
             vec4(t.f_cos, t.pdf_fwd),
-            vec4(u32(s.valid), 0u, 0u, 0u),
+            vec4(u32(s.valid), bitcast<u32>(s.pdf_rev), 0u, 0u),
         );
     }
     probe_outputs[i] = answer;

@@ -1,6 +1,7 @@
-// Light tracing as one kernel: vcm's light pass with its camera connections (bidir's
-// light_pass.rs), and the camera pass that light tracing keeps, which finds the lights seen
-// directly (camera_pass.rs). Invocation k of a frame's dispatches takes index i = k / samples
+// The light pass as one kernel: vcm's light pass with its camera connections (bidir's
+// light_pass.rs) — for light tracing alone together with the camera pass it keeps, which
+// finds the lights seen directly (camera_pass.rs); for the bidirectional algorithms run
+// twice, counting each path's cacheable vertices and then storing them (bidir.wgsl). Invocation k of a frame's dispatches takes index i = k / samples
 // of iteration first_sample + k % samples: pixel i's camera sample and the iteration's light
 // path i, each drawing the CPU's numbers for it, so that both backends follow the same
 // paths. A light path's vertices that scatter toward the camera and see it make splats.
@@ -41,17 +42,17 @@ struct Splat {
     shadow: Shadow,
 }
 
-// Connects the light vertex at `s`, reached through `medium` with `throughput`, to the camera
+// Connects the light vertex `vertex` at `s`, reached through `medium`, to the camera
 // (`connect_to_camera`): a splat where the vertex projects into the image and scatters toward
-// the camera. Light tracing alone weighs it 1.
+// the camera, weighted against the camera's own techniques where there are any.
 fn connect_to_camera(
     s: Surface,
     b: Bsdf,
     out: Outgoing,
-    throughput: vec3<f32>,
+    vertex: LightVertex,
     medium: vec3<f32>,
 ) -> Splat {
-    var splat = Splat(0u, Shadow(false, vec3(0.0), vec3(0.0), 0.0, vec3(0.0)));
+    var splat = Splat(0u, no_shadow());
     let raster = raster_of(s.position);
     if raster.x < 0.0 {
         return splat;
@@ -60,17 +61,24 @@ fn connect_to_camera(
     let distance_sq = dot3(to_camera, to_camera);
     let distance = sqrt(distance_sq);
     let direction = to_camera / distance;
-    let eval = bsdf_eval(b, out, direction, true);
+    let light_tracing = params.light_pass == LIGHT_TRACING;
+    let eval = bsdf_eval(b, out, direction, true, !light_tracing);
     if all(eval.f_cos == vec3(0.0)) {
         return splat;
     }
     // The camera's solid-angle pdf per pixel sample, d_image² / (pixel_area · cos θ) with
-    // d_image = 1 / cos θ.
+    // d_image = 1 / cos θ; its area pdf at the vertex adds |cos θ_surface| / d².
     let cos_camera = dot3(params.camera_forward, -direction);
     let camera_pdf_w = 1.0 / (params.pixel_area * (cos_camera * cos_camera * cos_camera));
+    var weight = 1.0;
+    if !light_tracing {
+        let camera_pdf_a = camera_pdf_w * abs(dot3(s.n_g, direction)) / distance_sq;
+        let mis = SubpathMis(vertex.mis.x, vertex.mis.y, vertex.mis.z);
+        weight = camera_connection_weight(mis, camera_pdf_a, eval.pdf_rev);
+    }
     let toward_camera = transmittance(medium_toward(medium, s, direction), distance);
-    splat.shadow.contribution = throughput * toward_camera * eval.f_cos
-        * (camera_pdf_w / (distance_sq * params.light_paths));
+    splat.shadow.contribution = vertex.throughput * toward_camera * eval.f_cos
+        * (weight * camera_pdf_w / (distance_sq * params.light_paths));
     splat.shadow.origin = offset_ray_origin(s.position, s.error, s.n_g, direction);
     // To the camera's point (`segment_to`).
     splat.shadow.direction = params.camera_position - splat.shadow.origin;
@@ -86,9 +94,7 @@ fn connect_to_camera(
 fn seen_directly(pixel: u32, iteration: u32) -> vec3<f32> {
     let key = hash_key3(params.seed, vec2(pixel, 0u), vec2(0u));
     var rng = sequence_sampler(key, iteration, params.independent != 0u);
-    let jitter = uniform2(&rng);
-    let raster = vec2(f32(pixel % params.width) + jitter.x, f32(pixel / params.width) + jitter.y);
-    let direction = camera_direction(raster);
+    let direction = pixel_direction(&rng, pixel);
     let hit = trace(Ray(params.camera_position, 0.0, direction, MISSED), false);
     if params.max_segments < 1u {
         return vec3(0.0);
@@ -100,99 +106,134 @@ fn seen_directly(pixel: u32, iteration: u32) -> vec3<f32> {
     return emission(s, hit, direction, -1.0);
 }
 
-// Follows light path `index` of `iteration` from its light to its end, adding the splats
-// that reach the camera to the film, and returns the closest-hit and shadow rays it traced.
-fn trace_light_path(index: u32, iteration: u32) -> vec2<u32> {
-    var rays = vec2(0u);
+// Follows light path `index` of `iteration` (the frame's path `path`) from its light to its
+// end and does what `params.light_pass` says at each diffuse or glossy vertex: splat it
+// (light tracing alone: weight 1), count it, or store it in the cache and splat it with the
+// bidirectional weight. Returns the closest-hit and shadow rays it traced.
+fn trace_light_path(path: u32, index: u32, iteration: u32) -> vec2<u32> {
+    let mode = params.light_pass;
+    var light_rays = 0u;
+    var shadow_rays = 0u;
+    var stored = 0u;
+    var next_slot = 0u;
+    if mode == STORE_VERTICES {
+        next_slot = vertex_index[path];
+    }
     let key = hash_key3(params.seed, vec2(iteration, 0u), vec2(LIGHT_STREAM, 0u));
     var rng = sequence_sampler(key, index, params.independent != 0u);
     // The emission (`emit` of light_pass.rs).
     let u_pick = uniform1(&rng);
     let u_pos = uniform2(&rng);
     let u_dir = uniform2(&rng);
-    if params.light_count == 0u {
-        return rays;
-    }
-    let light_index = pick(0u, params.light_count, u_pick);
-    let light = lights[light_index];
-    let emitted = emit(light, u_pos, u_dir);
-    if !emitted.valid {
-        return rays;
-    }
-    let emission_pdf_w = emitted.emission_pdf_w * picks[light_index].y;
-    var throughput = emitted.value * (emitted.cos_at_light / emission_pdf_w);
-    if !(max_element(throughput) > 0.0 && all_finite(throughput)) {
-        return rays;
-    }
-    // Roulette judges a light path relative to its emission (`Roulette::relative_to`);
-    // importance is not scaled by refraction.
-    let roulette_scale = 1.0 / max_element(throughput);
-    var origin = offset_off_light(light, emitted.position, emitted.direction);
-    var direction = emitted.direction;
-    var medium = vec3(0.0);
-    var segments = 1u;
     loop {
-        let hit = trace(Ray(origin, 0.0, direction, MISSED), false);
-        rays.x += 1u;
-        if hit.prim == NO_HIT {
+        if params.light_count == 0u {
             break;
         }
-        // The vertex (`shade` of light_pass.rs).
-        start_step(&rng, segments, LIGHT_PAIRS);
-        throughput *= transmittance(medium, hit.t);
-        let s = surface_at(hit.prim, hit.u, hit.v);
-        let b = bsdf_new(material_at(s), s.n_g, s.n_s);
-        let out = outgoing(b, -direction);
-        var splat = Splat(0u, Shadow(false, vec3(0.0), vec3(0.0), 0.0, vec3(0.0)));
-        if has_non_delta(b.m) && segments < params.max_segments && out.valid {
-            splat = connect_to_camera(s, b, out, throughput, medium);
-        }
-        // A further vertex has segments + 1 segments, and using it takes one more.
-        var alive = out.valid && params.max_segments >= 2u && segments <= params.max_segments - 2u;
-        if alive {
-            // The continuation (`Walk::scatter` in importance mode).
-            let u_lobe = uniform1(&rng);
-            let u_scatter = uniform2(&rng);
-            let sample = bsdf_sample(b, out, u_lobe, u_scatter, true);
-            alive = sample.valid;
-            if alive {
-                throughput = throughput * (sample.f_cos / sample.pdf_fwd);
-                alive = survives(&rng, segments, &throughput, roulette_scale);
-            }
-            if alive {
-                origin = offset_ray_origin(s.position, s.error, s.n_g, sample.wi);
-                direction = sample.wi;
-                segments += 1u;
-                medium = medium_toward(medium, s, sample.wi);
-            }
-        }
-        if splat.shadow.valid {
-            rays.y += 1u;
-            let shadow = splat.shadow;
-            let blocker = trace(Ray(shadow.origin, 0.0, shadow.direction, shadow.tmax), true);
-            if blocker.prim == NO_HIT {
-                film_add(splat.pixel, shadow.contribution);
-            }
-        }
-        if !alive {
+        let light_index = pick(0u, params.light_count, u_pick);
+        let pick_pmf = picks[light_index].y;
+        let light = lights[light_index];
+        let emitted = emit(light, u_pos, u_dir);
+        if !emitted.valid {
             break;
         }
+        let emission_pdf_w = emitted.emission_pdf_w * pick_pmf;
+        let throughput = emitted.value * (emitted.cos_at_light / emission_pdf_w);
+        if !(max_element(throughput) > 0.0 && all_finite(throughput)) {
+            break;
+        }
+        let kind = light_kind(light);
+        var mis = mis_light(
+            emitted.direct_pdf_a * pick_pmf,
+            emission_pdf_w,
+            emitted.cos_at_light,
+            is_delta_light(kind),
+            is_finite_light(kind),
+        );
+        // Roulette judges a light path relative to its emission (`Roulette::relative_to`);
+        // importance is not scaled by refraction.
+        let origin = offset_off_light(light, emitted.position, emitted.direction);
+        let roulette_scale = 1.0 / max_element(throughput);
+        var walk = Walk(origin, emitted.direction, throughput, vec3(0.0), 1u, roulette_scale);
+        loop {
+            let hit = trace(Ray(walk.origin, 0.0, walk.direction, MISSED), false);
+            light_rays += 1u;
+            if hit.prim == NO_HIT {
+                break;
+            }
+            // The vertex (`shade` of light_pass.rs).
+            let segments = walk.segments;
+            start_step(&rng, segments, LIGHT_PAIRS);
+            walk.throughput *= transmittance(walk.medium, hit.t);
+            let s = surface_at(hit.prim, hit.u, hit.v);
+            let wo = -walk.direction;
+            // A light at infinity's first segment has no length: its pdfs are per solid angle.
+            let from_infinity = segments == 1u && !is_finite_light(kind);
+            mis_arrive(&mis, select(hit.t * hit.t, -1.0, from_infinity), abs(dot3(s.n_g, wo)));
+            let b = bsdf_new(material_at(s), s.n_g, s.n_s);
+            let out = outgoing(b, wo);
+            var splat = Splat(0u, no_shadow());
+            if has_non_delta(b.m) {
+                let vertex = LightVertex(
+                    s.position,
+                    segments,
+                    wo,
+                    hit.prim,
+                    walk.throughput,
+                    hit.u,
+                    vec3(mis.d_vcm, mis.d_vc, mis.d_vm),
+                    hit.v,
+                );
+                if mode == STORE_VERTICES {
+                    cache[next_slot] = vertex;
+                    next_slot += 1u;
+                }
+                stored += 1u;
+                if mode != COUNT_VERTICES && segments < params.max_segments && out.valid {
+                    splat = connect_to_camera(s, b, out, vertex, walk.medium);
+                }
+            }
+            // A further vertex has segments + 1 segments, and using it takes one more.
+            var alive = out.valid && params.max_segments >= 2u
+                && segments <= params.max_segments - 2u;
+            if alive {
+                // The continuation in importance transport, with the MIS update.
+                let sample = scatter(&rng, b, out, true, mode != LIGHT_TRACING);
+                alive = sample.valid;
+                if alive {
+                    let cos_out = abs(dot3(s.n_g, sample.wi));
+                    let specular = sample.kind == KIND_SPECULAR;
+                    mis_scatter(&mis, cos_out, sample.pdf_fwd, sample.pdf_rev, specular);
+                    alive = walk_on(&walk, &rng, s, sample, true);
+                }
+            }
+            if splat.shadow.valid && unblocked(splat.shadow, &shadow_rays) {
+                film_add(splat.pixel, splat.shadow.contribution);
+            }
+            if !alive {
+                break;
+            }
+        }
+        break;
     }
-    return rays;
+    if mode == COUNT_VERTICES {
+        vertex_index[path] = stored;
+    }
+    return vec2(light_rays, shadow_rays);
 }
 
 @compute @workgroup_size(WORKGROUP)
 fn trace_light_paths(@builtin(global_invocation_id) id: vec3<u32>) {
-    let local = id.x + id.y * params.row_threads;
-    if local >= params.path_count {
+    let path = frame_path(id);
+    if path == NO_PATH {
         return;
     }
-    let path = params.first_path + local;
     let index = path / params.samples;
     let iteration = params.first_sample + path % params.samples;
-    film_add(index, seen_directly(index, iteration));
-    let rays = trace_light_path(index, iteration);
-    atomicAdd(&ray_counts[0], 1u);
+    if params.light_pass == LIGHT_TRACING {
+        film_add(index, seen_directly(index, iteration));
+        atomicAdd(&ray_counts[0], 1u);
+    }
+    let rays = trace_light_path(path, index, iteration);
     atomicAdd(&ray_counts[1], rays.x);
     atomicAdd(&ray_counts[2], rays.y);
 }

@@ -45,6 +45,16 @@ struct Params {
     pixel_area: f32,
     // Light paths per iteration of a bidirectional algorithm, as a float.
     light_paths: f32,
+    // Light vertices each camera vertex connects to (N_c).
+    connections: u32,
+    // The MIS factors (`MisFactors`): merge (η_VCM), connect and hit (1/η_VCM where both
+    // connections and merging run), connections (1 where camera vertices connect).
+    mis_merge: f32,
+    mis_connect: f32,
+    mis_hit: f32,
+    mis_connections: f32,
+    // What the light pass does (bidir.wgsl).
+    light_pass: u32,
 }
 
 // A triangle as shading sees it: corners (w: the material, the area light or NO_LIGHT, as
@@ -159,6 +169,23 @@ fn camera_direction(raster: vec2<f32>) -> vec3<f32> {
     let a = ndc_x * params.half_extent.x;
     let b = ndc_y * params.half_extent.y;
     return normalized(params.camera_forward + params.camera_right * a + params.camera_up * b);
+}
+
+// The frame's path number of invocation `id` of the dispatch (a 2D grid of rows of
+// `row_threads`), or NO_PATH beyond the dispatch's paths.
+fn frame_path(id: vec3<u32>) -> u32 {
+    let local = id.x + id.y * params.row_threads;
+    return select(params.first_path + local, NO_PATH, local >= params.path_count);
+}
+
+const NO_PATH: u32 = 0xffffffffu;
+
+// The direction of a camera ray through pixel `pixel`, jittered with the next pair of
+// numbers (the camera paths' start).
+fn pixel_direction(rng: ptr<function, Sampler>, pixel: u32) -> vec3<f32> {
+    let jitter = uniform2(rng);
+    let raster = vec2(f32(pixel % params.width) + jitter.x, f32(pixel / params.width) + jitter.y);
+    return camera_direction(raster);
 }
 
 // A hit turned into a surface point (`SurfaceHit`).
@@ -342,18 +369,12 @@ fn pick(first: u32, count: u32, u: f32) -> u32 {
 // camera or a delta lobe, full weight).
 fn emission(s: Surface, hit: Hit, dir: vec3<f32>, bsdf_pdf: f32) -> vec3<f32> {
     let t = hit.t;
-    if !has_light_kind(AREA_LIGHT) || s.light == NO_LIGHT {
-        return vec3(0.0);
-    }
-    let light = lights[s.light];
-    let cos_out = dot3(light.normal.xyz, -dir);
-    if !(cos_out > 0.0) {
-        return vec3(0.0);
-    }
-    let radiance = area_radiance(light, vec3(1.0 - hit.u - hit.v, hit.u, hit.v));
-    if bsdf_pdf < 0.0 {
+    let emitted = area_emission(s, hit, dir);
+    let radiance = emitted.xyz;
+    if bsdf_pdf < 0.0 || emitted.w == 0.0 {
         return radiance;
     }
+    let light = lights[s.light];
     let direct_pdf_a = 1.0 / light.c0.w;
     let cos_at_light = abs(dot3(s.n_g, -dir));
     let light_pdf_w = picks[s.light].y * direct_pdf_a * t * t / cos_at_light;
@@ -369,6 +390,10 @@ struct Shadow {
     contribution: vec3<f32>,
 }
 
+fn no_shadow() -> Shadow {
+    return Shadow(false, vec3(0.0), vec3(0.0), 0.0, vec3(0.0));
+}
+
 // A light seen from a receiver (`Illumination`); `valid` false where it sends nothing.
 struct Illumination {
     valid: bool,
@@ -377,19 +402,29 @@ struct Illumination {
     distance: f32,
     value: vec3<f32>,
     direct_pdf_w: f32,
+    // The light's pdf of emitting the segment toward the receiver (no pick), and the cosine
+    // at the light (1 for point-like lights).
+    emission_pdf_w: f32,
+    cos_at_light: f32,
 }
 
 fn no_illumination() -> Illumination {
-    return Illumination(false, vec3(0.0), 0.0, vec3(0.0), 0.0);
+    return Illumination(false, vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, 0.0);
 }
 
-// A point or spot light at `position` seen from `receiver` (`illuminate_delta`).
-fn illuminate_delta(position: vec3<f32>, receiver: vec3<f32>, value: vec3<f32>) -> Illumination {
+// A point or spot light at `position` seen from `receiver`, emitting toward it with pdf
+// `emission_pdf_w` (`illuminate_delta`).
+fn illuminate_delta(
+    position: vec3<f32>,
+    receiver: vec3<f32>,
+    value: vec3<f32>,
+    emission_pdf_w: f32,
+) -> Illumination {
     let to_light = position - receiver;
     let distance_sq = dot3(to_light, to_light);
     let distance = sqrt(distance_sq);
     let valid = distance > 0.0 && is_finite(distance);
-    return Illumination(valid, to_light / distance, distance, value, distance_sq);
+    return Illumination(valid, to_light / distance, distance, value, distance_sq, emission_pdf_w, 1.0);
 }
 
 fn light_kind(light: Light) -> u32 {
@@ -485,7 +520,9 @@ fn sample_environment_map(light: Light, u: vec2<f32>) -> Illumination {
         return no_illumination();
     }
     let pdf = pdf_uv / (2.0 * PI * PI * sin_theta);
-    return Illumination(true, direction, infinity(), environment_radiance(light, direction), pdf);
+    let radiance = environment_radiance(light, direction);
+    let emission_pdf_w = pdf * entry_disk_pdf_a(light);
+    return Illumination(true, direction, infinity(), radiance, pdf, emission_pdf_w, 1.0);
 }
 
 // The solid-angle pdf of `sample_environment_map` for direction `d` (`EnvironmentMap::pdf`).
@@ -546,19 +583,22 @@ fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
             }
             let inv_area = 1.0 / light.c0.w;
             let pdf = inv_area * distance_sq / cos_at_light;
-            return Illumination(true, direction, distance, area_radiance(light, b), pdf);
+            let emission_pdf_w = inv_area * cosine_hemisphere_pdf(cos_at_light);
+            let radiance = area_radiance(light, b);
+            return Illumination(true, direction, distance, radiance, pdf, emission_pdf_w, cos_at_light);
         }
         case POINT_LIGHT: {
             if !has_light_kind(POINT_LIGHT) {
                 return no_illumination();
             }
-            return illuminate_delta(light.c0.xyz, receiver, light.emission.xyz);
+            return illuminate_delta(light.c0.xyz, receiver, light.emission.xyz, UNIFORM_SPHERE_PDF);
         }
         case SPOT_LIGHT: {
             if !has_light_kind(SPOT_LIGHT) {
                 return no_illumination();
             }
-            var seen = illuminate_delta(light.c0.xyz, receiver, light.emission.xyz);
+            let cone_pdf = uniform_cone_pdf(light.c1.w);
+            var seen = illuminate_delta(light.c0.xyz, receiver, light.emission.xyz, cone_pdf);
             let attenuation = spot_falloff(light, dot3(light.c1.xyz, -seen.direction));
             seen.valid = seen.valid && attenuation > 0.0;
             seen.value = light.emission.xyz * attenuation;
@@ -568,7 +608,8 @@ fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
             if !has_light_kind(DIRECTIONAL_LIGHT) {
                 return no_illumination();
             }
-            return Illumination(true, -light.c0.xyz, infinity(), light.emission.xyz, 1.0);
+            let disk_pdf = entry_disk_pdf_a(light);
+            return Illumination(true, -light.c0.xyz, infinity(), light.emission.xyz, 1.0, disk_pdf, 1.0);
         }
         default: {
             if !has_light_kind(ENVIRONMENT_LIGHT) {
@@ -578,7 +619,9 @@ fn illuminate(light: Light, receiver: vec3<f32>, u: vec2<f32>) -> Illumination {
                 return sample_environment_map(light, u);
             }
             let direction = sample_uniform_sphere(u);
-            return Illumination(true, direction, infinity(), light.emission.xyz, UNIFORM_SPHERE_PDF);
+            let pdf = UNIFORM_SPHERE_PDF;
+            let emission_pdf_w = pdf * entry_disk_pdf_a(light);
+            return Illumination(true, direction, infinity(), light.emission.xyz, pdf, emission_pdf_w, 1.0);
         }
     }
 }
@@ -592,11 +635,14 @@ struct Emitted {
     direction: vec3<f32>,
     // Area pdf of the position times solid-angle pdf of the direction.
     emission_pdf_w: f32,
+    // The pdf with which light sampling picks this point: its area pdf on an area light,
+    // the direction's solid-angle pdf for the environment, 1 for the delta lights.
+    direct_pdf_a: f32,
     cos_at_light: f32,
 }
 
 fn no_emission() -> Emitted {
-    return Emitted(false, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0);
+    return Emitted(false, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 1.0, 0.0);
 }
 
 // A uniform direction in the cone of directions within θmax of +z (`sample_uniform_cone`).
@@ -605,6 +651,11 @@ fn sample_uniform_cone(u: vec2<f32>, cos_max: f32) -> vec3<f32> {
     let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
     let phi = 2.0 * PI * u.y;
     return vec3(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
+}
+
+// The pdf of `sample_uniform_cone` (`uniform_cone_pdf`).
+fn uniform_cone_pdf(cos_max: f32) -> f32 {
+    return 1.0 / (2.0 * PI * (1.0 - cos_max));
 }
 
 // Where a light path from a light at infinity enters the scene's bounding sphere (c1 of
@@ -640,6 +691,7 @@ fn emit(light: Light, u_pos: vec2<f32>, u_dir: vec2<f32>) -> Emitted {
             e.position = area_point(light, b);
             e.direction = to_world(frame_from_z(light.normal.xyz), local);
             e.emission_pdf_w = inv_area * cosine_hemisphere_pdf(local.z);
+            e.direct_pdf_a = inv_area;
             e.cos_at_light = local.z;
         }
         case POINT_LIGHT: {
@@ -660,7 +712,7 @@ fn emit(light: Light, u_pos: vec2<f32>, u_dir: vec2<f32>) -> Emitted {
             e.value = light.emission.xyz * spot_falloff(light, local.z);
             e.position = light.c0.xyz;
             e.direction = to_world(frame_from_z(light.c1.xyz), local);
-            e.emission_pdf_w = 1.0 / (2.0 * PI * (1.0 - cos_outer));
+            e.emission_pdf_w = uniform_cone_pdf(cos_outer);
         }
         case DIRECTIONAL_LIGHT: {
             if !has_light_kind(DIRECTIONAL_LIGHT) {
@@ -681,6 +733,7 @@ fn emit(light: Light, u_pos: vec2<f32>, u_dir: vec2<f32>) -> Emitted {
             e.direction = -sky.direction;
             e.position = entry_point(light, e.direction, u_pos);
             e.emission_pdf_w = sky.direct_pdf_w * entry_disk_pdf_a(light);
+            e.direct_pdf_a = sky.direct_pdf_w;
         }
     }
     e.valid = true;
@@ -739,4 +792,142 @@ fn survives(
     }
     *throughput = *throughput / continuation;
     return true;
+}
+
+// The light kinds with a delta position or direction (`Light::is_delta`), and those at a
+// finite position (`Light::is_finite`).
+fn is_delta_light(kind: u32) -> bool {
+    return kind == POINT_LIGHT || kind == SPOT_LIGHT || kind == DIRECTIONAL_LIGHT;
+}
+
+fn is_finite_light(kind: u32) -> bool {
+    return kind != DIRECTIONAL_LIGHT && kind != ENVIRONMENT_LIGHT;
+}
+
+// A light picked by power and a point on it, seen from `s` with the BSDF `b` from `out`
+// (`LightSample::sample`: three numbers from `rng`); `valid` false where it sends nothing
+// the BSDF takes. `reverse`: with the BSDF's reverse pdf.
+struct LightSample {
+    valid: bool,
+    light: Light,
+    pick_pmf: f32,
+    seen: Illumination,
+    eval: Evaluation,
+}
+
+fn sample_light(
+    rng: ptr<function, Sampler>,
+    s: Surface,
+    b: Bsdf,
+    out: Outgoing,
+    reverse: bool,
+) -> LightSample {
+    var sample: LightSample;
+    sample.valid = false;
+    let u_pick = uniform1(rng);
+    let u_light = uniform2(rng);
+    if params.light_count == 0u {
+        return sample;
+    }
+    let index = pick(0u, params.light_count, u_pick);
+    sample.pick_pmf = picks[index].y;
+    sample.light = lights[index];
+    sample.seen = illuminate(sample.light, s.position, u_light);
+    if !sample.seen.valid {
+        return sample;
+    }
+    sample.eval = bsdf_eval(b, out, sample.seen.direction, false, reverse);
+    sample.valid = any(sample.eval.f_cos != vec3(0.0));
+    return sample;
+}
+
+// The shadow ray from `s` to the point `seen` of `light`, off an emitting triangle's
+// surface, or toward infinity for lights at infinity (`LightSample::shadow_ray`,
+// `shadow_segment`), adding `contribution` unless blocked.
+fn shadow_to_light(s: Surface, light: Light, seen: Illumination, contribution: vec3<f32>) -> Shadow {
+    var shadow = Shadow(true, vec3(0.0), vec3(0.0), 0.0, contribution);
+    shadow.origin = offset_ray_origin(s.position, s.error, s.n_g, seen.direction);
+    if !is_finite(seen.distance) {
+        shadow.direction = seen.direction;
+        shadow.tmax = MISSED;
+    } else {
+        let light_point = s.position + seen.direction * seen.distance;
+        let target_point = offset_off_light(light, light_point, -seen.direction);
+        shadow.direction = target_point - shadow.origin;
+        shadow.tmax = 1.0 - GAMMA_16;
+    }
+    return shadow;
+}
+
+// Whether nothing blocks `shadow` (and its ray is counted in `rays`).
+fn unblocked(shadow: Shadow, rays: ptr<function, u32>) -> bool {
+    *rays += 1u;
+    return trace(Ray(shadow.origin, 0.0, shadow.direction, shadow.tmax), true).prim == NO_HIT;
+}
+
+// What a path carries from vertex to vertex (`Walk`): its next segment, its throughput, the
+// absorption of the medium the segment runs through, its segments so far and Russian
+// roulette's factor (refraction's radiance scaling undone, or a light path's emission).
+struct Walk {
+    origin: vec3<f32>,
+    direction: vec3<f32>,
+    throughput: vec3<f32>,
+    medium: vec3<f32>,
+    segments: u32,
+    roulette_scale: f32,
+}
+
+// The continuation's BSDF sample from `s` (`Walk::scatter`): a lobe and a direction with the
+// next two pairs of numbers, in importance or radiance transport, with the reverse pdf where
+// asked.
+fn scatter(
+    rng: ptr<function, Sampler>,
+    b: Bsdf,
+    out: Outgoing,
+    importance: bool,
+    reverse: bool,
+) -> BsdfSample {
+    let u_lobe = uniform1(rng);
+    let u = uniform2(rng);
+    return bsdf_sample(b, out, u_lobe, u, importance, reverse);
+}
+
+// Moves `walk` on from `s` along the valid `sample` (`Walk::scatter` from the throughput on):
+// the throughput, Russian roulette, the next segment; false where roulette ends the path.
+fn walk_on(
+    walk: ptr<function, Walk>,
+    rng: ptr<function, Sampler>,
+    s: Surface,
+    sample: BsdfSample,
+    importance: bool,
+) -> bool {
+    if !importance {
+        (*walk).roulette_scale *= sample.eta * sample.eta;
+    }
+    var throughput = (*walk).throughput * (sample.f_cos / sample.pdf_fwd);
+    let alive = survives(rng, (*walk).segments, &throughput, (*walk).roulette_scale);
+    (*walk).throughput = throughput;
+    if !alive {
+        return false;
+    }
+    (*walk).origin = offset_ray_origin(s.position, s.error, s.n_g, sample.wi);
+    (*walk).direction = sample.wi;
+    (*walk).segments += 1u;
+    (*walk).medium = medium_toward((*walk).medium, s, sample.wi);
+    return true;
+}
+
+// The radiance an emitting triangle sends from `s` toward a path that hit it along `dir`
+// (`AreaLight::radiance_on_hit`), and in w the cosine at the light; zero where `s` emits
+// nothing that way.
+fn area_emission(s: Surface, hit: Hit, dir: vec3<f32>) -> vec4<f32> {
+    if !has_light_kind(AREA_LIGHT) || s.light == NO_LIGHT {
+        return vec4(0.0);
+    }
+    let light = lights[s.light];
+    let cos_out = dot3(light.normal.xyz, -dir);
+    if !(cos_out > 0.0) {
+        return vec4(0.0);
+    }
+    return vec4(area_radiance(light, vec3(1.0 - hit.u - hit.v, hit.u, hit.v)), cos_out);
 }

@@ -1,7 +1,7 @@
 //! The GPU's BSDF sampling checked with the shared chi-square harness: bsdf.wgsl samples a
 //! batch of directions on the GPU (`shaders/bsdf_probe.wgsl`), the CPU histograms them
-//! against the CPU's pdf, and each sample's pdf and f·|cos| (of radiance and of importance
-//! transport) are compared with the CPU's.
+//! against the CPU's pdf, and each sample's pdfs (forward and reverse) and f·|cos| (of
+//! radiance and of importance transport) are compared with the CPU's.
 //! Skipped without a graphics adapter unless `VCM_REQUIRE_GPU=1`.
 
 use bytemuck::{Pod, Zeroable};
@@ -131,7 +131,7 @@ const FAMILY: usize = 24;
 const SAMPLES: usize = 200_000;
 
 /// The GPU's samples of `params` from `wo` follow the CPU's pdf (chi-square over the
-/// sphere), and each sampled direction's pdf and f·|cos| in both transport modes are the
+/// sphere), and each sampled direction's pdfs and f·|cos| in both transport modes are the
 /// CPU's up to rounding. The shading normal leans off the geometric one, so that importance
 /// transport's correction for it matters.
 fn check(gpu: &GpuDevice, name: &str, params: &BsdfParams, wo: Vec3) {
@@ -158,8 +158,10 @@ fn check(gpu: &GpuDevice, name: &str, params: &BsdfParams, wo: Vec3) {
         let wi = Vec3::from_slice(&s.wi[..3]);
         let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-7;
         let same = |mode, gpu: &[f32; 4]| {
-            let eval = cpu.eval_with(wo, wi, mode, Pdfs::Forward);
-            close(eval.pdf_fwd, gpu[3]) && (0..3).all(|k| close(eval.f_cos[k], gpu[k]))
+            let eval = cpu.eval_with(wo, wi, mode, Pdfs::Both);
+            close(eval.pdf_fwd, gpu[3])
+                && close(eval.pdf_rev, f32::from_bits(s.valid[1]))
+                && (0..3).all(|k| close(eval.f_cos[k], gpu[k]))
         };
         let alike = same(TransportMode::Radiance, &s.f_cos)
             && same(TransportMode::Importance, &s.importance);

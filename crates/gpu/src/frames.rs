@@ -11,7 +11,7 @@ use vcm_scene::Scene;
 use vcm_traversal_wgpu::GpuBvh;
 
 use crate::error::GpuRenderError;
-use crate::kernel::{Params, Sampling, SceneKernel, check_host_estimate, film_estimate};
+use crate::kernel::{LightPass, Params, Sampling, SceneKernel, check_host_estimate, film_estimate};
 use crate::shader::Kernel;
 
 /// u32 limbs of one exact sum on the device (`SUM_LIMBS` of `film.wgsl`).
@@ -27,9 +27,21 @@ const PATHS_PER_DISPATCH: u64 = 1 << 20;
 /// cores.
 const PATHS_PER_SOFTWARE_DISPATCH: u64 = 1 << 15;
 
-/// A GPU integrator's kernel, its frames' film on the device, and the state of its frames.
+/// How a frame runs its kernels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum FramePlan {
+    /// One kernel, an invocation per pixel and sample (path tracing, light tracing).
+    OnePass(Kernel),
+    /// The light pass counting its light vertices, then storing them in the cache, then the
+    /// camera pass connecting to them (bidirectional path tracing).
+    Bidirectional,
+}
+
+/// A GPU integrator's kernels, its frames' film on the device, and the state of its frames.
 pub(crate) struct GpuFrames {
-    pub kernel: SceneKernel,
+    /// The kernels: the one pass's, or the light pass's and the camera pass's.
+    pub kernels: Vec<SceneKernel>,
+    plan: FramePlan,
     /// The image size.
     pub size: (u32, u32),
     paths_per_dispatch: u64,
@@ -41,22 +53,30 @@ pub(crate) struct GpuFrames {
 }
 
 /// The dispatches' parameters, the film's sums per channel, the dropped samples and the ray
-/// counts, the read-back copy of all but the parameters, and the bind group of them all.
+/// counts, their read-back copy, the light vertex cache and its index, and the bind groups
+/// of each kernel.
 struct FrameBuffers {
     params: wgpu::Buffer,
     /// The sums of each channel, then the dropped samples, then the ray counts: what a frame
     /// clears and reads back, in the read-back's order.
     outputs: [wgpu::Buffer; 5],
     readback: wgpu::Buffer,
-    group: wgpu::BindGroup,
+    /// Per light path of the frame its vertices' count or first slot, then per iteration its
+    /// first vertex and count (`vertex_index` of bidir.wgsl).
+    index: wgpu::Buffer,
+    index_readback: wgpu::Buffer,
+    /// The light vertices (`cache` of bidir.wgsl).
+    cache: wgpu::Buffer,
+    /// Bind group 0 of each kernel.
+    groups: Vec<wgpu::BindGroup>,
 }
 
 impl GpuFrames {
-    /// `kernel` compiled for `scene` on the hierarchy `bvh`, and its frames at `size`. Fails
-    /// where a channel's sums (40 bytes a pixel) exceed the device's largest binding, or the
-    /// films the host's memory.
+    /// The kernels of `plan` compiled for `scene` on the hierarchy `bvh`, and their frames at
+    /// `size`. Fails where a channel's sums (40 bytes a pixel) exceed the device's largest
+    /// binding, or the films the host's memory.
     pub fn new(
-        kernel: Kernel,
+        plan: FramePlan,
         scene: Arc<Scene>,
         bvh: &GpuBvh,
         size: (u32, u32),
@@ -81,10 +101,18 @@ impl GpuFrames {
         } else {
             PATHS_PER_DISPATCH
         };
-        let kernel = SceneKernel::new(kernel, scene, bvh)?;
-        let buffers = FrameBuffers::new(&kernel, channel_bytes);
+        let kernels = match plan {
+            FramePlan::OnePass(kernel) => vec![SceneKernel::new(kernel, scene, bvh)?],
+            FramePlan::Bidirectional => {
+                let light = SceneKernel::new(Kernel::LightTracer, scene, bvh)?;
+                let camera = light.sibling(Kernel::BidirCamera);
+                vec![light, camera]
+            }
+        };
+        let buffers = FrameBuffers::new(&kernels, channel_bytes);
         Ok(GpuFrames {
-            kernel,
+            kernels,
+            plan,
             size,
             paths_per_dispatch,
             buffers,
@@ -94,12 +122,12 @@ impl GpuFrames {
         })
     }
 
-    /// Renders the frame starting at sample `first_sample` with `sampling`: one invocation
-    /// per pixel and sample, in dispatches of consecutive invocations, and adds the film
-    /// they made to `film`. Returns the statistics `stats` makes of the rays traced (by the
-    /// kernel's kinds) and the invocations, with the time it took, or
-    /// [`FrameStats::INTERRUPTED`] where the frame was stopped or failed (`algorithm` names it
-    /// in the failure), leaving `film` as it was.
+    /// Renders the frame starting at sample `first_sample` with `sampling`: each pass an
+    /// invocation per pixel and sample, in dispatches of consecutive invocations that add to
+    /// the film on the device, and adds that film to `film`. Returns the statistics `stats`
+    /// makes of the rays traced (by the kernels' kinds) and the invocations of a pass, with
+    /// the time it took, or [`FrameStats::INTERRUPTED`] where the frame was stopped or failed
+    /// (`algorithm` names it in the failure), leaving `film` as it was.
     pub fn render(
         &mut self,
         film: &mut Film,
@@ -130,32 +158,129 @@ impl GpuFrames {
         }
     }
 
-    /// The frame's film, rays and invocations; `None` where it was stopped.
+    /// The frame's film, rays and invocations per pass; `None` where it was stopped.
     fn render_frame(
-        &self,
+        &mut self,
         first_sample: u32,
         sampling: &Sampling,
     ) -> Result<Option<(Film, [u64; 3], u64)>, String> {
         let (width, height) = self.size;
-        let b = &self.buffers;
-        let gpu = &self.kernel.gpu;
         let samples = self.samples_per_frame;
         let invocations = u64::from(width) * u64::from(height) * u64::from(samples);
         let frame = (first_sample, samples);
-        let mut cleared: Vec<&wgpu::Buffer> = b.outputs.iter().collect();
+        let pass = |light_pass| (sampling, light_pass);
+        let done = match self.plan {
+            FramePlan::OnePass(_) => {
+                self.run_pass(0, pass(LightPass::LightTracing), frame, true)?
+            }
+            FramePlan::Bidirectional => {
+                // A count per light path, then a first vertex and a count per iteration.
+                let bytes = 4 * (invocations + 2 * u64::from(samples));
+                if bytes > self.kernels[0].gpu.max_binding_bytes() {
+                    return Err(format!(
+                        "{invocations} light paths a frame need an index of {bytes} bytes, \
+                         more than the device can bind: render fewer samples per frame"
+                    ));
+                }
+                if bytes > self.buffers.index.size() {
+                    self.buffers.grow_index(&self.kernels, bytes);
+                }
+                self.run_pass(0, pass(LightPass::CountVertices), frame, true)?
+                    && self.index_vertices(invocations as usize, samples as usize)?
+                    && self.run_pass(0, pass(LightPass::StoreVertices), frame, false)?
+                    && self.run_pass(1, pass(LightPass::LightTracing), frame, false)?
+            }
+        };
+        if !done {
+            return Ok(None);
+        }
+        self.read_film(samples)
+            .map(|(film, rays)| Some((film, rays, invocations)))
+    }
+
+    /// Runs kernel `kernel` with `sampling` and `light_pass` over every invocation of
+    /// `frame`, clearing the outputs first where `clear`; `false` where a stop request cut
+    /// it short.
+    fn run_pass(
+        &self,
+        kernel: usize,
+        (sampling, light_pass): (&Sampling, LightPass),
+        frame: (u32, u32),
+        clear: bool,
+    ) -> Result<bool, String> {
+        let b = &self.buffers;
+        let (width, height) = self.size;
+        let invocations = u64::from(width) * u64::from(height) * u64::from(frame.1);
+        let mut cleared: Vec<&wgpu::Buffer> = if clear {
+            b.outputs.iter().collect()
+        } else {
+            Vec::new()
+        };
+        let scene_kernel = &self.kernels[kernel];
+        let gpu = &scene_kernel.gpu;
         for first in (0..invocations).step_by(self.paths_per_dispatch as usize) {
             if self.stop.is_raised() || self.failure.is_some() {
-                return Ok(None);
+                return Ok(false);
             }
             let range = (first, self.paths_per_dispatch.min(invocations - first));
-            let dispatch = (&b.params, &b.group);
-            let encoder = self
-                .kernel
-                .encode(dispatch, sampling, frame, range, &cleared);
-            // The first dispatch clears the film; the others add to it.
+            let dispatch = (&b.params, &b.groups[kernel]);
+            let pass = (sampling, light_pass);
+            let encoder = scene_kernel.encode(dispatch, pass, frame, range, &cleared);
+            // The first dispatch clears the outputs; the others add to them.
             cleared.clear();
             gpu.wait(gpu.queue.submit([encoder.finish()]))?;
         }
+        Ok(true)
+    }
+
+    /// Turns the light vertices each of the frame's `paths` light paths counted into where
+    /// they go in the cache — iteration by iteration (`samples` of them), each iteration's
+    /// in the order of its paths, as the CPU's cache keeps them — and makes room for them
+    /// (always `true`, to chain with the passes).
+    fn index_vertices(&mut self, paths: usize, samples: usize) -> Result<bool, String> {
+        let gpu = Arc::clone(&self.kernels[0].gpu);
+        let b = &self.buffers;
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let count_bytes = 4 * paths as u64;
+        encoder.copy_buffer_to_buffer(&b.index, 0, &b.index_readback, 0, count_bytes);
+        let counts: Vec<u32> = gpu.read_back(
+            encoder,
+            (&b.index_readback, count_bytes),
+            bytemuck::pod_collect_to_vec,
+        )?;
+        let mut index = vec![0u32; paths + 2 * samples];
+        let mut total = 0u64;
+        for sample in 0..samples {
+            let first = total;
+            // Path number p = pixel · samples + sample.
+            for path in (sample..paths).step_by(samples) {
+                index[path] = total as u32;
+                total += u64::from(counts[path]);
+            }
+            index[paths + 2 * sample] = first as u32;
+            index[paths + 2 * sample + 1] = (total - first) as u32;
+        }
+        let cache_bytes = total.max(1) * size_of::<LightVertex>() as u64;
+        if cache_bytes > gpu.max_binding_bytes() || total > u64::from(u32::MAX) {
+            return Err(format!(
+                "the frame's {total} light vertices take {cache_bytes} bytes, more than the \
+                 device can bind ({} bytes): render fewer samples per frame or a smaller image",
+                gpu.max_binding_bytes()
+            ));
+        }
+        if cache_bytes > self.buffers.cache.size() {
+            self.buffers.grow_cache(&self.kernels, cache_bytes);
+        }
+        gpu.queue
+            .write_buffer(&self.buffers.index, 0, bytemuck::cast_slice(&index));
+        Ok(true)
+    }
+
+    /// The frame's film of `samples` per pixel and the rays traced, read back.
+    fn read_film(&self, samples: u32) -> Result<(Film, [u64; 3]), String> {
+        let (width, height) = self.size;
+        let b = &self.buffers;
+        let gpu = &self.kernels[0].gpu;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let mut at = 0;
         for buffer in &b.outputs {
@@ -177,9 +302,9 @@ impl GpuFrames {
             let counts = vec![u64::from(samples); pixels];
             let film = Film::from_parts(self.size, sums, counts, u64::from(dropped));
             let rays = [rays[0], rays[1], rays[2]].map(u64::from);
-            (film.expect("a sum per pixel"), rays, invocations)
+            (film.expect("a sum per pixel"), rays)
         };
-        gpu.read_back(encoder, (&b.readback, at), read).map(Some)
+        gpu.read_back(encoder, (&b.readback, at), read)
     }
 
     /// Takes the samples per pixel per frame of `schedule` (its scheduler, a CPU matter,
@@ -230,10 +355,26 @@ fn exact_sum(limbs: &[u32]) -> ExactSum {
     ExactSum::from_words(words)
 }
 
+/// `LightVertex` of bidir.wgsl.
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct LightVertex {
+    position: [f32; 3],
+    path_length: u32,
+    wo: [f32; 3],
+    triangle: u32,
+    throughput: [f32; 3],
+    u: f32,
+    mis: [f32; 3],
+    v: f32,
+}
+
 impl FrameBuffers {
-    /// Buffers for `kernel`'s frames with `channel_bytes` of sums per channel.
-    fn new(kernel: &SceneKernel, channel_bytes: u64) -> FrameBuffers {
+    /// Buffers for the frames of `kernels` with `channel_bytes` of sums per channel; the
+    /// cache and its index hold nothing yet.
+    fn new(kernels: &[SceneKernel], channel_bytes: u64) -> FrameBuffers {
         use wgpu::BufferUsages as U;
+        let kernel = &kernels[0];
         let output = U::STORAGE | U::COPY_SRC | U::COPY_DST;
         let params = kernel.buffer(
             "frame parameters",
@@ -250,14 +391,59 @@ impl FrameBuffers {
             outputs.iter().map(wgpu::Buffer::size).sum(),
             U::MAP_READ | U::COPY_DST,
         );
-        // Bindings: 0 the parameters, 1–3 the channels, 4 the dropped samples, 5 the rays.
-        let group = kernel.bind(0, [&params].into_iter().chain(&outputs));
-        FrameBuffers {
+        // Room for nothing yet: the frames make it.
+        let index = kernel.buffer("light vertex index", 16, output);
+        let index_readback = kernel.buffer("light vertex counts", 16, U::MAP_READ | U::COPY_DST);
+        let cache = kernel.buffer(
+            "light vertex cache",
+            size_of::<LightVertex>() as u64,
+            output,
+        );
+        let mut buffers = FrameBuffers {
             params,
             outputs,
             readback,
-            group,
-        }
+            index,
+            index_readback,
+            cache,
+            groups: Vec::new(),
+        };
+        buffers.bind(kernels);
+        buffers
+    }
+
+    /// (Re)makes each kernel's bind group 0: 0 the parameters, 1–3 the channels, 4 the
+    /// dropped samples, 5 the rays, and where it reads them 6 the index and 7 the cache.
+    fn bind(&mut self, kernels: &[SceneKernel]) {
+        self.groups = kernels
+            .iter()
+            .map(|kernel| {
+                let film = [&self.params].into_iter().chain(&self.outputs);
+                if kernel.kind.uses_cache() {
+                    kernel.bind(0, film.chain([&self.index, &self.cache]))
+                } else {
+                    kernel.bind(0, film)
+                }
+            })
+            .collect();
+    }
+
+    /// A cache of `bytes`, bound to `kernels`.
+    fn grow_cache(&mut self, kernels: &[SceneKernel], bytes: u64) {
+        use wgpu::BufferUsages as U;
+        let output = U::STORAGE | U::COPY_SRC | U::COPY_DST;
+        self.cache = kernels[0].buffer("light vertex cache", bytes, output);
+        self.bind(kernels);
+    }
+
+    /// An index of `bytes` and its read-back copy, bound to `kernels`.
+    fn grow_index(&mut self, kernels: &[SceneKernel], bytes: u64) {
+        use wgpu::BufferUsages as U;
+        let output = U::STORAGE | U::COPY_SRC | U::COPY_DST;
+        self.index = kernels[0].buffer("light vertex index", bytes, output);
+        self.index_readback =
+            kernels[0].buffer("light vertex counts", bytes, U::MAP_READ | U::COPY_DST);
+        self.bind(kernels);
     }
 }
 
@@ -292,7 +478,7 @@ pub(crate) use integrator_methods_of_frames;
 mod tests {
     use std::path::PathBuf;
 
-    use vcm::PtSettings;
+    use vcm::{Algorithm, PtSettings, VcmSettings};
     use vcm_scene::sampling::Rng;
     use vcm_traversal_wgpu::{GpuBvhOptions, GpuDevice, device_or_skip};
     use wgpu::util::DeviceExt;
@@ -429,18 +615,30 @@ mod tests {
         (scene, bvh)
     }
 
-    /// The film of two frames of 3 samples per pixel of `kernel` on `scene` at 24 × 18,
+    /// The film of two frames of 3 samples per pixel of `algorithm` on `scene` at 24 × 18,
     /// rendered in dispatches of at most `paths` invocations.
-    fn film_of(kernel: Kernel, (scene, bvh): &(Arc<Scene>, GpuBvh), paths: u64) -> Film {
+    fn film_of(algorithm: Algorithm, (scene, bvh): &(Arc<Scene>, GpuBvh), paths: u64) -> Film {
         let size = (24, 18);
-        let mut frames = GpuFrames::new(kernel, Arc::clone(scene), bvh, size).unwrap();
+        let (plan, sampling) = match algorithm {
+            Algorithm::Pt => (
+                FramePlan::OnePass(Kernel::PathTracer),
+                Sampling::from(&PtSettings::new(size.0, size.1)),
+            ),
+            bidirectional => (
+                match bidirectional {
+                    Algorithm::LightTracing => FramePlan::OnePass(Kernel::LightTracer),
+                    _ => FramePlan::Bidirectional,
+                },
+                Sampling::from(&VcmSettings::new(bidirectional, size.0, size.1)),
+            ),
+        };
+        let mut frames = GpuFrames::new(plan, Arc::clone(scene), bvh, size).unwrap();
         frames.set_paths_per_dispatch(paths);
         let schedule = Schedule {
             samples_per_frame: 3,
             ..Schedule::ONE_BATCH
         };
         frames.set_schedule(schedule, "paths").unwrap();
-        let sampling = Sampling::from(&PtSettings::new(size.0, size.1));
         let mut film = Film::new(size.0, size.1);
         for frame in 0..2 {
             let stats = frames.render(&mut film, 3 * frame, ("test", &sampling), |_, _| {
@@ -451,17 +649,17 @@ mod tests {
         film
     }
 
-    /// Each kernel's film is the same bit for bit whether a frame is one dispatch or many
-    /// (the device's sums are exact), and not black.
+    /// Each algorithm's film is the same bit for bit whether a frame's passes are one
+    /// dispatch each or many (the device's sums are exact), and not black.
     #[test]
     fn the_film_does_not_depend_on_the_dispatches() {
         let Some(gpu) = device_or_skip().map(Arc::new) else {
             return;
         };
         let scene = scene_on(&gpu, "cornell-box");
-        for kernel in Kernel::ALL {
-            let whole = film_of(kernel, &scene, 1 << 20);
-            assert_eq!(film_of(kernel, &scene, 97), whole, "{kernel:?}");
+        for algorithm in [Algorithm::Pt, Algorithm::LightTracing, Algorithm::Bpt] {
+            let whole = film_of(algorithm, &scene, 1 << 20);
+            assert_eq!(film_of(algorithm, &scene, 97), whole, "{algorithm:?}");
             assert!(whole.mean().iter().any(|p| p.max_element() > 0.0));
         }
     }

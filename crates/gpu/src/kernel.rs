@@ -41,14 +41,32 @@ pub(crate) struct Params {
     environment_columns: u32,
     pixel_area: f32,
     light_paths: f32,
+    connections: u32,
+    mis_merge: f32,
+    mis_connect: f32,
+    mis_hit: f32,
+    mis_connections: f32,
+    light_pass: u32,
     /// Up to the WGSL struct's size, a multiple of 16 bytes.
-    padding: [u32; 3],
+    padding: u32,
 }
 
 const _: () = assert!(
-    size_of::<Params>() == 144,
+    size_of::<Params>() == 160,
     "the size of Params in scene.wgsl"
 );
+
+/// What the light pass does (`light_pass` of `Params`, bidir.wgsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LightPass {
+    /// Light tracing alone, with the camera's first hits (and for kernels without a light
+    /// pass).
+    LightTracing = 0,
+    /// Count each light path's cacheable vertices.
+    CountVertices = 1,
+    /// Store them in the cache and splat with the bidirectional weights.
+    StoreVertices = 2,
+}
 
 /// What a dispatch's parameters take from an integrator's settings.
 #[derive(Clone, Copy, Debug)]
@@ -58,36 +76,68 @@ pub(crate) struct Sampling {
     pub seed: u64,
     pub sequence: SampleSequence,
     pub max_depth: Option<u32>,
+    /// N_c: light vertices each camera vertex connects to (0 without connections).
+    pub connections: u32,
+    /// The MIS factors (`vcm`'s `MisFactors`): merge, connect, hit, connections.
+    pub mis: [f32; 4],
 }
 
-/// [`Sampling`] from each integrator's settings type, which name the same fields.
-macro_rules! sampling_from {
-    ($settings:ty) => {
-        impl From<&$settings> for Sampling {
-            fn from(s: &$settings) -> Sampling {
-                Sampling {
-                    width: s.width,
-                    height: s.height,
-                    seed: s.seed,
-                    sequence: s.sequence,
-                    max_depth: s.max_depth,
-                }
-            }
+impl Sampling {
+    /// What every integrator's settings say: the image, the numbers, the path length; without
+    /// connections.
+    fn of_image(
+        (width, height): (u32, u32),
+        (seed, sequence): (u64, SampleSequence),
+        max_depth: Option<u32>,
+    ) -> Sampling {
+        Sampling {
+            width,
+            height,
+            seed,
+            sequence,
+            max_depth,
+            connections: 0,
+            mis: [0.0; 4],
         }
-    };
+    }
 }
 
-sampling_from!(vcm::PtSettings);
-sampling_from!(vcm::VcmSettings);
+impl From<&vcm::PtSettings> for Sampling {
+    fn from(s: &vcm::PtSettings) -> Sampling {
+        Sampling::of_image((s.width, s.height), (s.seed, s.sequence), s.max_depth)
+    }
+}
+
+impl From<&vcm::VcmSettings> for Sampling {
+    /// Of light tracing or BPT, which do not merge: the factors that involve merging are 0
+    /// (`MisFactors::new` without merging), and BPT's camera vertices connect.
+    fn from(s: &vcm::VcmSettings) -> Sampling {
+        let image = Sampling::of_image((s.width, s.height), (s.seed, s.sequence), s.max_depth);
+        if !s.algorithm.connects() {
+            return image;
+        }
+        Sampling {
+            connections: s.connections,
+            mis: [0.0, 0.0, 0.0, 1.0],
+            ..image
+        }
+    }
+}
 
 /// A kernel compiled for one scene, with the scene's shading data on the device.
 pub(crate) struct SceneKernel {
+    /// Which kernel it is.
+    pub kind: Kernel,
     pub gpu: Arc<GpuDevice>,
     pub scene: Arc<Scene>,
     pub pipeline: wgpu::ComputePipeline,
-    /// The scene's bind groups with their indices: 1 the hierarchy, 2 the alpha masks where
-    /// there are any, then the shading data ([`shading_group`]).
+    /// The scene's buffers by bind group: 1 the hierarchy, 2 the alpha masks where there are
+    /// any, then the shading data ([`shading_group`]).
+    scene_buffers: Vec<(u32, Vec<wgpu::Buffer>)>,
+    /// Their bind groups for this kernel's pipeline.
     scene_groups: Vec<(u32, wgpu::BindGroup)>,
+    /// The WGSL of the traversal functions and whether they test alpha masks.
+    traversal: (String, bool),
     light_count: u32,
     environment: u32,
     /// Where the environment map's rows and its rows' texels start in the picks buffer.
@@ -110,28 +160,9 @@ impl SceneKernel {
             .hierarchy_buffers()
             .ok_or_else(|| GpuRenderError::Unsupported("a scene without triangles".into()))?;
         let gpu = Arc::clone(bvh.device());
-        let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(kernel.entry()),
-            source: wgpu::ShaderSource::Wgsl(
-                kernel_module(kernel, &bvh.traversal_functions(), bvh.has_alpha_masks()).into(),
-            ),
-        });
         let plan = KernelPlan::for_scene(&scene);
-        let constants = plan.constants();
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(kernel.entry()),
-            layout: None,
-            module: &module,
-            entry_point: Some(kernel.entry()),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: &constants,
-                ..Default::default()
-            },
-            cache: None,
-        });
         let data = SceneData::new(&scene, &plan);
-        let shading = [
+        let shading = vec![
             upload(&gpu, "shading triangles", &data.triangles)?,
             upload(&gpu, "materials", &data.materials)?,
             upload(&gpu, "lights", &data.lights)?,
@@ -144,22 +175,47 @@ impl SceneKernel {
             upload(&gpu, "triangle attributes", &data.attributes)?,
             upload(&gpu, "environment texels", &data.environment_texels)?,
         ];
-        let mut scene_groups = vec![(1, bind(device, &pipeline, 1, hierarchy.iter()))];
+        let mut scene_buffers = vec![(1, hierarchy.to_vec())];
         if let Some(masks) = bvh.alpha_mask_buffers() {
-            scene_groups.push((2, bind(device, &pipeline, 2, masks.iter())));
+            scene_buffers.push((2, masks.to_vec()));
         }
-        let group = shading_group(bvh.has_alpha_masks());
-        scene_groups.push((group, bind(device, &pipeline, group, shading.iter())));
+        scene_buffers.push((shading_group(bvh.has_alpha_masks()), shading));
+        let traversal = (bvh.traversal_functions(), bvh.has_alpha_masks());
+        let pipeline = compile(&gpu.device, kernel, &traversal, &plan);
+        let scene_groups = bind_scene(&gpu.device, &pipeline, &scene_buffers);
         Ok(SceneKernel {
+            kind: kernel,
             gpu,
             scene,
             pipeline,
+            scene_buffers,
             scene_groups,
+            traversal,
             light_count: data.light_count,
             environment: data.environment,
             environment_offsets: data.environment_offsets,
             plan,
         })
+    }
+
+    /// `kernel` for the same scene, on the same buffers.
+    pub fn sibling(&self, kernel: Kernel) -> SceneKernel {
+        let device = &self.gpu.device;
+        let pipeline = compile(device, kernel, &self.traversal, &self.plan);
+        let scene_groups = bind_scene(device, &pipeline, &self.scene_buffers);
+        SceneKernel {
+            kind: kernel,
+            gpu: Arc::clone(&self.gpu),
+            scene: Arc::clone(&self.scene),
+            pipeline,
+            scene_buffers: self.scene_buffers.clone(),
+            scene_groups,
+            traversal: self.traversal.clone(),
+            light_count: self.light_count,
+            environment: self.environment,
+            environment_offsets: self.environment_offsets,
+            plan: self.plan,
+        }
     }
 
     /// The parameters of invocations `first_path …` (`count` of them) of a frame of
@@ -170,6 +226,7 @@ impl SceneKernel {
         sampling: &Sampling,
         (first_sample, samples): (u32, u32),
         (first_path, count): (u64, u64),
+        light_pass: LightPass,
     ) -> (Params, (u32, u32)) {
         let Sampling {
             width,
@@ -177,6 +234,8 @@ impl SceneKernel {
             seed,
             sequence,
             max_depth,
+            connections,
+            mis,
         } = *sampling;
         let camera = &self.scene.camera;
         let projection = camera.projection(width, height);
@@ -210,23 +269,29 @@ impl SceneKernel {
             pixel_area: projection.pixel_area(),
             // As the CPU's bidirectional algorithms count them: one per pixel.
             light_paths: (width * height) as f32,
-            padding: [0; 3],
+            connections,
+            mis_merge: mis[0],
+            mis_connect: mis[1],
+            mis_hit: mis[2],
+            mis_connections: mis[3],
+            light_pass: light_pass as u32,
+            padding: 0,
         };
         (params, (x, y))
     }
 
     /// A command encoder that writes the parameters of invocations `range` (first, count) of
-    /// the frame `frame` (first sample, samples per pixel) into `params`, clears `outputs`
-    /// and dispatches the kernel with `dispatch` as bind group 0.
+    /// the frame `frame` (first sample, samples per pixel) and `light_pass` into `params`,
+    /// clears `outputs` and dispatches the kernel with `dispatch` as bind group 0.
     pub fn encode(
         &self,
         (params, dispatch): (&wgpu::Buffer, &wgpu::BindGroup),
-        sampling: &Sampling,
+        (sampling, light_pass): (&Sampling, LightPass),
         frame: (u32, u32),
         range: (u64, u64),
         outputs: &[&wgpu::Buffer],
     ) -> wgpu::CommandEncoder {
-        let (values, (x, y)) = self.params(sampling, frame, range);
+        let (values, (x, y)) = self.params(sampling, frame, range, light_pass);
         self.gpu
             .queue
             .write_buffer(params, 0, bytemuck::bytes_of(&values));
@@ -267,6 +332,44 @@ impl SceneKernel {
             mapped_at_creation: false,
         })
     }
+}
+
+/// The pipeline of `kernel` over `traversal` (its WGSL, and whether it tests alpha masks),
+/// specialised by `plan`.
+fn compile(
+    device: &wgpu::Device,
+    kernel: Kernel,
+    (traversal, alpha_masks): &(String, bool),
+    plan: &KernelPlan,
+) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(kernel.entry()),
+        source: wgpu::ShaderSource::Wgsl(kernel_module(kernel, traversal, *alpha_masks).into()),
+    });
+    let constants = plan.constants();
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(kernel.entry()),
+        layout: None,
+        module: &module,
+        entry_point: Some(kernel.entry()),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
+}
+
+/// The bind groups of `pipeline` over the scene's `buffers` (by group).
+fn bind_scene(
+    device: &wgpu::Device,
+    pipeline: &wgpu::ComputePipeline,
+    buffers: &[(u32, Vec<wgpu::Buffer>)],
+) -> Vec<(u32, wgpu::BindGroup)> {
+    buffers
+        .iter()
+        .map(|(group, buffers)| (*group, bind(device, pipeline, *group, buffers.iter())))
+        .collect()
 }
 
 /// Uploads `items` as a read-only storage buffer, one zeroed item if there are none (a

@@ -1,20 +1,23 @@
-//! Whole frames on the GPU: vcm-rs's path tracer and light tracer as WGSL compute kernels
-//! through wgpu.
+//! Whole frames on the GPU: vcm-rs's path tracer, light tracer and bidirectional path
+//! tracer as WGSL compute kernels through wgpu.
 //!
 //! [`GpuPathTracer`] renders with the hierarchy of a [`GpuBvh`](vcm_traversal_wgpu::GpuBvh)
 //! and the scene's shading data uploaded once: each kernel invocation follows one camera path
 //! to its end (camera ray, closest hits, emission with MIS, one light sample with its shadow
-//! ray, BSDF sampling, Russian roulette) and writes its radiance; only those radiances come
-//! back, and the host adds them to the film (a frame at a time: an interrupted frame adds
-//! nothing; the film's exact sums make the order irrelevant). The kernel draws
+//! ray, BSDF sampling, Russian roulette) and adds its radiance to the frame's film on the
+//! device; only that film comes back, and the host merges it into the render's once the
+//! frame is whole (an interrupted frame adds nothing). The kernel draws
 //! the same numbers as the CPU for the same path ([`vcm_scene::sampling::SobolSampler`] in
 //! `shaders/sampler.wgsl`) and shades with the same operations, so both backends render the
 //! same image up to floating-point rounding per path, not only in expectation.
 //!
-//! [`GpuLightTracer`] does the same for light tracing: each invocation takes one camera
-//! sample to its first hit (the lights seen directly) and follows one light path from its
-//! light, in importance transport, connecting its vertices to the camera; the splats that
-//! reach it come back with the camera samples' radiance.
+//! [`GpuBidirectional`] does the same for light tracing — each invocation takes one camera
+//! sample to its first hit and follows one light path from its light, in importance
+//! transport, connecting its vertices to the camera — and for bidirectional path tracing:
+//! the light paths store their vertices in a cache on the device (in the CPU's order), and
+//! the camera paths sample lights and connect to cached vertices, all weighted by MIS as the
+//! CPU weighs them. Every kernel adds to a film on the device whose exact sums make the order
+//! of the additions irrelevant; only that film comes back.
 //!
 //! The GPU shades the whole scene model of vcm-scene — every lobe of the glTF
 //! metallic-roughness mixture, smooth and GGX, with its textures (base colour,
@@ -28,18 +31,18 @@
 
 #![warn(missing_docs)]
 
+mod bidirectional;
 #[cfg(test)]
 mod bsdf_probe;
 mod error;
 mod frames;
 mod kernel;
-mod light_tracer;
 mod path_tracer;
 mod plan;
 mod scene_data;
 pub mod shader;
 
+pub use bidirectional::GpuBidirectional;
 pub use error::GpuRenderError;
-pub use light_tracer::GpuLightTracer;
 pub use path_tracer::GpuPathTracer;
 pub use scene_data::check_scene;

@@ -7,7 +7,7 @@ use vcm_scene::{Decision, Scene};
 use vcm_traversal_wgpu::GpuBvh;
 
 use crate::error::GpuRenderError;
-use crate::frames::{GpuFrames, integrator_methods_of_frames};
+use crate::frames::{FramePlan, GpuFrames, integrator_methods_of_frames};
 use crate::kernel::Sampling;
 use crate::shader::Kernel;
 
@@ -29,7 +29,7 @@ impl GpuPathTracer {
         settings: PtSettings,
     ) -> Result<GpuPathTracer, GpuRenderError> {
         let size = (settings.width, settings.height);
-        let frames = GpuFrames::new(Kernel::PathTracer, scene, bvh, size)?;
+        let frames = GpuFrames::new(FramePlan::OnePass(Kernel::PathTracer), scene, bvh, size)?;
         Ok(GpuPathTracer { frames, settings })
     }
 
@@ -58,7 +58,7 @@ impl Integrator for GpuPathTracer {
 
     fn decisions(&self) -> Vec<Decision> {
         let reason = "path tracing neither connects nor merges";
-        let kernel = &self.frames.kernel;
+        let kernel = &self.frames.kernels[0];
         vec![
             Decision::runs(
                 "shading on the GPU",

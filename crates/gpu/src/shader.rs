@@ -16,8 +16,12 @@ pub const SCENE_WGSL: &str = include_str!("../shaders/scene.wgsl");
 pub const FILM_WGSL: &str = include_str!("../shaders/film.wgsl");
 /// The path tracing kernel.
 pub const PATH_TRACER_WGSL: &str = include_str!("../shaders/path_tracer.wgsl");
-/// The light tracing kernel.
+/// What the bidirectional kernels share: MIS quantities and weights, the light vertex cache.
+pub const BIDIR_WGSL: &str = include_str!("../shaders/bidir.wgsl");
+/// The light pass: light tracing, or the bidirectional algorithms' light vertices.
 pub const LIGHT_TRACER_WGSL: &str = include_str!("../shaders/light_tracer.wgsl");
+/// The camera pass of bidirectional path tracing.
+pub const BIDIR_CAMERA_WGSL: &str = include_str!("../shaders/bidir_camera.wgsl");
 
 /// Invocations per workgroup (`WORKGROUP` in `scene.wgsl`).
 pub const WORKGROUP_SIZE: u32 = 64;
@@ -27,28 +31,38 @@ pub const WORKGROUP_SIZE: u32 = 64;
 pub enum Kernel {
     /// Each invocation follows one camera path to its end (`path_tracer.wgsl`).
     PathTracer,
-    /// Each invocation takes one camera sample's first hit and follows one light path to
-    /// its end (`light_tracer.wgsl`).
+    /// Each invocation follows one light path to its end, and for light tracing alone takes
+    /// one camera sample's first hit (`light_tracer.wgsl`).
     LightTracer,
+    /// Each invocation follows one camera path of bidirectional path tracing to its end
+    /// (`bidir_camera.wgsl`).
+    BidirCamera,
 }
 
 impl Kernel {
     /// Every kernel.
-    pub const ALL: [Kernel; 2] = [Kernel::PathTracer, Kernel::LightTracer];
+    pub const ALL: [Kernel; 3] = [Kernel::PathTracer, Kernel::LightTracer, Kernel::BidirCamera];
 
     /// Its entry point.
     pub fn entry(self) -> &'static str {
         match self {
             Kernel::PathTracer => "render_paths",
             Kernel::LightTracer => "trace_light_paths",
+            Kernel::BidirCamera => "connect_camera_paths",
         }
     }
 
-    /// Its own source, which follows [`SCENE_WGSL`] and [`FILM_WGSL`].
-    fn source(self) -> &'static str {
+    /// Whether it reads the light vertex cache and its index (bindings 6 and 7 of group 0).
+    pub fn uses_cache(self) -> bool {
+        self != Kernel::PathTracer
+    }
+
+    /// Its own sources, which follow [`SCENE_WGSL`] and [`FILM_WGSL`].
+    fn sources(self) -> &'static [&'static str] {
         match self {
-            Kernel::PathTracer => PATH_TRACER_WGSL,
-            Kernel::LightTracer => LIGHT_TRACER_WGSL,
+            Kernel::PathTracer => &[PATH_TRACER_WGSL],
+            Kernel::LightTracer => &[BIDIR_WGSL, LIGHT_TRACER_WGSL],
+            Kernel::BidirCamera => &[BIDIR_WGSL, BIDIR_CAMERA_WGSL],
         }
     }
 }
@@ -67,7 +81,7 @@ pub fn kernel_module(kernel: Kernel, traversal: &str, alpha_masks: bool) -> Stri
     // The shading data's bindings are written as group 2 in scene.wgsl.
     let group = shading_group(alpha_masks);
     let scene = SCENE_WGSL.replace("@group(2)", &format!("@group({group})"));
-    let kernel = kernel.source();
+    let kernel = kernel.sources().join("\n");
     format!(
         "{constants}{traversal}\n{SAMPLER_WGSL}\n{BSDF_WGSL}\n{MATERIAL_WGSL}\n{scene}\n\
          {FILM_WGSL}\n{kernel}"

@@ -119,13 +119,13 @@ impl Request {
                     "shading: \"gpu\" shades on the GPU backend's device: give backend=\"gpu\" too",
                 ));
             }
-            // The GPU shades path tracing and light tracing only so far; "auto" means path
-            // tracing there.
+            // The GPU shades path tracing, light tracing and BPT only so far; "auto" means
+            // path tracing there.
             algorithm = match algorithm.shaded_on_gpu() {
                 Ok(shaded) => AlgorithmOption::Fixed(shaded),
                 Err(other) => {
                     return Err(PyValueError::new_err(format!(
-                        "shading: \"gpu\" renders path tracing and light tracing only so far (algo \"pt\", \"lt\" or \"auto\"), not \"{}\"",
+                        "shading: \"gpu\" renders pt, lt and bpt only so far (algo \"pt\", \"lt\", \"bpt\" or \"auto\"), not \"{}\"",
                         other.name()
                     )));
                 }

@@ -189,8 +189,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     setup: RenderSetup,
     /// Where paths are shaded: `gpu` follows each whole path in one WGSL kernel on the GPU
-    /// backend's device and brings back only radiances (needs --backend gpu; path tracing
-    /// and light tracing only so far; see docs/gpu.md).
+    /// backend's device and brings back only the film (needs --backend gpu; pt, lt and bpt
+    /// only so far; see docs/gpu.md).
     #[arg(long, value_enum, default_value_t = Shading::Cpu)]
     shading: Shading,
     /// Output EXR (linear radiance); a tone-mapped PNG is written beside it (default out.exr,
@@ -664,13 +664,13 @@ fn build_backend(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<BuiltTr
     Ok(built)
 }
 
-/// The algorithm `--shading gpu` renders for `--algo`: path tracing or light tracing, the
-/// ones its kernels have so far (`auto`: path tracing).
+/// The algorithm `--shading gpu` renders for `--algo`: path tracing, light tracing or BPT,
+/// the ones its kernels have so far (`auto`: path tracing).
 pub fn gpu_shaded_algorithm(algorithm: AlgorithmOption) -> anyhow::Result<Algorithm> {
     algorithm.shaded_on_gpu().or_else(|other| {
         bail!(
-            "--shading gpu renders path tracing and light tracing only so far (--algo pt, lt \
-             or auto), not {}",
+            "--shading gpu renders pt, lt and bpt only so far (--algo pt, lt, bpt or auto), \
+             not {}",
             other.name()
         )
     })

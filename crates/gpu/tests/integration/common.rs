@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use vcm::{Film, Integrator, PathTracer, PtSettings, Schedule, Vcm, VcmSettings};
-use vcm_gpu::{GpuLightTracer, GpuPathTracer};
+use vcm_gpu::{GpuBidirectional, GpuPathTracer};
 use vcm_scene::Scene;
 use vcm_traversal::{CpuBvh, CpuBvhOptions};
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
@@ -118,8 +118,8 @@ pub fn cpu_bidir_image(
     render(&mut integrator, frames, samples)
 }
 
-/// The GPU light tracer's image of `scene`.
-pub fn gpu_light_image(
+/// The GPU's image of `scene` with a bidirectional algorithm (`settings.algorithm`).
+pub fn gpu_bidir_image(
     gpu: &Arc<GpuDevice>,
     scene: &Arc<Scene>,
     settings: VcmSettings,
@@ -127,6 +127,6 @@ pub fn gpu_light_image(
     samples: u32,
 ) -> Vec<Vec3> {
     let bvh = gpu_bvh(gpu, scene);
-    let mut tracer = GpuLightTracer::new(Arc::clone(scene), &bvh, settings).unwrap();
+    let mut tracer = GpuBidirectional::new(Arc::clone(scene), &bvh, settings).unwrap();
     render(&mut tracer, frames, samples)
 }

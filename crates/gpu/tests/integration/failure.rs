@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use vcm::{Algorithm, Film, Integrator, PathTracer, PtSettings, Vcm, VcmSettings};
-use vcm_gpu::{GpuLightTracer, GpuPathTracer};
+use vcm_gpu::{GpuBidirectional, GpuPathTracer};
 use vcm_traversal::Traversal;
 use vcm_traversal_wgpu::{GpuBvh, GpuBvhOptions, GpuDevice};
 
@@ -38,7 +38,7 @@ fn assert_a_lost_device_drops_frames(
     }
 }
 
-/// The GPU's path tracer and light tracer, whose kernels fail.
+/// The GPU's path tracer, light tracer and BPT, whose kernels fail.
 #[test]
 fn a_lost_device_drops_the_frame_and_names_the_failure() {
     let Some(gpu) = gpu() else { return };
@@ -46,13 +46,20 @@ fn a_lost_device_drops_the_frame_and_names_the_failure() {
     let options = GpuBvhOptions::default();
     let bvh = GpuBvh::new(Arc::clone(&gpu), &scene.triangle_corners(), options).unwrap();
     let path_tracer = GpuPathTracer::new(Arc::clone(&scene), &bvh, PtSettings::new(8, 8));
-    let light_settings = VcmSettings::new(Algorithm::LightTracing, 8, 8);
-    let light_tracer = GpuLightTracer::new(Arc::clone(&scene), &bvh, light_settings);
-    let mut integrators: [Box<dyn Integrator + '_>; 2] = [
+    let bidirectional = |algorithm| {
+        let settings = VcmSettings::new(algorithm, 8, 8);
+        GpuBidirectional::new(Arc::clone(&scene), &bvh, settings).unwrap()
+    };
+    let mut integrators: [Box<dyn Integrator + '_>; 3] = [
         Box::new(path_tracer.unwrap()),
-        Box::new(light_tracer.unwrap()),
+        Box::new(bidirectional(Algorithm::LightTracing)),
+        Box::new(bidirectional(Algorithm::Bpt)),
     ];
-    let prefixes = ["path tracing on the GPU: ", "light tracing on the GPU: "];
+    let prefixes = [
+        "path tracing on the GPU: ",
+        "light tracing on the GPU: ",
+        "bidirectional path tracing on the GPU: ",
+    ];
     assert_a_lost_device_drops_frames(&gpu, &mut integrators, &prefixes);
 }
 

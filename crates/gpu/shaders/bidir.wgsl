@@ -1,0 +1,173 @@
+// What the bidirectional kernels share (vcm's bidir/): the MIS quantities a subpath carries
+// and the weights made from them (mis.rs, Georgiev et al. 2012, SmallVCM's recursive form),
+// the light vertex cache and its index, and the PCG32 stream that picks cached vertices
+// (vcm-scene's sampling/rng.rs).
+//
+// Bindings (group 0): 6 the index — per light path of the frame its stored vertices
+// (counted by the light pass's first run) or where they start (for its second), then per
+// iteration of the frame where its vertices start and how many there are — and 7 the
+// vertices, iteration by iteration, each iteration's in the order of its light paths.
+
+// What the light pass does (`Params::light_pass`): trace light paths for light tracing
+// alone (weight 1, with the camera's first hits), count the vertices each path would store,
+// or store them and splat with the bidirectional weights.
+const LIGHT_TRACING: u32 = 0u;
+const COUNT_VERTICES: u32 = 1u;
+const STORE_VERTICES: u32 = 2u;
+
+// A subpath's MIS quantities (`SubpathMis`): dVCM, dVC, dVM.
+struct SubpathMis {
+    d_vcm: f32,
+    d_vc: f32,
+    d_vm: f32,
+}
+
+// A cached light vertex (`LightVertex`): where it is, toward the previous vertex, the path's
+// throughput and MIS quantities there, the hit it was (to shade it again), and the segments
+// from the light.
+struct LightVertex {
+    position: vec3<f32>,
+    path_length: u32,
+    wo: vec3<f32>,
+    triangle: u32,
+    throughput: vec3<f32>,
+    u: f32,
+    mis: vec3<f32>,
+    v: f32,
+}
+
+@group(0) @binding(6) var<storage, read_write> vertex_index: array<u32>;
+@group(0) @binding(7) var<storage, read_write> cache: array<LightVertex>;
+
+// A camera subpath's quantities at its start (`SubpathMis::camera`).
+fn mis_camera(camera_pdf_w: f32) -> SubpathMis {
+    return SubpathMis(params.light_paths / camera_pdf_w, 0.0, 0.0);
+}
+
+// A light subpath's quantities at its start (`SubpathMis::light`).
+fn mis_light(
+    direct_pdf: f32,
+    emission_pdf_w: f32,
+    cos_at_light: f32,
+    is_delta: bool,
+    is_finite: bool,
+) -> SubpathMis {
+    var d_vc = 0.0;
+    if !is_delta {
+        d_vc = select(1.0 / emission_pdf_w, cos_at_light / emission_pdf_w, is_finite);
+    }
+    return SubpathMis(direct_pdf / emission_pdf_w, d_vc, d_vc * params.mis_hit);
+}
+
+// Arrival at a vertex over a segment of squared length `distance_sq` (negative: from a
+// light at infinity, whose pdfs are per solid angle) at cosine `cos_in`
+// (`SubpathMis::arrive`).
+fn mis_arrive(mis: ptr<function, SubpathMis>, distance_sq: f32, cos_in: f32) {
+    if distance_sq >= 0.0 {
+        (*mis).d_vcm = (*mis).d_vcm * distance_sq;
+    }
+    let inv_cos = 1.0 / abs(cos_in);
+    (*mis).d_vcm = (*mis).d_vcm * inv_cos;
+    (*mis).d_vc = (*mis).d_vc * inv_cos;
+    (*mis).d_vm = (*mis).d_vm * inv_cos;
+}
+
+// Scattering from a vertex at cosine `cos_out` with the sample's pdfs (`SubpathMis::scatter`).
+fn mis_scatter(
+    mis: ptr<function, SubpathMis>,
+    cos_out: f32,
+    pdf_fwd: f32,
+    pdf_rev: f32,
+    specular: bool,
+) {
+    let ratio = abs(cos_out) / pdf_fwd;
+    let m = *mis;
+    if specular {
+        (*mis).d_vcm = 0.0;
+        (*mis).d_vc = m.d_vc * (ratio * pdf_rev);
+        (*mis).d_vm = m.d_vm * (ratio * pdf_rev);
+    } else {
+        let d_vc = ratio * (m.d_vc * pdf_rev + m.d_vcm * params.mis_connections + params.mis_merge);
+        let d_vm = ratio * (m.d_vm * pdf_rev + m.d_vcm * params.mis_connect + 1.0);
+        *mis = SubpathMis(1.0 / pdf_fwd, d_vc, d_vm);
+    }
+}
+
+// Weight of emission a camera path found by itself (`emission_hit_weight`).
+fn emission_hit_weight(camera: SubpathMis, direct_pdf_a: f32, emission_pdf_w: f32) -> f32 {
+    let w_camera = params.mis_connections * direct_pdf_a * camera.d_vcm + emission_pdf_w * camera.d_vc;
+    return 1.0 / (1.0 + w_camera);
+}
+
+// Weight of a light sample from a camera vertex (`light_sample_weight`).
+fn light_sample_weight(
+    camera: SubpathMis,
+    direct_pdf_w: f32,
+    emission_pdf_w: f32,
+    cos_at_light: f32,
+    cos_at_receiver: f32,
+    bsdf_fwd_pdf_w: f32,
+    bsdf_rev_pdf_w: f32,
+) -> f32 {
+    let w_light = bsdf_fwd_pdf_w / direct_pdf_w;
+    let w_camera = (emission_pdf_w * cos_at_receiver / (direct_pdf_w * cos_at_light))
+        * (params.mis_merge + camera.d_vcm + camera.d_vc * bsdf_rev_pdf_w);
+    return 1.0 / (w_light + 1.0 + w_camera);
+}
+
+// Weight of a light vertex's connection to the camera (`camera_connection_weight`).
+fn camera_connection_weight(light: SubpathMis, camera_pdf_a: f32, bsdf_rev_pdf_w: f32) -> f32 {
+    let w_light = (camera_pdf_a / params.light_paths)
+        * (params.mis_merge + light.d_vcm + light.d_vc * bsdf_rev_pdf_w);
+    return 1.0 / (w_light + 1.0);
+}
+
+// Weight of a connection between a camera vertex and a light vertex (`connection_weight`).
+fn connection_weight(
+    camera: SubpathMis,
+    light: SubpathMis,
+    camera_fwd_pdf_a: f32,
+    camera_rev_pdf_w: f32,
+    light_fwd_pdf_a: f32,
+    light_rev_pdf_w: f32,
+) -> f32 {
+    let w_light = camera_fwd_pdf_a * (params.mis_merge + light.d_vcm + light.d_vc * light_rev_pdf_w);
+    let w_camera = light_fwd_pdf_a
+        * (params.mis_merge + camera.d_vcm + camera.d_vc * camera_rev_pdf_w);
+    return 1.0 / (w_light + 1.0 + w_camera);
+}
+
+// PCG32 (`Rng`): a 64-bit state and increment, as vec2<u32> (low, high).
+struct Pcg {
+    state: vec2<u32>,
+    inc: vec2<u32>,
+}
+
+// The multiplier of PCG32's linear congruential step.
+const PCG_MULT: vec2<u32> = vec2(0x4C957F2Du, 0x5851F42Du);
+
+// The next 32 bits (`Rng::next_u32`).
+fn pcg_next(r: ptr<function, Pcg>) -> u32 {
+    let old = (*r).state;
+    (*r).state = add64(mul64(old, PCG_MULT), (*r).inc);
+    let xorshifted = shr64(shr64(old, 18u) ^ old, 27u).x;
+    let rot = old.y >> 27u;
+    return (xorshifted >> rot) | (xorshifted << ((32u - rot) & 31u));
+}
+
+// `Rng::new(seed, stream)`.
+fn pcg_new(seed: vec2<u32>, stream: vec2<u32>) -> Pcg {
+    let inc = vec2((stream.x << 1u) | 1u, (stream.y << 1u) | (stream.x >> 31u));
+    var r = Pcg(vec2(0u), inc);
+    pcg_next(&r);
+    r.state = add64(r.state, seed);
+    pcg_next(&r);
+    return r;
+}
+
+// The stream a sampler gives in place of its next pair of dimensions
+// (`SobolSampler::next_stream`: `Rng::from_key([seed, index_rev, pair])`).
+fn next_stream(s: Sampler) -> Pcg {
+    let h = hash_key3(vec2(s.seed, 0u), vec2(s.index_rev, 0u), vec2(s.pair, 0u));
+    return pcg_new(splitmix64(h), splitmix64(h ^ vec2(0x2468ACE0u, 0x13579BDFu)));
+}
