@@ -22,8 +22,8 @@ pub enum Shading {
     /// On rayon threads; rays go to the traversal backend in batches.
     #[default]
     Cpu,
-    /// Whole paths in one WGSL kernel on the GPU backend's device (path tracing and light
-    /// tracing only, and the scenes [`vcm_gpu::check_scene`] accepts); only the image comes back.
+    /// Whole paths in WGSL kernels on the GPU backend's device (every algorithm, and the
+    /// scenes [`vcm_gpu::check_scene`] accepts); only the image comes back.
     Gpu,
 }
 

@@ -53,21 +53,14 @@ impl AlgorithmOption {
         }
     }
 
-    /// The algorithm it renders with GPU shading: path tracing, light tracing or BPT, the
-    /// ones the GPU's kernels have so far (`auto` means path tracing there); `Err` with the
-    /// algorithm named, which GPU shading cannot render.
-    pub fn shaded_on_gpu(self) -> Result<Algorithm, Algorithm> {
+    /// The algorithm it renders with GPU shading, which has every algorithm's kernels:
+    /// itself, and for `auto` path tracing (the GPU runs no pilots).
+    pub fn shaded_on_gpu(self) -> Algorithm {
         match self {
-            AlgorithmOption::Auto => Ok(Algorithm::Pt),
-            AlgorithmOption::Fixed(algorithm) if Self::GPU_SHADED.contains(&algorithm) => {
-                Ok(algorithm)
-            }
-            AlgorithmOption::Fixed(other) => Err(other),
+            AlgorithmOption::Auto => Algorithm::Pt,
+            AlgorithmOption::Fixed(algorithm) => algorithm,
         }
     }
-
-    /// The algorithms GPU shading renders.
-    pub const GPU_SHADED: [Algorithm; 3] = [Algorithm::Pt, Algorithm::LightTracing, Algorithm::Bpt];
 }
 
 impl clap::ValueEnum for AlgorithmOption {
@@ -225,8 +218,7 @@ fn pt_settings(options: &IntegratorOptions, (width, height): (u32, u32)) -> PtSe
 
 /// `algorithm` with every path shaded on the GPU ([`GpuPathTracer`], [`GpuBidirectional`]), on
 /// the GPU backend's hierarchy `bvh`, for a `width` × `height` image: the same image as
-/// [`build`]'s integrator up to rounding. Refuses the algorithms the GPU has no kernel for
-/// ([`AlgorithmOption::GPU_SHADED`]).
+/// [`build`]'s integrator up to rounding.
 pub fn build_on_gpu(
     algorithm: Algorithm,
     scene: &Arc<Scene>,
@@ -237,15 +229,9 @@ pub fn build_on_gpu(
     let scene = Arc::clone(scene);
     Ok(match algorithm {
         Algorithm::Pt => Box::new(GpuPathTracer::new(scene, bvh, pt_settings(options, size))?),
-        Algorithm::LightTracing | Algorithm::Bpt => {
-            let settings = vcm_settings(algorithm, options, size);
+        bidirectional => {
+            let settings = vcm_settings(bidirectional, options, size);
             Box::new(GpuBidirectional::new(scene, bvh, settings)?)
-        }
-        other => {
-            return Err(GpuRenderError::Refused(format!(
-                "renders path tracing, light tracing and bpt only so far, not {}",
-                other.name()
-            )));
         }
     })
 }
@@ -265,13 +251,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn gpu_shading_renders_path_tracing_for_auto_lt_and_bpt_and_refuses_the_others() {
-        assert_eq!(AlgorithmOption::Auto.shaded_on_gpu(), Ok(Algorithm::Pt));
-        let fixed = |algorithm| AlgorithmOption::Fixed(algorithm).shaded_on_gpu();
-        assert_eq!(fixed(Algorithm::Pt), Ok(Algorithm::Pt));
-        assert_eq!(fixed(Algorithm::LightTracing), Ok(Algorithm::LightTracing));
-        assert_eq!(fixed(Algorithm::Bpt), Ok(Algorithm::Bpt));
-        assert_eq!(fixed(Algorithm::Vcm), Err(Algorithm::Vcm));
-        assert_eq!(fixed(Algorithm::Ppm), Err(Algorithm::Ppm));
+    fn gpu_shading_renders_path_tracing_for_auto_and_every_algorithm_as_itself() {
+        assert_eq!(AlgorithmOption::Auto.shaded_on_gpu(), Algorithm::Pt);
+        for algorithm in Algorithm::ALL {
+            assert_eq!(AlgorithmOption::Fixed(algorithm).shaded_on_gpu(), algorithm);
+        }
     }
 }

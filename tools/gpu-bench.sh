@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The GPU measured in one short run, for a machine with a GPU that is lent for minutes: PT,
 # LT, BPT and VCM on the Cornell scenes and `large`, 1024² by default, with the GPU backend
-# (rays traced on the GPU, shaded on the CPU), with PT, LT and BPT shaded on the GPU too
+# (rays traced on the GPU, shaded on the CPU), with PT, LT, BPT and VCM shaded on the GPU too
 # (`--shading gpu`: whole paths in kernels) and with the CPU backend, on the same machine, as a
 # Markdown table of
 # samples/s, rays/s and where the time went (traversal, which on the GPU backend is the whole
@@ -11,8 +11,8 @@
 #   VCM_BIN=path/to/vcm tools/gpu-bench.sh    # measures a binary built elsewhere
 #
 # Settings (environment): GPU_BENCH_SIZE (pixels per side, 1024), GPU_BENCH_SPP_PT (16; LT
-# on the CPU takes as many), GPU_BENCH_SPP_SHADED (PT and LT shaded on the GPU, 256; BPT a
-# quarter), GPU_BENCH_SPP_VCM (4; BPT on the CPU as many), GPU_BENCH_SCENES
+# on the CPU takes as many), GPU_BENCH_SPP_SHADED (PT and LT shaded on the GPU, 256; BPT and
+# VCM a quarter), GPU_BENCH_SPP_VCM (4; BPT on the CPU as many), GPU_BENCH_SCENES
 # ("cornell-box cornell-water large"), GPU_BENCH_OUT (folder for the images, a new
 # temporary one by default).
 set -euo pipefail
@@ -45,7 +45,9 @@ for scene in $scenes; do
         "pt cpu cpu ${GPU_BENCH_SPP_PT:-16}" "lt gpu gpu ${GPU_BENCH_SPP_SHADED:-256}" \
         "lt cpu cpu ${GPU_BENCH_SPP_PT:-16}" \
         "bpt gpu gpu $(( (${GPU_BENCH_SPP_SHADED:-256} + 3) / 4 ))" \
-        "bpt cpu cpu ${GPU_BENCH_SPP_VCM:-4}" "vcm gpu cpu ${GPU_BENCH_SPP_VCM:-4}" \
+        "bpt cpu cpu ${GPU_BENCH_SPP_VCM:-4}" \
+        "vcm gpu gpu $(( (${GPU_BENCH_SPP_SHADED:-256} + 3) / 4 ))" \
+        "vcm gpu cpu ${GPU_BENCH_SPP_VCM:-4}" \
         "vcm cpu cpu ${GPU_BENCH_SPP_VCM:-4}"; do
         read -r algo backend shading spp <<< "$run"
         image="$out/$scene-$algo-$backend-$shading.exr"

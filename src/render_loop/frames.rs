@@ -90,9 +90,9 @@ impl Frames {
     }
 
     /// [`integrator`](Self::integrator) with its paths shaded where `shading` says: on the
-    /// GPU, every path shaded in one kernel on the GPU backend's hierarchy in `built`
-    /// ([`integrators::build_on_gpu`]). GPU shading of an algorithm without a kernel, or on
-    /// the CPU backend, is [`GpuRenderError::Refused`].
+    /// GPU, every path shaded in kernels on the GPU backend's hierarchy in `built`
+    /// ([`integrators::build_on_gpu`]). GPU shading on the CPU backend is
+    /// [`GpuRenderError::Refused`].
     pub fn shaded_integrator(
         &self,
         (algorithm, shading): (Algorithm, Shading),

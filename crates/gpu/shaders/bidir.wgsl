@@ -1,12 +1,13 @@
 // What the bidirectional kernels share (vcm's bidir/): the MIS quantities a subpath carries
 // and the weights made from them (mis.rs, Georgiev et al. 2012, SmallVCM's recursive form),
-// the light vertex cache and its index, and the PCG32 stream that picks cached vertices
-// (vcm-scene's sampling/rng.rs).
+// the light vertex cache and its index, each iteration's MIS factors and hash grid
+// (hash_grid.rs), and the PCG32 stream that picks cached vertices (vcm-scene's
+// sampling/rng.rs).
 //
-// Bindings (group 0): 6 the index — per light path of the frame its stored vertices
-// (counted by the light pass's first run) or where they start (for its second), then per
-// iteration of the frame where its vertices start and how many there are — and 7 the
-// vertices, iteration by iteration, each iteration's in the order of its light paths.
+// Bindings (group 0): 6 per light path of the frame its stored vertices (counted by the
+// light pass's first run) or where they start (for its second); 7 the vertices, iteration by
+// iteration, each iteration's in the order of its light paths; 8 the frame's iterations; and
+// for the camera pass 9 and 10 the iterations' hash grids.
 
 // What the light pass does (`Params::light_pass`): trace light paths for light tracing
 // alone (weight 1, with the camera's first hits), count the vertices each path would store,
@@ -14,6 +15,19 @@
 const LIGHT_TRACING: u32 = 0u;
 const COUNT_VERTICES: u32 = 1u;
 const STORE_VERTICES: u32 = 2u;
+
+// The parts that run (`Params::plan`, vcm's `BidirPlan`): light vertices connect to the
+// camera; camera vertices take light samples and connect to cached vertices; they merge
+// with cached vertices; photon mapping proper (merging at the first diffuse or glossy vertex
+// and stopping there, unweighted).
+const SPLATS: u32 = 1u;
+const CONNECTS: u32 = 2u;
+const MERGES: u32 = 4u;
+const PPM: u32 = 8u;
+
+fn plan_has(part: u32) -> bool {
+    return (params.plan & part) != 0u;
+}
 
 // A subpath's MIS quantities (`SubpathMis`): dVCM, dVC, dVM.
 struct SubpathMis {
@@ -36,8 +50,47 @@ struct LightVertex {
     v: f32,
 }
 
+// The MIS factors of an iteration (`MisFactors`): merge (η_VCM where merging), connect (1/η
+// where connecting and merging), hit (1/η where merging), connections (1 where connecting).
+struct MisFactors {
+    merge: f32,
+    connect: f32,
+    hit: f32,
+    connections: f32,
+}
+
+// An iteration of the frame (one sample per pixel): its light vertices in the cache, its
+// MIS factors and merge radius, and its hash grid (`HashGrid::layout`: where its bucket
+// starts and entries begin in bindings 9 and 10, the points' bounds, the inverse cell size,
+// the bucket mask, the entries).
+struct Iteration {
+    cache_start: u32,
+    cache_count: u32,
+    grid_starts: u32,
+    grid_entries: u32,
+    factors: MisFactors,
+    grid_min: vec3<f32>,
+    inv_cell_size: f32,
+    grid_max: vec3<f32>,
+    bucket_mask: u32,
+    radius: f32,
+    radius_sq: f32,
+    entry_count: u32,
+    unused: u32,
+}
+
+// A hash grid's entry: a light vertex's position and its index in its iteration's cache.
+struct GridEntry {
+    position: vec3<f32>,
+    index: u32,
+}
+
 @group(0) @binding(6) var<storage, read_write> vertex_index: array<u32>;
 @group(0) @binding(7) var<storage, read_write> cache: array<LightVertex>;
+@group(0) @binding(8) var<storage, read> iterations: array<Iteration>;
+
+// The MIS factors of the invocation's iteration, set where it starts.
+var<private> factors: MisFactors;
 
 // A camera subpath's quantities at its start (`SubpathMis::camera`).
 fn mis_camera(camera_pdf_w: f32) -> SubpathMis {
@@ -56,7 +109,7 @@ fn mis_light(
     if !is_delta {
         d_vc = select(1.0 / emission_pdf_w, cos_at_light / emission_pdf_w, is_finite);
     }
-    return SubpathMis(direct_pdf / emission_pdf_w, d_vc, d_vc * params.mis_hit);
+    return SubpathMis(direct_pdf / emission_pdf_w, d_vc, d_vc * factors.hit);
 }
 
 // Arrival at a vertex over a segment of squared length `distance_sq` (negative: from a
@@ -87,15 +140,15 @@ fn mis_scatter(
         (*mis).d_vc = m.d_vc * (ratio * pdf_rev);
         (*mis).d_vm = m.d_vm * (ratio * pdf_rev);
     } else {
-        let d_vc = ratio * (m.d_vc * pdf_rev + m.d_vcm * params.mis_connections + params.mis_merge);
-        let d_vm = ratio * (m.d_vm * pdf_rev + m.d_vcm * params.mis_connect + 1.0);
+        let d_vc = ratio * (m.d_vc * pdf_rev + m.d_vcm * factors.connections + factors.merge);
+        let d_vm = ratio * (m.d_vm * pdf_rev + m.d_vcm * factors.connect + 1.0);
         *mis = SubpathMis(1.0 / pdf_fwd, d_vc, d_vm);
     }
 }
 
 // Weight of emission a camera path found by itself (`emission_hit_weight`).
 fn emission_hit_weight(camera: SubpathMis, direct_pdf_a: f32, emission_pdf_w: f32) -> f32 {
-    let w_camera = params.mis_connections * direct_pdf_a * camera.d_vcm + emission_pdf_w * camera.d_vc;
+    let w_camera = factors.connections * direct_pdf_a * camera.d_vcm + emission_pdf_w * camera.d_vc;
     return 1.0 / (1.0 + w_camera);
 }
 
@@ -111,14 +164,14 @@ fn light_sample_weight(
 ) -> f32 {
     let w_light = bsdf_fwd_pdf_w / direct_pdf_w;
     let w_camera = (emission_pdf_w * cos_at_receiver / (direct_pdf_w * cos_at_light))
-        * (params.mis_merge + camera.d_vcm + camera.d_vc * bsdf_rev_pdf_w);
+        * (factors.merge + camera.d_vcm + camera.d_vc * bsdf_rev_pdf_w);
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 
 // Weight of a light vertex's connection to the camera (`camera_connection_weight`).
 fn camera_connection_weight(light: SubpathMis, camera_pdf_a: f32, bsdf_rev_pdf_w: f32) -> f32 {
     let w_light = (camera_pdf_a / params.light_paths)
-        * (params.mis_merge + light.d_vcm + light.d_vc * bsdf_rev_pdf_w);
+        * (factors.merge + light.d_vcm + light.d_vc * bsdf_rev_pdf_w);
     return 1.0 / (w_light + 1.0);
 }
 
@@ -131,9 +184,21 @@ fn connection_weight(
     light_fwd_pdf_a: f32,
     light_rev_pdf_w: f32,
 ) -> f32 {
-    let w_light = camera_fwd_pdf_a * (params.mis_merge + light.d_vcm + light.d_vc * light_rev_pdf_w);
+    let w_light = camera_fwd_pdf_a * (factors.merge + light.d_vcm + light.d_vc * light_rev_pdf_w);
     let w_camera = light_fwd_pdf_a
-        * (params.mis_merge + camera.d_vcm + camera.d_vc * camera_rev_pdf_w);
+        * (factors.merge + camera.d_vcm + camera.d_vc * camera_rev_pdf_w);
+    return 1.0 / (w_light + 1.0 + w_camera);
+}
+
+// Weight of a merge of a camera vertex with a light vertex (`merge_weight`).
+fn merge_weight(
+    camera: SubpathMis,
+    light: SubpathMis,
+    camera_fwd_pdf_w: f32,
+    camera_rev_pdf_w: f32,
+) -> f32 {
+    let w_light = light.d_vcm * factors.connect + light.d_vm * camera_fwd_pdf_w;
+    let w_camera = camera.d_vcm * factors.connect + camera.d_vm * camera_rev_pdf_w;
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 

@@ -1,8 +1,9 @@
-// The camera pass of bidirectional path tracing as one kernel (bidir's camera_pass.rs): an
+// The camera pass of the bidirectional algorithms as one kernel (bidir's camera_pass.rs): an
 // invocation follows one camera path to its end, weighing by MIS what it finds by itself
 // (emission), one light sample per vertex and its connections to light vertices of its
-// iteration's cache (bidir.wgsl), picked uniformly; then adds the path's radiance to the film
-// (film.wgsl). Paths are numbered pixel · samples + sample, and path k draws the CPU's numbers
+// iteration's cache picked uniformly (BPT, VCM), and its merges with the light vertices
+// within the iteration's radius, found in its hash grid (PPM, BPM, VCM: bidir.wgsl); then
+// adds the path's radiance to the film (film.wgsl). Paths are numbered pixel · samples + sample, and path k draws the CPU's numbers
 // for that pixel and iteration. Outputs (group 0): 1–4 the film, 5 the rays traced (closest
 // hits, —, shadow).
 
@@ -12,6 +13,11 @@ const CAMERA_PAIRS: u32 = 6u;
 const CAMERA_LIGHT_PICK: u32 = 1u;
 
 @group(0) @binding(5) var<storage, read_write> ray_counts: array<atomic<u32>, 3>;
+// Each iteration's hash grid (`Iteration`): its buckets' first entries, then its entries.
+@group(0) @binding(9) var<storage, read> grid_starts: array<u32>;
+@group(0) @binding(10) var<storage, read> grid_entries: array<GridEntry>;
+
+const NO_BUCKET: u32 = 0xffffffffu;
 
 // The weight of emission the camera path found by itself at its `segments`-th vertex, from
 // light `light` whose light sampling picks that point with (area or solid-angle) pdf
@@ -24,7 +30,9 @@ fn found_emission_weight(
     direct_pdf_a: f32,
     emission_pdf_w: f32,
 ) -> f32 {
-    if segments == 1u {
+    // Photon mapping proper finds a light only through specular vertices, which nothing else
+    // samples.
+    if segments == 1u || plan_has(PPM) {
         return 1.0;
     }
     let pick_pmf = picks[light].y;
@@ -139,6 +147,95 @@ fn connect(
     return Shadow(true, origin, target_point - origin, 1.0 - GAMMA_16, contribution);
 }
 
+// The bucket of a grid cell (`HashGrid::bucket`, Teschner et al. 2003): the low bits of the
+// 64-bit hash, which 32-bit arithmetic gives alike.
+fn grid_bucket(it: Iteration, cell: vec3<i32>) -> u32 {
+    let c = bitcast<vec3<u32>>(cell);
+    let h = (c.x * 73856093u) ^ (c.y * 19349663u) ^ (c.z * 83492791u);
+    return h & it.bucket_mask;
+}
+
+// The buckets a query at `query` reads (`HashGrid::cells`): its cell's and, per axis, the
+// neighbour on the side of the cell it lies in, where the sphere of the radius reaches; each
+// once, NO_BUCKET for the others.
+fn grid_cells(it: Iteration, query: vec3<f32>) -> array<u32, 8> {
+    var buckets = array<u32, 8>(
+        NO_BUCKET, NO_BUCKET, NO_BUCKET, NO_BUCKET, NO_BUCKET, NO_BUCKET, NO_BUCKET, NO_BUCKET,
+    );
+    let r = sqrt(it.radius_sq);
+    if it.entry_count == 0u || any(query < it.grid_min - r) || any(query > it.grid_max + r) {
+        return buckets;
+    }
+    let scaled = (query - it.grid_min) * it.inv_cell_size;
+    let cell = floor(scaled);
+    let side = (scaled - cell) > vec3(0.5);
+    let to_face = select(scaled - cell, cell + 1.0 - scaled, side);
+    let to_face_sq = to_face * to_face;
+    let base = vec3<i32>(cell);
+    let step = select(vec3(-1), vec3(1), side);
+    for (var corner = 0u; corner < 8u; corner++) {
+        let across = vec3((corner & 1u) != 0u, (corner & 2u) != 0u, (corner & 4u) != 0u);
+        var distance_sq = 0.0;
+        for (var axis = 0u; axis < 3u; axis++) {
+            if across[axis] {
+                distance_sq += to_face_sq[axis];
+            }
+        }
+        if distance_sq > GRID_REACH_SQ {
+            continue;
+        }
+        let bucket = grid_bucket(it, base + select(vec3(0), step, across));
+        var seen = false;
+        for (var k = 0u; k < 8u; k++) {
+            seen = seen || buckets[k] == bucket;
+        }
+        if !seen {
+            buckets[corner] = bucket;
+        }
+    }
+    return buckets;
+}
+
+// Density estimation with the light vertices of iteration `it` within its radius of the
+// camera vertex `s` (vertex merging, `merge` of camera_pass.rs): the MIS-weighted reflected
+// radiance there, per unit throughput.
+fn merge(s: Surface, b: Bsdf, out: Outgoing, mis: SubpathMis, it: Iteration, segments: u32) -> vec3<f32> {
+    var sum = vec3(0.0);
+    let buckets = grid_cells(it, s.position);
+    for (var slot = 0u; slot < 8u; slot++) {
+        let bucket = buckets[slot];
+        if bucket == NO_BUCKET {
+            continue;
+        }
+        let first = grid_starts[it.grid_starts + bucket];
+        let end = grid_starts[it.grid_starts + bucket + 1u];
+        for (var e = first; e < end; e++) {
+            let entry = grid_entries[it.grid_entries + e];
+            let d = entry.position - s.position;
+            if !(dot3(d, d) <= it.radius_sq) {
+                continue;
+            }
+            let vertex = cache[it.cache_start + entry.index];
+            if segments + vertex.path_length > params.max_segments {
+                continue;
+            }
+            let eval = bsdf_eval(b, out, vertex.wo, false, true);
+            if all(eval.f_cos == vec3(0.0)) {
+                continue;
+            }
+            var weight = 1.0;
+            if !plan_has(PPM) {
+                let light = SubpathMis(vertex.mis.x, vertex.mis.y, vertex.mis.z);
+                weight = merge_weight(mis, light, eval.pdf_fwd, eval.pdf_rev);
+            }
+            // The light vertices' density is over the surface's area: the photon's flux
+            // weighs f·|ωi·n_s| / |ωi·n_g|.
+            sum += vertex.throughput * eval.f_cos * (weight / abs(dot3(s.n_g, vertex.wo)));
+        }
+    }
+    return sum / (PI * it.radius * it.radius * params.light_paths);
+}
+
 @compute @workgroup_size(WORKGROUP)
 fn connect_camera_paths(@builtin(global_invocation_id) id: vec3<u32>) {
     let path = frame_path(id);
@@ -148,10 +245,11 @@ fn connect_camera_paths(@builtin(global_invocation_id) id: vec3<u32>) {
     let pixel = path / params.samples;
     let sample = path % params.samples;
     let iteration = params.first_sample + sample;
-    // The iteration's light vertices.
-    let frame_paths = params.width * params.height * params.samples;
-    let cache_start = vertex_index[frame_paths + 2u * sample];
-    let cache_count = vertex_index[frame_paths + 2u * sample + 1u];
+    // The iteration's light vertices, MIS factors and grid.
+    let it = iterations[sample];
+    factors = it.factors;
+    let cache_start = it.cache_start;
+    let cache_count = it.cache_count;
     // The camera path (`start` of camera_pass.rs).
     let key = hash_key3(params.seed, vec2(pixel, 0u), vec2(0u));
     var rng = sequence_sampler(key, iteration, params.independent != 0u);
@@ -192,7 +290,7 @@ fn connect_camera_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         if !out.valid {
             break;
         }
-        if has_non_delta(b.m) {
+        if has_non_delta(b.m) && plan_has(CONNECTS) {
             rng.pair += CAMERA_LIGHT_PICK;
             let shadow = weighted_light_sample(&rng, s, b, out, walk, mis);
             if shadow.valid && unblocked(shadow, &shadow_rays) {
@@ -210,6 +308,13 @@ fn connect_camera_paths(@builtin(global_invocation_id) id: vec3<u32>) {
                 if connection.valid && unblocked(connection, &shadow_rays) {
                     radiance += connection.contribution;
                 }
+            }
+        }
+        if has_non_delta(b.m) && plan_has(MERGES) {
+            radiance += walk.throughput * merge(s, b, out, mis, it, segments);
+            // Photon mapping proper stops at the first diffuse or glossy vertex.
+            if plan_has(PPM) {
+                break;
             }
         }
         // The continuation in radiance transport, with the MIS update.

@@ -188,7 +188,8 @@ fn trace_light_path(path: u32, index: u32, iteration: u32) -> vec2<u32> {
                     next_slot += 1u;
                 }
                 stored += 1u;
-                if mode != COUNT_VERTICES && segments < params.max_segments && out.valid {
+                let splats = mode != COUNT_VERTICES && plan_has(SPLATS);
+                if splats && segments < params.max_segments && out.valid {
                     splat = connect_to_camera(s, b, out, vertex, walk.medium);
                 }
             }
@@ -228,10 +229,15 @@ fn trace_light_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let index = path / params.samples;
-    let iteration = params.first_sample + path % params.samples;
+    let sample = path % params.samples;
+    let iteration = params.first_sample + sample;
+    factors = iterations[sample].factors;
     if params.light_pass == LIGHT_TRACING {
         film_add(index, seen_directly(index, iteration));
         atomicAdd(&ray_counts[0], 1u);
+    }
+    if !plan_has(SPLATS) && params.light_pass == LIGHT_TRACING {
+        return;
     }
     let rays = trace_light_path(path, index, iteration);
     atomicAdd(&ray_counts[1], rays.x);

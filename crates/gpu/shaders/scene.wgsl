@@ -47,14 +47,10 @@ struct Params {
     light_paths: f32,
     // Light vertices each camera vertex connects to (N_c).
     connections: u32,
-    // The MIS factors (`MisFactors`): merge (η_VCM), connect and hit (1/η_VCM where both
-    // connections and merging run), connections (1 where camera vertices connect).
-    mis_merge: f32,
-    mis_connect: f32,
-    mis_hit: f32,
-    mis_connections: f32,
     // What the light pass does (bidir.wgsl).
     light_pass: u32,
+    // The parts of a bidirectional algorithm that run (`BidirPlan`, bidir.wgsl).
+    plan: u32,
 }
 
 // A triangle as shading sees it: corners (w: the material, the area light or NO_LIGHT, as

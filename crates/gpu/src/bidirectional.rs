@@ -1,57 +1,78 @@
-//! [`GpuBidirectional`]: light tracing and bidirectional path tracing with their kernels, as
-//! an [`Integrator`].
+//! [`GpuBidirectional`]: the bidirectional algorithms (light tracing, BPT, PPM, BPM, VCM)
+//! with their kernels, as an [`Integrator`].
 
 use std::sync::Arc;
 
-use vcm::{Algorithm, Film, FrameStats, Integrator, VcmSettings};
+use glam::Vec2;
+use vcm::{Algorithm, BidirPlan, Film, FrameStats, Integrator, VcmSettings};
 use vcm_scene::{Decision, Scene};
 use vcm_traversal_wgpu::GpuBvh;
 
 use crate::error::GpuRenderError;
-use crate::frames::{FramePlan, GpuFrames, integrator_methods_of_frames};
+use crate::frames::{BidirFrames, FramePlan, GpuFrames, integrator_methods_of_frames};
 use crate::kernel::Sampling;
-use crate::shader::Kernel;
 
-/// Light tracing or bidirectional path tracing with every path shaded on the GPU: each
-/// iteration (one sample per pixel) traces one light path per pixel, whose vertices connect
-/// to the camera, and one camera sample per pixel — for light tracing its first hit, which
-/// finds the lights seen directly; for BPT a whole path, which also samples lights and
-/// connects to `connections` light vertices of its iteration picked uniformly, all weighted
-/// by MIS. Everything is added to the film on the device. The same image as the CPU's
-/// [`vcm::Vcm`] with the same settings, up to floating-point rounding per path. Renders the
-/// scenes [`check_scene`](crate::check_scene) accepts.
+/// A bidirectional algorithm with every path shaded on the GPU: each iteration (one sample per
+/// pixel) traces one light path per pixel and one camera sample per pixel — for light tracing
+/// its first hit, which finds the lights seen directly, and the light vertices connect to the
+/// camera; for the others a whole camera path, which samples lights and connects to
+/// `connections` light vertices of its iteration picked uniformly (BPT, VCM) and merges with
+/// those within the iteration's radius (PPM, BPM, VCM), all weighted by MIS. Everything is
+/// added to the film on the device. The same image as the CPU's [`vcm::Vcm`] with the same
+/// settings, up to floating-point rounding per path. Renders the scenes
+/// [`check_scene`](crate::check_scene) accepts.
 pub struct GpuBidirectional {
     frames: GpuFrames,
     settings: VcmSettings,
+    /// The parts that run on this scene.
+    plan: BidirPlan,
+    /// r₀ and how it was found, where the frames merge.
+    first_radius: Option<(f32, String)>,
 }
 
 impl GpuBidirectional {
-    /// The algorithms it renders.
-    pub const ALGORITHMS: [Algorithm; 2] = [Algorithm::LightTracing, Algorithm::Bpt];
+    /// The algorithms it renders: every bidirectional one.
+    pub const ALGORITHMS: [Algorithm; 5] = [
+        Algorithm::LightTracing,
+        Algorithm::Bpt,
+        Algorithm::Ppm,
+        Algorithm::Bpm,
+        Algorithm::Vcm,
+    ];
 
     /// `settings.algorithm` (one of [`GpuBidirectional::ALGORITHMS`]) for `scene` on the
-    /// hierarchy `bvh` (built over [`Scene::triangle_corners`]), with `settings` (`radius`,
-    /// `alpha`, `prune` and `lambert_lanes` do not apply). Compiles the kernels and uploads
-    /// the scene's shading data.
+    /// hierarchy `bvh` (built over [`Scene::triangle_corners`]), with `settings`
+    /// (`lambert_lanes` does not apply). Finds the first merge radius as the CPU does,
+    /// compiles the kernels and uploads the scene's shading data.
     pub fn new(
         scene: Arc<Scene>,
         bvh: &GpuBvh,
         settings: VcmSettings,
     ) -> Result<GpuBidirectional, GpuRenderError> {
-        let plan = match settings.algorithm {
-            Algorithm::LightTracing => FramePlan::OnePass(Kernel::LightTracer),
-            Algorithm::Bpt => FramePlan::Bidirectional,
-            other => {
-                return Err(GpuRenderError::Refused(format!(
-                    "renders light tracing and bpt of the bidirectional algorithms only so far, \
-                     not {}",
-                    other.name()
-                )));
-            }
+        settings.check()?;
+        let algorithm = settings.algorithm;
+        let (width, height) = (settings.width, settings.height);
+        vcm::check_image_size(width, height)?;
+        let plan = BidirPlan::new(algorithm, &scene.features, settings.prune);
+        // r₀ as the CPU finds it, from camera rays through the GPU backend's hierarchy.
+        let first_radius = plan.merges.then(|| {
+            let projection = scene.camera.projection(width, height);
+            let size = Vec2::new(width as f32, height as f32);
+            settings.radius.initial(&scene, bvh, (&projection, size))
+        });
+        let bidir = BidirFrames {
+            algorithm,
+            plan,
+            first_radius: first_radius.as_ref().map_or(0.0, |(r0, _)| *r0),
+            alpha: settings.alpha,
         };
-        let size = (settings.width, settings.height);
-        let frames = GpuFrames::new(plan, scene, bvh, size)?;
-        Ok(GpuBidirectional { frames, settings })
+        let frames = GpuFrames::new(FramePlan::Bidirectional(bidir), scene, bvh, (width, height))?;
+        Ok(GpuBidirectional {
+            frames,
+            settings,
+            plan,
+            first_radius,
+        })
     }
 
     /// The settings it renders with.
@@ -66,7 +87,7 @@ impl Integrator for GpuBidirectional {
     /// Renders iterations `first_sample …` (`samples_per_frame` of them) on the GPU, in
     /// dispatches of consecutive invocations, and adds them to `film`.
     fn render_frame(&mut self, film: &mut Film, first_sample: u32) -> FrameStats {
-        let sampling = Sampling::from(&self.settings);
+        let sampling = Sampling::of_bidir(&self.settings, &self.plan);
         let light_tracing = self.settings.algorithm == Algorithm::LightTracing;
         let stats = |[closest, light, shadow]: [u64; 3], paths: u64| {
             // Light tracing's camera samples stop at their first hit.
@@ -92,44 +113,38 @@ impl Integrator for GpuBidirectional {
         frames.render(film, first_sample, (name, &sampling), stats)
     }
 
+    /// Where the paths are shaded, then the CPU's decisions of the algorithm's parts.
     fn decisions(&self) -> Vec<Decision> {
         let kernel = &self.frames.kernels[0];
-        let light_tracing = self.settings.algorithm == Algorithm::LightTracing;
-        let mut decisions = if light_tracing {
-            let reason = "light tracing connects light vertices to the camera only";
-            vec![
-                Decision::runs(
-                    "shading on the GPU",
-                    format!(
-                        "one WGSL kernel follows each light path to its end, and each camera \
-                         sample to its first hit, on {}, adding them to the film on the \
-                         device; only the film comes back",
-                        kernel.gpu.describe()
-                    ),
-                ),
-                Decision::left_out("light vertex cache", reason),
-            ]
+        let algorithm = self.settings.algorithm;
+        let how = if algorithm == Algorithm::LightTracing {
+            "one WGSL kernel follows each light path to its end, and each camera sample to its \
+             first hit"
+                .to_string()
         } else {
-            vec![
-                Decision::runs(
-                    "shading on the GPU",
-                    format!(
-                        "WGSL kernels on {}: the light paths, traced twice (counting their \
-                         vertices, then storing them in the cache in the CPU's order), then \
-                         the camera paths, adding to the film on the device; only the film \
-                         and the vertex counts come back",
-                        kernel.gpu.describe()
-                    ),
-                ),
-                Decision::runs("light vertex cache", "camera vertices connect to it"),
-            ]
+            let grids = if self.plan.merges {
+                ", the hash grids built on the host over the cache (which comes back for them)"
+            } else {
+                ""
+            };
+            format!(
+                "WGSL kernels trace the light paths twice (counting their vertices, then \
+                 storing them in the cache in the CPU's order{grids}), then the camera paths"
+            )
         };
-        decisions.push(Decision::runs(
-            "light tracing splats",
-            "light vertices connect to the camera",
-        ));
-        let reason = format!("{} does not merge", self.settings.algorithm.name());
-        decisions.push(Decision::left_out("merging and hash grid", reason));
+        let mut decisions = vec![Decision::runs(
+            "shading on the GPU",
+            format!(
+                "{how} on {}, adding to the film on the device; only the film and the vertex \
+                 counts come back",
+                kernel.gpu.describe()
+            ),
+        )];
+        decisions.extend(self.plan.decisions(algorithm, &kernel.scene.features));
+        if let Some((r0, how)) = &self.first_radius {
+            let reason = format!("r₀ = {r0} world units: {how}");
+            decisions.push(Decision::runs("merge radius", reason));
+        }
         decisions.extend(kernel.plan.decisions());
         decisions
     }

@@ -5,8 +5,13 @@
 
 use std::sync::Arc;
 
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
 use vcm::exact_sum::{ExactSum, WORDS};
-use vcm::{Film, FrameStats, PixelSum, RenderError, Schedule, StopFlag};
+use vcm::hash_grid::HashGrid;
+use vcm::{
+    Algorithm, BidirPlan, Film, FrameStats, PixelSum, RenderError, Schedule, StopFlag, merge_radius,
+};
 use vcm_scene::Scene;
 use vcm_traversal_wgpu::GpuBvh;
 
@@ -28,13 +33,25 @@ const PATHS_PER_DISPATCH: u64 = 1 << 20;
 const PATHS_PER_SOFTWARE_DISPATCH: u64 = 1 << 15;
 
 /// How a frame runs its kernels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug)]
 pub(crate) enum FramePlan {
-    /// One kernel, an invocation per pixel and sample (path tracing, light tracing).
-    OnePass(Kernel),
-    /// The light pass counting its light vertices, then storing them in the cache, then the
-    /// camera pass connecting to them (bidirectional path tracing).
-    Bidirectional,
+    /// The path tracer: one pass of its kernel.
+    PathTracing,
+    /// A bidirectional algorithm: light tracing in one pass of the light kernel; the others
+    /// count their light vertices, store them, build the iterations' hash grids where they
+    /// merge, then run the camera pass.
+    Bidirectional(BidirFrames),
+}
+
+/// What a bidirectional algorithm's frames need besides their settings.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BidirFrames {
+    pub algorithm: Algorithm,
+    /// The parts that run on this scene.
+    pub plan: BidirPlan,
+    /// r₀, the first iteration's merge radius (0 where nothing merges), and α, how it shrinks.
+    pub first_radius: f32,
+    pub alpha: f32,
 }
 
 /// A GPU integrator's kernels, its frames' film on the device, and the state of its frames.
@@ -52,24 +69,26 @@ pub(crate) struct GpuFrames {
     failure: Option<String>,
 }
 
-/// The dispatches' parameters, the film's sums per channel, the dropped samples and the ray
-/// counts, their read-back copy, the light vertex cache and its index, and the bind groups
-/// of each kernel.
+/// The buffers of bind group 0 in binding order — the dispatches' parameters, the film's
+/// sums per channel, the dropped samples, the ray counts, the light vertex cache's index,
+/// the cache, the iterations, the hash grids' bucket starts and entries — the film's
+/// read-back copy, the index's, and each kernel's bind group.
 struct FrameBuffers {
-    params: wgpu::Buffer,
-    /// The sums of each channel, then the dropped samples, then the ray counts: what a frame
-    /// clears and reads back, in the read-back's order.
-    outputs: [wgpu::Buffer; 5],
+    bindings: [wgpu::Buffer; 11],
     readback: wgpu::Buffer,
-    /// Per light path of the frame its vertices' count or first slot, then per iteration its
-    /// first vertex and count (`vertex_index` of bidir.wgsl).
-    index: wgpu::Buffer,
     index_readback: wgpu::Buffer,
-    /// The light vertices (`cache` of bidir.wgsl).
-    cache: wgpu::Buffer,
     /// Bind group 0 of each kernel.
     groups: Vec<wgpu::BindGroup>,
 }
+
+/// Where each buffer is bound in group 0 (`bindings` of [`FrameBuffers`]).
+const PARAMS: usize = 0;
+const FILM: std::ops::Range<usize> = 1..6;
+const INDEX: usize = 6;
+const CACHE: usize = 7;
+const ITERATIONS: usize = 8;
+const GRID_STARTS: usize = 9;
+const GRID_ENTRIES: usize = 10;
 
 impl GpuFrames {
     /// The kernels of `plan` compiled for `scene` on the hierarchy `bvh`, and their frames at
@@ -102,11 +121,15 @@ impl GpuFrames {
             PATHS_PER_DISPATCH
         };
         let kernels = match plan {
-            FramePlan::OnePass(kernel) => vec![SceneKernel::new(kernel, scene, bvh)?],
-            FramePlan::Bidirectional => {
+            FramePlan::PathTracing => vec![SceneKernel::new(Kernel::PathTracer, scene, bvh)?],
+            FramePlan::Bidirectional(bidir) => {
                 let light = SceneKernel::new(Kernel::LightTracer, scene, bvh)?;
-                let camera = light.sibling(Kernel::BidirCamera);
-                vec![light, camera]
+                if bidir.algorithm == Algorithm::LightTracing {
+                    vec![light]
+                } else {
+                    let camera = light.sibling(Kernel::BidirCamera);
+                    vec![light, camera]
+                }
             }
         };
         let buffers = FrameBuffers::new(&kernels, channel_bytes);
@@ -170,25 +193,23 @@ impl GpuFrames {
         let frame = (first_sample, samples);
         let pass = |light_pass| (sampling, light_pass);
         let done = match self.plan {
-            FramePlan::OnePass(_) => {
+            FramePlan::PathTracing => {
                 self.run_pass(0, pass(LightPass::LightTracing), frame, true)?
             }
-            FramePlan::Bidirectional => {
-                // A count per light path, then a first vertex and a count per iteration.
-                let bytes = 4 * (invocations + 2 * u64::from(samples));
-                if bytes > self.kernels[0].gpu.max_binding_bytes() {
-                    return Err(format!(
-                        "{invocations} light paths a frame need an index of {bytes} bytes, \
-                         more than the device can bind: render fewer samples per frame"
-                    ));
+            FramePlan::Bidirectional(bidir) => {
+                let mut iterations = self.iterations(&bidir, frame);
+                if bidir.algorithm == Algorithm::LightTracing {
+                    self.write_iterations(&iterations);
+                    self.run_pass(0, pass(LightPass::LightTracing), frame, true)?
+                } else {
+                    self.prepare_index(invocations, samples)?;
+                    self.write_iterations(&iterations);
+                    self.run_pass(0, pass(LightPass::CountVertices), frame, true)?
+                        && self.index_vertices(&mut iterations, invocations as usize)?
+                        && self.run_pass(0, pass(LightPass::StoreVertices), frame, false)?
+                        && (!bidir.plan.merges || self.build_grids(&mut iterations)?)
+                        && self.run_pass(1, pass(LightPass::LightTracing), frame, false)?
                 }
-                if bytes > self.buffers.index.size() {
-                    self.buffers.grow_index(&self.kernels, bytes);
-                }
-                self.run_pass(0, pass(LightPass::CountVertices), frame, true)?
-                    && self.index_vertices(invocations as usize, samples as usize)?
-                    && self.run_pass(0, pass(LightPass::StoreVertices), frame, false)?
-                    && self.run_pass(1, pass(LightPass::LightTracing), frame, false)?
             }
         };
         if !done {
@@ -199,8 +220,8 @@ impl GpuFrames {
     }
 
     /// Runs kernel `kernel` with `sampling` and `light_pass` over every invocation of
-    /// `frame`, clearing the outputs first where `clear`; `false` where a stop request cut
-    /// it short.
+    /// `frame`, clearing the film and the ray counts first where `clear`; `false` where a
+    /// stop request cut it short.
     fn run_pass(
         &self,
         kernel: usize,
@@ -212,7 +233,7 @@ impl GpuFrames {
         let (width, height) = self.size;
         let invocations = u64::from(width) * u64::from(height) * u64::from(frame.1);
         let mut cleared: Vec<&wgpu::Buffer> = if clear {
-            b.outputs.iter().collect()
+            b.bindings[FILM].iter().collect()
         } else {
             Vec::new()
         };
@@ -223,7 +244,7 @@ impl GpuFrames {
                 return Ok(false);
             }
             let range = (first, self.paths_per_dispatch.min(invocations - first));
-            let dispatch = (&b.params, &b.groups[kernel]);
+            let dispatch = (&b.bindings[PARAMS], &b.groups[kernel]);
             let pass = (sampling, light_pass);
             let encoder = scene_kernel.encode(dispatch, pass, frame, range, &cleared);
             // The first dispatch clears the outputs; the others add to them.
@@ -233,34 +254,83 @@ impl GpuFrames {
         Ok(true)
     }
 
+    /// The frame's iterations as `bidir` renders them: their merge radii and MIS factors.
+    fn iterations(
+        &self,
+        bidir: &BidirFrames,
+        (first, samples): (u32, u32),
+    ) -> Vec<IterationRecord> {
+        let (width, height) = self.size;
+        let light_paths = (width * height) as f32;
+        (0..samples)
+            .map(|sample| {
+                let iteration = u64::from(first) + u64::from(sample);
+                let radius = merge_radius(bidir.first_radius, bidir.alpha, iteration);
+                IterationRecord {
+                    factors: bidir.plan.mis_factors(radius, light_paths),
+                    radius,
+                    ..IterationRecord::zeroed()
+                }
+            })
+            .collect()
+    }
+
+    /// Writes `iterations` to the device, making room for them.
+    fn write_iterations(&mut self, iterations: &[IterationRecord]) {
+        let bytes: &[u8] = bytemuck::cast_slice(iterations);
+        self.buffers
+            .fit(&self.kernels, ITERATIONS, bytes.len() as u64);
+        let gpu = &self.kernels[0].gpu;
+        gpu.queue
+            .write_buffer(&self.buffers.bindings[ITERATIONS], 0, bytes);
+    }
+
+    /// Makes room in the index for the frame's `paths` light paths and its `samples`.
+    fn prepare_index(&mut self, paths: u64, samples: u32) -> Result<(), String> {
+        let bytes = 4 * paths;
+        if bytes > self.kernels[0].gpu.max_binding_bytes() {
+            return Err(format!(
+                "{paths} light paths a frame need an index of {bytes} bytes, more than the \
+                 device can bind: render fewer samples per frame ({samples} now)"
+            ));
+        }
+        self.buffers.fit(&self.kernels, INDEX, bytes);
+        Ok(())
+    }
+
     /// Turns the light vertices each of the frame's `paths` light paths counted into where
-    /// they go in the cache — iteration by iteration (`samples` of them), each iteration's
-    /// in the order of its paths, as the CPU's cache keeps them — and makes room for them
-    /// (always `true`, to chain with the passes).
-    fn index_vertices(&mut self, paths: usize, samples: usize) -> Result<bool, String> {
+    /// they go in the cache — iteration by iteration, each iteration's in the order of its
+    /// paths, as the CPU's cache keeps them — records each iteration's in `iterations`, and
+    /// makes room for them (always `true`, to chain with the passes).
+    fn index_vertices(
+        &mut self,
+        iterations: &mut [IterationRecord],
+        paths: usize,
+    ) -> Result<bool, String> {
         let gpu = Arc::clone(&self.kernels[0].gpu);
         let b = &self.buffers;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let count_bytes = 4 * paths as u64;
-        encoder.copy_buffer_to_buffer(&b.index, 0, &b.index_readback, 0, count_bytes);
+        encoder.copy_buffer_to_buffer(&b.bindings[INDEX], 0, &b.index_readback, 0, count_bytes);
         let counts: Vec<u32> = gpu.read_back(
             encoder,
             (&b.index_readback, count_bytes),
             bytemuck::pod_collect_to_vec,
         )?;
-        let mut index = vec![0u32; paths + 2 * samples];
+        let samples = iterations.len();
+        let mut offsets = vec![0u32; paths];
         let mut total = 0u64;
-        for sample in 0..samples {
+        for (sample, iteration) in iterations.iter_mut().enumerate() {
             let first = total;
             // Path number p = pixel · samples + sample.
             for path in (sample..paths).step_by(samples) {
-                index[path] = total as u32;
+                offsets[path] = total as u32;
                 total += u64::from(counts[path]);
             }
-            index[paths + 2 * sample] = first as u32;
-            index[paths + 2 * sample + 1] = (total - first) as u32;
+            iteration.cache_start = first as u32;
+            iteration.cache_count = (total - first) as u32;
         }
-        let cache_bytes = total.max(1) * size_of::<LightVertex>() as u64;
+        let cache_bytes = total * size_of::<LightVertex>() as u64;
         if cache_bytes > gpu.max_binding_bytes() || total > u64::from(u32::MAX) {
             return Err(format!(
                 "the frame's {total} light vertices take {cache_bytes} bytes, more than the \
@@ -268,11 +338,77 @@ impl GpuFrames {
                 gpu.max_binding_bytes()
             ));
         }
-        if cache_bytes > self.buffers.cache.size() {
-            self.buffers.grow_cache(&self.kernels, cache_bytes);
+        self.buffers.fit(&self.kernels, CACHE, cache_bytes);
+        gpu.queue.write_buffer(
+            &self.buffers.bindings[INDEX],
+            0,
+            bytemuck::cast_slice(&offsets),
+        );
+        self.write_iterations(iterations);
+        Ok(true)
+    }
+
+    /// Builds each iteration's hash grid over its light vertices within its radius, on the
+    /// host with the CPU's [`HashGrid`] (the cache comes back for it), and uploads them
+    /// (always `true`, to chain with the passes).
+    fn build_grids(&mut self, iterations: &mut [IterationRecord]) -> Result<bool, String> {
+        let gpu = Arc::clone(&self.kernels[0].gpu);
+        let vertices: u64 = iterations.iter().map(|it| u64::from(it.cache_count)).sum();
+        let bytes = vertices * size_of::<LightVertex>() as u64;
+        let positions: Vec<Vec3> = if bytes == 0 {
+            Vec::new()
+        } else {
+            let cache = &self.buffers.bindings[CACHE];
+            let readback = self
+                .buffers
+                .kernel_buffer(&self.kernels, "cache read-back", bytes);
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            encoder.copy_buffer_to_buffer(cache, 0, &readback, 0, bytes);
+            gpu.read_back(encoder, (&readback, bytes), |bytes| {
+                let vertices: Vec<LightVertex> = bytemuck::pod_collect_to_vec(bytes);
+                vertices.iter().map(|v| Vec3::from(v.position)).collect()
+            })?
+        };
+        let grids: Vec<HashGrid> = iterations
+            .iter()
+            .map(|it| {
+                let start = it.cache_start as usize;
+                let points = &positions[start..start + it.cache_count as usize];
+                HashGrid::build(points, it.radius)
+            })
+            .collect();
+        let (mut starts, mut entries) = (Vec::new(), Vec::new());
+        for (it, grid) in iterations.iter_mut().zip(&grids) {
+            let layout = grid.layout();
+            it.grid_starts = starts.len() as u32;
+            it.grid_entries = entries.len() as u32;
+            it.grid_min = layout.min.to_array();
+            it.grid_max = layout.max.to_array();
+            it.inv_cell_size = layout.inv_cell_size;
+            it.bucket_mask = layout.bucket_mask;
+            it.radius_sq = layout.radius_sq;
+            it.entry_count = layout.entries.len() as u32;
+            starts.extend_from_slice(layout.starts);
+            entries.extend(layout.entries.map(|(position, index)| GridEntry {
+                position: position.to_array(),
+                index,
+            }));
         }
-        gpu.queue
-            .write_buffer(&self.buffers.index, 0, bytemuck::cast_slice(&index));
+        for (binding, bytes) in [
+            (GRID_STARTS, bytemuck::cast_slice::<u32, u8>(&starts)),
+            (GRID_ENTRIES, bytemuck::cast_slice(&entries)),
+        ] {
+            if bytes.len() as u64 > gpu.max_binding_bytes() {
+                return Err(format!(
+                    "the frame's hash grids take {} bytes, more than the device can bind",
+                    bytes.len()
+                ));
+            }
+            self.buffers.fit(&self.kernels, binding, bytes.len() as u64);
+            gpu.queue
+                .write_buffer(&self.buffers.bindings[binding], 0, bytes);
+        }
+        self.write_iterations(iterations);
         Ok(true)
     }
 
@@ -283,7 +419,7 @@ impl GpuFrames {
         let gpu = &self.kernels[0].gpu;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let mut at = 0;
-        for buffer in &b.outputs {
+        for buffer in &b.bindings[FILM] {
             encoder.copy_buffer_to_buffer(buffer, 0, &b.readback, at, buffer.size());
             at += buffer.size();
         }
@@ -356,7 +492,7 @@ fn exact_sum(limbs: &[u32]) -> ExactSum {
 }
 
 /// `LightVertex` of bidir.wgsl.
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
 struct LightVertex {
     position: [f32; 3],
@@ -369,9 +505,36 @@ struct LightVertex {
     v: f32,
 }
 
+/// `Iteration` of bidir.wgsl.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct IterationRecord {
+    cache_start: u32,
+    cache_count: u32,
+    grid_starts: u32,
+    grid_entries: u32,
+    factors: [f32; 4],
+    grid_min: [f32; 3],
+    inv_cell_size: f32,
+    grid_max: [f32; 3],
+    bucket_mask: u32,
+    radius: f32,
+    radius_sq: f32,
+    entry_count: u32,
+    unused: u32,
+}
+
+/// `GridEntry` of bidir.wgsl.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct GridEntry {
+    position: [f32; 3],
+    index: u32,
+}
+
 impl FrameBuffers {
     /// Buffers for the frames of `kernels` with `channel_bytes` of sums per channel; the
-    /// cache and its index hold nothing yet.
+    /// cache, its index, the iterations and the grids hold nothing yet.
     fn new(kernels: &[SceneKernel], channel_bytes: u64) -> FrameBuffers {
         use wgpu::BufferUsages as U;
         let kernel = &kernels[0];
@@ -385,65 +548,76 @@ impl FrameBuffers {
             .map(|label| kernel.buffer(label, channel_bytes, output));
         let dropped = kernel.buffer("dropped samples", 4, output);
         let rays = kernel.buffer("ray counts", RAY_COUNT_BYTES, output);
-        let outputs = [red, green, blue, dropped, rays];
         let readback = kernel.buffer(
             "film read-back",
-            outputs.iter().map(wgpu::Buffer::size).sum(),
+            3 * channel_bytes + 4 + RAY_COUNT_BYTES,
             U::MAP_READ | U::COPY_DST,
         );
-        // Room for nothing yet: the frames make it.
-        let index = kernel.buffer("light vertex index", 16, output);
+        let [index, cache, iterations, grid_starts, grid_entries] = [
+            ("light vertex index", 16),
+            ("light vertex cache", size_of::<LightVertex>()),
+            ("iterations", size_of::<IterationRecord>()),
+            ("grid bucket starts", 16),
+            ("grid entries", size_of::<GridEntry>()),
+        ]
+        .map(|(label, bytes)| kernel.buffer(label, bytes as u64, output));
         let index_readback = kernel.buffer("light vertex counts", 16, U::MAP_READ | U::COPY_DST);
-        let cache = kernel.buffer(
-            "light vertex cache",
-            size_of::<LightVertex>() as u64,
-            output,
-        );
-        let mut buffers = FrameBuffers {
+        let bindings = [
             params,
-            outputs,
-            readback,
+            red,
+            green,
+            blue,
+            dropped,
+            rays,
             index,
-            index_readback,
             cache,
+            iterations,
+            grid_starts,
+            grid_entries,
+        ];
+        let mut buffers = FrameBuffers {
+            bindings,
+            readback,
+            index_readback,
             groups: Vec::new(),
         };
         buffers.bind(kernels);
         buffers
     }
 
-    /// (Re)makes each kernel's bind group 0: 0 the parameters, 1–3 the channels, 4 the
-    /// dropped samples, 5 the rays, and where it reads them 6 the index and 7 the cache.
+    /// (Re)makes each kernel's bind group 0 of the buffers it reads.
     fn bind(&mut self, kernels: &[SceneKernel]) {
         self.groups = kernels
             .iter()
             .map(|kernel| {
-                let film = [&self.params].into_iter().chain(&self.outputs);
-                if kernel.kind.uses_cache() {
-                    kernel.bind(0, film.chain([&self.index, &self.cache]))
-                } else {
-                    kernel.bind(0, film)
-                }
+                let used = kernel.kind.dispatch_bindings();
+                let buffers = used.iter().map(|&b| (b, &self.bindings[b as usize]));
+                kernel.bind_at(0, buffers)
             })
             .collect();
     }
 
-    /// A cache of `bytes`, bound to `kernels`.
-    fn grow_cache(&mut self, kernels: &[SceneKernel], bytes: u64) {
+    /// Makes binding `binding` at least `bytes` long (growing it by half again, a new
+    /// buffer), and the index's read-back copy with the index, rebinding `kernels`.
+    fn fit(&mut self, kernels: &[SceneKernel], binding: usize, bytes: u64) {
+        if bytes <= self.bindings[binding].size() {
+            return;
+        }
         use wgpu::BufferUsages as U;
-        let output = U::STORAGE | U::COPY_SRC | U::COPY_DST;
-        self.cache = kernels[0].buffer("light vertex cache", bytes, output);
+        let size = (bytes + bytes / 2).next_multiple_of(16);
+        let kernel = &kernels[0];
+        let label = "grown frame buffer";
+        self.bindings[binding] = kernel.buffer(label, size, U::STORAGE | U::COPY_SRC | U::COPY_DST);
+        if binding == INDEX {
+            self.index_readback = kernel.buffer(label, size, U::MAP_READ | U::COPY_DST);
+        }
         self.bind(kernels);
     }
 
-    /// An index of `bytes` and its read-back copy, bound to `kernels`.
-    fn grow_index(&mut self, kernels: &[SceneKernel], bytes: u64) {
+    /// A read-back buffer of `bytes`.
+    fn kernel_buffer(&self, kernels: &[SceneKernel], label: &str, bytes: u64) -> wgpu::Buffer {
         use wgpu::BufferUsages as U;
-        let output = U::STORAGE | U::COPY_SRC | U::COPY_DST;
-        self.index = kernels[0].buffer("light vertex index", bytes, output);
-        self.index_readback =
-            kernels[0].buffer("light vertex counts", bytes, U::MAP_READ | U::COPY_DST);
-        self.bind(kernels);
+        kernels[0].buffer(label, bytes, U::MAP_READ | U::COPY_DST)
     }
 }
 
@@ -621,16 +795,21 @@ mod tests {
         let size = (24, 18);
         let (plan, sampling) = match algorithm {
             Algorithm::Pt => (
-                FramePlan::OnePass(Kernel::PathTracer),
+                FramePlan::PathTracing,
                 Sampling::from(&PtSettings::new(size.0, size.1)),
             ),
-            bidirectional => (
-                match bidirectional {
-                    Algorithm::LightTracing => FramePlan::OnePass(Kernel::LightTracer),
-                    _ => FramePlan::Bidirectional,
-                },
-                Sampling::from(&VcmSettings::new(bidirectional, size.0, size.1)),
-            ),
+            bidirectional => {
+                let settings = VcmSettings::new(bidirectional, size.0, size.1);
+                let plan = BidirPlan::new(bidirectional, &scene.features, false);
+                let bidir = BidirFrames {
+                    algorithm: bidirectional,
+                    plan,
+                    first_radius: 0.01,
+                    alpha: settings.alpha,
+                };
+                let sampling = Sampling::of_bidir(&settings, &plan);
+                (FramePlan::Bidirectional(bidir), sampling)
+            }
         };
         let mut frames = GpuFrames::new(plan, Arc::clone(scene), bvh, size).unwrap();
         frames.set_paths_per_dispatch(paths);
@@ -657,7 +836,7 @@ mod tests {
             return;
         };
         let scene = scene_on(&gpu, "cornell-box");
-        for algorithm in [Algorithm::Pt, Algorithm::LightTracing, Algorithm::Bpt] {
+        for algorithm in Algorithm::ALL {
             let whole = film_of(algorithm, &scene, 1 << 20);
             assert_eq!(film_of(algorithm, &scene, 97), whole, "{algorithm:?}");
             assert!(whole.mean().iter().any(|p| p.max_element() > 0.0));

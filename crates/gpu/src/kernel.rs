@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
 use vcm::memory::{AvailableMemory, MemoryEstimate, check_budget};
-use vcm::{Film, RenderError};
+use vcm::{Algorithm, BidirPlan, Film, RenderError};
 use vcm_scene::Scene;
 use vcm_scene::sampling::SampleSequence;
 use vcm_traversal_wgpu::{GpuBvh, GpuDevice, GpuError, dispatch_shape};
@@ -42,17 +42,12 @@ pub(crate) struct Params {
     pixel_area: f32,
     light_paths: f32,
     connections: u32,
-    mis_merge: f32,
-    mis_connect: f32,
-    mis_hit: f32,
-    mis_connections: f32,
     light_pass: u32,
-    /// Up to the WGSL struct's size, a multiple of 16 bytes.
-    padding: u32,
+    plan: u32,
 }
 
 const _: () = assert!(
-    size_of::<Params>() == 160,
+    size_of::<Params>() == 144,
     "the size of Params in scene.wgsl"
 );
 
@@ -76,10 +71,10 @@ pub(crate) struct Sampling {
     pub seed: u64,
     pub sequence: SampleSequence,
     pub max_depth: Option<u32>,
-    /// N_c: light vertices each camera vertex connects to (0 without connections).
+    /// N_c: light vertices each camera vertex connects to.
     pub connections: u32,
-    /// The MIS factors (`vcm`'s `MisFactors`): merge, connect, hit, connections.
-    pub mis: [f32; 4],
+    /// The parts of a bidirectional algorithm that run (`plan` of bidir.wgsl).
+    pub plan: u32,
 }
 
 impl Sampling {
@@ -97,7 +92,7 @@ impl Sampling {
             sequence,
             max_depth,
             connections: 0,
-            mis: [0.0; 4],
+            plan: 0,
         }
     }
 }
@@ -108,21 +103,33 @@ impl From<&vcm::PtSettings> for Sampling {
     }
 }
 
-impl From<&vcm::VcmSettings> for Sampling {
-    /// Of light tracing or BPT, which do not merge: the factors that involve merging are 0
-    /// (`MisFactors::new` without merging), and BPT's camera vertices connect.
-    fn from(s: &vcm::VcmSettings) -> Sampling {
-        let image = Sampling::of_image((s.width, s.height), (s.seed, s.sequence), s.max_depth);
-        if !s.algorithm.connects() {
-            return image;
+impl Sampling {
+    /// What the settings of a bidirectional algorithm that runs `plan` say.
+    pub fn of_bidir(s: &vcm::VcmSettings, plan: &BidirPlan) -> Sampling {
+        let mut parts = 0;
+        for (part, runs) in [
+            (SPLATS, plan.splats),
+            (CONNECTS, plan.connects),
+            (MERGES, plan.merges),
+            (PPM, s.algorithm == Algorithm::Ppm),
+        ] {
+            if runs {
+                parts |= part;
+            }
         }
         Sampling {
             connections: s.connections,
-            mis: [0.0, 0.0, 0.0, 1.0],
-            ..image
+            plan: parts,
+            ..Sampling::of_image((s.width, s.height), (s.seed, s.sequence), s.max_depth)
         }
     }
 }
+
+/// The parts of a bidirectional algorithm, as `plan` of bidir.wgsl has them.
+const SPLATS: u32 = 1;
+const CONNECTS: u32 = 2;
+const MERGES: u32 = 4;
+const PPM: u32 = 8;
 
 /// A kernel compiled for one scene, with the scene's shading data on the device.
 pub(crate) struct SceneKernel {
@@ -235,7 +242,7 @@ impl SceneKernel {
             sequence,
             max_depth,
             connections,
-            mis,
+            plan,
         } = *sampling;
         let camera = &self.scene.camera;
         let projection = camera.projection(width, height);
@@ -270,12 +277,8 @@ impl SceneKernel {
             // As the CPU's bidirectional algorithms count them: one per pixel.
             light_paths: (width * height) as f32,
             connections,
-            mis_merge: mis[0],
-            mis_connect: mis[1],
-            mis_hit: mis[2],
-            mis_connections: mis[3],
             light_pass: light_pass as u32,
-            padding: 0,
+            plan,
         };
         (params, (x, y))
     }
@@ -314,13 +317,13 @@ impl SceneKernel {
         encoder
     }
 
-    /// Binds `buffers` to bindings 0, 1, … of the kernel's bind group `group`.
-    pub fn bind<'a>(
+    /// Binds each of `buffers` (binding, buffer) in the kernel's bind group `group`.
+    pub fn bind_at<'a>(
         &self,
         group: u32,
-        buffers: impl Iterator<Item = &'a wgpu::Buffer>,
+        buffers: impl Iterator<Item = (u32, &'a wgpu::Buffer)>,
     ) -> wgpu::BindGroup {
-        bind(&self.gpu.device, &self.pipeline, group, buffers)
+        bind_entries(&self.gpu.device, &self.pipeline, group, buffers)
     }
 
     /// A buffer of `size` bytes with `usage`.
@@ -391,8 +394,17 @@ fn bind<'a>(
     group: u32,
     buffers: impl Iterator<Item = &'a wgpu::Buffer>,
 ) -> wgpu::BindGroup {
-    let entries: Vec<_> = (0u32..)
-        .zip(buffers)
+    bind_entries(device, pipeline, group, (0u32..).zip(buffers))
+}
+
+/// Binds each of `buffers` (binding, buffer) in bind group `group` of `pipeline`.
+fn bind_entries<'a>(
+    device: &wgpu::Device,
+    pipeline: &wgpu::ComputePipeline,
+    group: u32,
+    buffers: impl Iterator<Item = (u32, &'a wgpu::Buffer)>,
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = buffers
         .map(|(binding, buffer)| wgpu::BindGroupEntry {
             binding,
             resource: buffer.as_entire_binding(),
@@ -404,7 +416,6 @@ fn bind<'a>(
         entries: &entries,
     })
 }
-
 /// The host memory of the two films of a `width` × `height` render: the render's and the
 /// frame's, to which a frame's dispatches add before it is whole.
 pub(crate) fn film_estimate((width, height): (u32, u32)) -> MemoryEstimate {

@@ -1,5 +1,5 @@
-//! Whole frames on the GPU: vcm-rs's path tracer, light tracer and bidirectional path
-//! tracer as WGSL compute kernels through wgpu.
+//! Whole frames on the GPU: vcm-rs's path tracer and its bidirectional algorithms (light
+//! tracing, BPT, PPM, BPM, VCM) as WGSL compute kernels through wgpu.
 //!
 //! [`GpuPathTracer`] renders with the hierarchy of a [`GpuBvh`](vcm_traversal_wgpu::GpuBvh)
 //! and the scene's shading data uploaded once: each kernel invocation follows one camera path
@@ -13,10 +13,11 @@
 //!
 //! [`GpuBidirectional`] does the same for light tracing — each invocation takes one camera
 //! sample to its first hit and follows one light path from its light, in importance
-//! transport, connecting its vertices to the camera — and for bidirectional path tracing:
-//! the light paths store their vertices in a cache on the device (in the CPU's order), and
-//! the camera paths sample lights and connect to cached vertices, all weighted by MIS as the
-//! CPU weighs them. Every kernel adds to a film on the device whose exact sums make the order
+//! transport, connecting its vertices to the camera — and for BPT, PPM, BPM and VCM: the
+//! light paths store their vertices in a cache on the device (in the CPU's order), the host
+//! builds the CPU's hash grids over it where the algorithm merges, and the camera paths
+//! sample lights, connect to cached vertices and merge with those nearby, all weighted by MIS
+//! as the CPU weighs them. Every kernel adds to a film on the device whose exact sums make the order
 //! of the additions irrelevant; only that film comes back.
 //!
 //! The GPU shades the whole scene model of vcm-scene — every lobe of the glTF

@@ -9,7 +9,6 @@ use vcm_traversal_wgpu::GpuBvh;
 use crate::error::GpuRenderError;
 use crate::frames::{FramePlan, GpuFrames, integrator_methods_of_frames};
 use crate::kernel::Sampling;
-use crate::shader::Kernel;
 
 /// The path tracer with every path shaded on the GPU: the same image as the CPU's
 /// [`vcm::PathTracer`] with the same settings, up to floating-point rounding per path.
@@ -29,7 +28,7 @@ impl GpuPathTracer {
         settings: PtSettings,
     ) -> Result<GpuPathTracer, GpuRenderError> {
         let size = (settings.width, settings.height);
-        let frames = GpuFrames::new(FramePlan::OnePass(Kernel::PathTracer), scene, bvh, size)?;
+        let frames = GpuFrames::new(FramePlan::PathTracing, scene, bvh, size)?;
         Ok(GpuPathTracer { frames, settings })
     }
 

@@ -1,6 +1,7 @@
 //! Composing the kernels from the WGSL sources in this crate's `shaders/` and the traversal
 //! functions of vcm-traversal-wgpu (WGSL has no includes).
 
+use vcm::hash_grid::HashGrid;
 use vcm::ray_offset::gamma;
 use vcm_scene::bsdf::{ALBEDO_TABLE_SIZE, MIN_ALPHA};
 
@@ -52,9 +53,16 @@ impl Kernel {
         }
     }
 
-    /// Whether it reads the light vertex cache and its index (bindings 6 and 7 of group 0).
-    pub fn uses_cache(self) -> bool {
-        self != Kernel::PathTracer
+    /// The bindings of its bind group 0: 0 the parameters, 1–4 the film (sums, dropped
+    /// samples), 5 the ray counts; for the light pass 6 the cache's index; for both
+    /// bidirectional passes 7 the cache and 8 the iterations; for the camera pass 9 and 10
+    /// the hash grids' bucket starts and entries.
+    pub fn dispatch_bindings(self) -> &'static [u32] {
+        match self {
+            Kernel::PathTracer => &[0, 1, 2, 3, 4, 5],
+            Kernel::LightTracer => &[0, 1, 2, 3, 4, 5, 6, 7, 8],
+            Kernel::BidirCamera => &[0, 1, 2, 3, 4, 5, 7, 8, 9, 10],
+        }
     }
 
     /// Its own sources, which follow [`SCENE_WGSL`] and [`FILM_WGSL`].
@@ -88,9 +96,9 @@ pub fn kernel_module(kernel: Kernel, traversal: &str, alpha_masks: bool) -> Stri
     )
 }
 
-/// The constants the host defines for the shaders: the CPU's rounding-error factors and
-/// GGX width floor, written so that they parse to the same f32, and the layout of the
-/// lookup tables.
+/// The constants the host defines for the shaders: the CPU's rounding-error factors, GGX
+/// width floor and hash grid reach, written so that they parse to the same f32, and the
+/// layout of the lookup tables.
 pub fn host_constants() -> String {
     let (columns, rows) = ALBEDO_TABLE_SIZE;
     // Where each table starts in `tables`: A and B (rows × columns each), their row
@@ -102,11 +110,12 @@ pub fn host_constants() -> String {
          const MIN_ALPHA: f32 = {:?}f;\nconst R_MIN: f32 = {:?}f;\n\
          const ALBEDO_COLUMNS: u32 = {columns}u;\nconst ALBEDO_ROWS: u32 = {rows}u;\n\
          const TABLE_A_AVG: u32 = {a_average}u;\nconst TABLE_B_AVG: u32 = {b_average}u;\n\
-         const TABLE_SRGB: u32 = {srgb}u;\n",
+         const TABLE_SRGB: u32 = {srgb}u;\nconst GRID_REACH_SQ: f32 = {:?}f;\n",
         gamma(7),
         gamma(16),
         MIN_ALPHA,
         MIN_ALPHA.sqrt(),
+        HashGrid::REACH_SQ,
     )
 }
 
@@ -139,7 +148,13 @@ mod tests {
 
     #[test]
     fn host_constants_parse_back_to_the_same_floats() {
-        for x in [gamma(7), gamma(16), MIN_ALPHA, MIN_ALPHA.sqrt()] {
+        for x in [
+            gamma(7),
+            gamma(16),
+            MIN_ALPHA,
+            MIN_ALPHA.sqrt(),
+            HashGrid::REACH_SQ,
+        ] {
             let written = format!("{x:?}");
             assert_eq!(written.parse::<f32>().unwrap().to_bits(), x.to_bits());
         }

@@ -119,17 +119,8 @@ impl Request {
                     "shading: \"gpu\" shades on the GPU backend's device: give backend=\"gpu\" too",
                 ));
             }
-            // The GPU shades path tracing, light tracing and BPT only so far; "auto" means
-            // path tracing there.
-            algorithm = match algorithm.shaded_on_gpu() {
-                Ok(shaded) => AlgorithmOption::Fixed(shaded),
-                Err(other) => {
-                    return Err(PyValueError::new_err(format!(
-                        "shading: \"gpu\" renders pt, lt and bpt only so far (algo \"pt\", \"lt\", \"bpt\" or \"auto\"), not \"{}\"",
-                        other.name()
-                    )));
-                }
-            };
+            // "auto" means path tracing there: the GPU runs no pilots.
+            algorithm = AlgorithmOption::Fixed(algorithm.shaded_on_gpu());
         }
         Ok(Request {
             algorithm,

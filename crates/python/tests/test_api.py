@@ -146,7 +146,6 @@ def test_merging_refuses_shared_samples_and_other_settings(water):
         (dict(sampler="halton"), ValueError, "sampler"),
         (dict(backend="tpu"), ValueError, "backend"),
         (dict(shading="gpu"), ValueError, 'give backend="gpu" too'),
-        (dict(shading="gpu", backend="gpu", algo="vcm"), ValueError, "pt, lt and bpt only so far"),
         (dict(progress=3), TypeError, "progress"),
         (dict(colour="red"), TypeError, "unexpected keyword argument 'colour'"),
         (dict(connections=0, algo="bpt"), ValueError, "connections"),

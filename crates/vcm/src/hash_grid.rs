@@ -41,6 +41,24 @@ pub struct HashGrid {
     entries: Vec<Entry>,
 }
 
+/// A grid's data as [`HashGrid::layout`] gives it.
+pub struct GridLayout<'a> {
+    /// The query radius, squared.
+    pub radius_sq: f32,
+    /// 1 / the cell size (cells are 2r wide).
+    pub inv_cell_size: f32,
+    /// The points' bounds.
+    pub min: Vec3,
+    /// The points' bounds.
+    pub max: Vec3,
+    /// Buckets − 1 (a power of two less one).
+    pub bucket_mask: u32,
+    /// Each bucket's first entry, then the number of entries.
+    pub starts: &'a [u32],
+    /// (point, its index) in bucket order.
+    pub entries: Box<dyn ExactSizeIterator<Item = (Vec3, u32)> + 'a>,
+}
+
 /// The buckets a query reads ([`HashGrid::cells`]): at most 8, each once.
 #[derive(Clone, Copy, Debug)]
 pub struct GridCells([u32; 8]);
@@ -202,8 +220,7 @@ impl HashGrid {
         // its side, per axis; a neighbour across several faces is at least the sum away.
         let to_face = Vec3::select(side, cell + 1.0 - scaled, scaled - cell);
         let to_face_sq = to_face * to_face;
-        // r is half a cell; the margin keeps cells whose distance rounding might overstate.
-        let reach_sq = 0.25 * (1.0 + 1e-4);
+        let reach_sq = HashGrid::REACH_SQ;
         let cell = cell.as_i64vec3();
         let step = I64Vec3::select(side, I64Vec3::ONE, I64Vec3::NEG_ONE);
         for (slot, corner) in (0..8_i64).enumerate() {
@@ -225,6 +242,26 @@ impl HashGrid {
         GridCells(buckets)
     }
 
+    /// The squared distance (in cells) within which a neighbouring cell is visited: r is half
+    /// a cell; the margin keeps cells whose distance rounding might overstate.
+    pub const REACH_SQ: f32 = 0.25 * (1.0 + 1e-4);
+
+    /// What another implementation of [`HashGrid::cells`] and [`HashGrid::query_cells`] (the
+    /// GPU's) needs: the radius squared, the inverse cell size, the points' bounds, the
+    /// bucket mask of the cells' spatial hash (Teschner et al.), each bucket's first entry
+    /// (and the end), and the entries (point, its index) in bucket order.
+    pub fn layout(&self) -> GridLayout<'_> {
+        GridLayout {
+            radius_sq: self.radius_sq,
+            inv_cell_size: self.inv_cell_size,
+            min: self.min,
+            max: self.max,
+            bucket_mask: self.bucket_mask as u32,
+            starts: &self.starts,
+            entries: Box::new(self.entries.iter().map(|e| (e.position, e.index))),
+        }
+    }
+
     /// Bytes of the bucket and entry arrays.
     pub fn memory_bytes(&self) -> usize {
         self.starts.capacity() * std::mem::size_of::<u32>()
@@ -235,7 +272,8 @@ impl HashGrid {
         ((p - self.min) * self.inv_cell_size).floor().as_i64vec3()
     }
 
-    /// The bucket of a cell (the spatial hash of Teschner et al. 2003).
+    /// The bucket of a cell (the spatial hash of Teschner et al. 2003; only the low bits,
+    /// which 32-bit arithmetic gives alike, survive the mask).
     fn bucket(&self, cell: I64Vec3) -> u32 {
         let h = (cell.x.wrapping_mul(73_856_093))
             ^ (cell.y.wrapping_mul(19_349_663))

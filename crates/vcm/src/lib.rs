@@ -72,8 +72,8 @@ mod wave;
 
 pub use algorithm::Algorithm;
 pub use bidir::{
-    DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MAX_CONNECTIONS, MergeRadius,
-    Vcm, VcmSettings,
+    BidirPlan, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MAX_CONNECTIONS,
+    MergeRadius, Vcm, VcmSettings, merge_radius,
 };
 pub use error::RenderError;
 pub use film::{Film, FilmBand, PixelSum, rounded_sum};

@@ -182,12 +182,10 @@ fn radius_row(radius: &mut MergeRadius, ui: &mut egui::Ui) {
     });
 }
 
-/// Where paths are shaded: on the GPU only for path tracing, light tracing and BPT on the
-/// GPU backend (else back to the CPU; `auto` renders path tracing there, as `vcm render`
-/// does).
+/// Where paths are shaded: on the GPU only on the GPU backend (else back to the CPU; `auto`
+/// renders path tracing there, as `vcm render` does).
 fn shading_row(settings: &mut RenderSettings, ui: &mut egui::Ui) {
-    let shaded = settings.algorithm.shaded_on_gpu().is_ok();
-    let possible = settings.backend == Backend::Gpu && shaded;
+    let possible = settings.backend == Backend::Gpu;
     if !possible {
         settings.shading = Shading::Cpu;
     }
@@ -198,7 +196,7 @@ fn shading_row(settings: &mut RenderSettings, ui: &mut egui::Ui) {
             ui.selectable_value(&mut settings.shading, Shading::Gpu, "gpu");
         })
         .response
-        .on_disabled_hover_text("whole paths on the GPU: pt, lt or bpt on the gpu backend");
+        .on_disabled_hover_text("whole paths on the GPU: with the gpu backend");
     });
     ui.end_row();
 }

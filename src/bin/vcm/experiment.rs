@@ -25,8 +25,7 @@ use vcm_rs::{Backend, Shading, Traversals};
 use crate::crops::Crop;
 use crate::progressive::{self, Budget, Checkpoint, Part, Watch};
 use crate::render::{
-    SceneLimits, gpu_shaded_algorithm, load_scene, relmse_points, stop_flag, tell_traversal,
-    write_report, write_text,
+    SceneLimits, load_scene, relmse_points, stop_flag, tell_traversal, write_report, write_text,
 };
 
 /// Arguments of `vcm experiment`.
@@ -478,7 +477,7 @@ fn render(
             &options.integrator,
             (stop, false),
         )?,
-        Shading::Gpu => gpu_shaded_algorithm(options.algo)?,
+        Shading::Gpu => options.algo.shaded_on_gpu(),
     };
     let frames = Frames::new(options.schedule, options.backend);
     let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;

@@ -189,8 +189,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     setup: RenderSetup,
     /// Where paths are shaded: `gpu` follows each whole path in one WGSL kernel on the GPU
-    /// backend's device and brings back only the film (needs --backend gpu; pt, lt and bpt
-    /// only so far; see docs/gpu.md).
+    /// backend's device and brings back only the film (needs --backend gpu; --algo auto
+    /// means pt there; see docs/gpu.md).
     #[arg(long, value_enum, default_value_t = Shading::Cpu)]
     shading: Shading,
     /// Output EXR (linear radiance); a tone-mapped PNG is written beside it (default out.exr,
@@ -388,7 +388,7 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
             options,
             how,
         )?,
-        Shading::Gpu => gpu_shaded_algorithm(algorithm)?,
+        Shading::Gpu => algorithm.shaded_on_gpu(),
     };
     let mut state = prepare_state(&mut plan, &scene, args)?;
     let samples_left = plan.budget.remaining(0, Duration::ZERO).samples;
@@ -662,18 +662,6 @@ fn build_backend(backend: Backend, scene: &Arc<Scene>) -> anyhow::Result<BuiltTr
         .context("building the ray traversal backend")?;
     tell_traversal(&built);
     Ok(built)
-}
-
-/// The algorithm `--shading gpu` renders for `--algo`: path tracing, light tracing or BPT,
-/// the ones its kernels have so far (`auto`: path tracing).
-pub fn gpu_shaded_algorithm(algorithm: AlgorithmOption) -> anyhow::Result<Algorithm> {
-    algorithm.shaded_on_gpu().or_else(|other| {
-        bail!(
-            "--shading gpu renders pt, lt and bpt only so far (--algo pt, lt, bpt or auto), \
-             not {}",
-            other.name()
-        )
-    })
 }
 
 /// Says what a traversal backend just built runs on.

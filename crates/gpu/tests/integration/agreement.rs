@@ -1,10 +1,12 @@
-//! The GPU's path tracer, light tracer and BPT draw the CPU's numbers for the same paths and
-//! shade them with the same operations (BPT also picks the same cached light vertices): the images agree pixel by pixel up to rounding, except
+//! The GPU's path tracer and bidirectional algorithms (light tracing, BPT, PPM, BPM, VCM) draw
+//! the CPU's numbers for the same paths and shade them with the same operations (picking the
+//! same cached light vertices, merging with the same ones in the same order): the images agree pixel by pixel up to rounding, except
 //! where a rounding difference flips one of a path's decisions (a lobe, roulette, a hit at a
 //! triangle's edge, the pixel a light vertex projects to) and that path goes elsewhere.
 
 use glam::Vec3;
 use vcm::{Algorithm, PtSettings, VcmSettings};
+use vcm_gpu::GpuBidirectional;
 use vcm_scene::sampling::SampleSequence;
 
 use serde_json::json;
@@ -36,12 +38,13 @@ const ABSOLUTE: f32 = 1e-6;
 ///
 /// On `large` a few light paths store another number of vertices than on the CPU (its long
 /// paths meet many edges), which moves every later vertex of their iteration's cache: BPT's
-/// camera vertices, which pick vertices from the whole cache by index, then connect to
-/// others (on lavapipe 39% of the pixels agree). There BPT is compared in expectation.
+/// and VCM's camera vertices, which pick vertices from the whole cache by index, then
+/// connect to others (on lavapipe 39% of BPT's pixels agree), and BPM's merge with other
+/// vertices around those paths (97%). There those three are compared in expectation.
 #[test]
 fn gpu_paths_are_the_cpu_paths() {
     let Some(gpu) = gpu() else { return };
-    let per_path = Bpt::PathByPath;
+    let per_path = Cache::PathByPath;
     let cases = [
         ("cornell-box", SampleSequence::Sobol, None, 2, per_path),
         (
@@ -66,20 +69,27 @@ fn gpu_paths_are_the_cpu_paths() {
             2,
             per_path,
         ),
-        ("large", SampleSequence::Sobol, None, 1, Bpt::InExpectation),
+        (
+            "large",
+            SampleSequence::Sobol,
+            None,
+            1,
+            Cache::InExpectation,
+        ),
     ];
-    for (name, sequence, max_depth, samples, bpt) in cases {
+    for (name, sequence, max_depth, samples, cache) in cases {
         let settings = (sequence, max_depth, samples);
-        check_agreement_of_bpt(&gpu, name, &scene(name), settings, bpt);
+        check_agreement_with(&gpu, name, &scene(name), settings, cache);
     }
 }
 
-/// How the GPU's BPT image is compared with the CPU's.
+/// How the images of BPT, BPM and VCM — whose camera vertices read many light paths' cached
+/// vertices — are compared with the CPU's.
 #[derive(Clone, Copy, PartialEq)]
-enum Bpt {
-    /// Pixel by pixel, as light tracing.
+enum Cache {
+    /// Pixel by pixel, as the others.
     PathByPath,
-    /// The images' means within 1% (they agree to 3·10⁻⁴ on `large`).
+    /// The images' sums within 1% (they agree to 3·10⁻⁴ on `large`).
     InExpectation,
 }
 
@@ -234,25 +244,26 @@ fn gpu_paths_are_the_cpu_paths_on_textured_models() {
     }
 }
 
-/// Renders `scene` with path tracing, light tracing and BPT on the CPU and the GPU with
-/// `(sequence, max_depth, samples per frame)` and checks what [`gpu_paths_are_the_cpu_paths`]
-/// says of each pair (of light tracing and BPT, 98% of the pixels).
+/// Renders `scene` with path tracing and every bidirectional algorithm on the CPU and the GPU
+/// with `(sequence, max_depth, samples per frame)` and checks what
+/// [`gpu_paths_are_the_cpu_paths`] says of each pair (of the bidirectional algorithms, 98% of
+/// the pixels).
 fn check_agreement(
     gpu: &std::sync::Arc<vcm_traversal_wgpu::GpuDevice>,
     name: &str,
     scene: &std::sync::Arc<vcm_scene::Scene>,
     settings: (SampleSequence, Option<u32>, u32),
 ) {
-    check_agreement_of_bpt(gpu, name, scene, settings, Bpt::PathByPath);
+    check_agreement_with(gpu, name, scene, settings, Cache::PathByPath);
 }
 
-/// [`check_agreement`], with BPT compared as `bpt` says.
-fn check_agreement_of_bpt(
+/// [`check_agreement`], with BPT, BPM and VCM compared as `cache` says.
+fn check_agreement_with(
     gpu: &std::sync::Arc<vcm_traversal_wgpu::GpuDevice>,
     name: &str,
     scene: &std::sync::Arc<vcm_scene::Scene>,
     (sequence, max_depth, samples): (SampleSequence, Option<u32>, u32),
-    bpt: Bpt,
+    cache: Cache,
 ) {
     let (width, height, seed, frames) = (48, 36, 11, 4 / samples);
     let settings = PtSettings {
@@ -264,7 +275,7 @@ fn check_agreement_of_bpt(
     let cpu = cpu_image(scene, settings, frames, samples);
     let on_gpu = gpu_image(gpu, scene, settings, frames, samples);
     assert_alike(&format!("{name}, path tracing"), &cpu, &on_gpu, 0.99);
-    for algorithm in [Algorithm::LightTracing, Algorithm::Bpt] {
+    for algorithm in GpuBidirectional::ALGORITHMS {
         let settings = VcmSettings {
             seed,
             sequence,
@@ -274,20 +285,21 @@ fn check_agreement_of_bpt(
         let cpu = cpu_bidir_image(scene, settings, frames, samples);
         let on_gpu = gpu_bidir_image(gpu, scene, settings, frames, samples);
         let what = format!("{name}, {}", algorithm.name());
-        if algorithm == Algorithm::Bpt && bpt == Bpt::InExpectation {
-            let mean = |image: &[Vec3]| {
+        let reads_many = [Algorithm::Bpt, Algorithm::Bpm, Algorithm::Vcm].contains(&algorithm);
+        if reads_many && cache == Cache::InExpectation {
+            let sum = |image: &[Vec3]| {
                 image
                     .iter()
                     .map(|p| f64::from(p.element_sum()))
                     .sum::<f64>()
             };
-            let (a, b) = (mean(&cpu), mean(&on_gpu));
-            assert!((a - b).abs() <= 0.01 * a, "{what}: means {a} and {b}");
+            let (a, b) = (sum(&cpu), sum(&on_gpu));
+            assert!((a - b).abs() <= 0.01 * a, "{what}: sums {a} and {b}");
         } else {
-            // A light path's splats reach as many pixels as it has vertices, and BPT's
-            // camera vertices connect to light vertices: a path that a rounding difference
-            // sends elsewhere changes several pixels (on lavapipe up to 15 of 1,728 on
-            // `large` for light tracing, against 7 for path tracing).
+            // A light path's splats reach as many pixels as it has vertices, and camera
+            // vertices connect to and merge with light vertices: a path that a rounding
+            // difference sends elsewhere changes several pixels (on lavapipe up to 15 of
+            // 1,728 on `large` for light tracing, against 7 for path tracing).
             assert_alike(&what, &cpu, &on_gpu, 0.98);
         }
     }

@@ -52,8 +52,8 @@ use crate::lambert::{LANES_PART, LANES_RUN, LambertLanes};
 use crate::light_vertex_cache::LightVertexCache;
 use light_pass::ResultBuffers;
 use mis::MisFactors;
-use plan::BidirPlan;
-pub use radius::{DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MergeRadius};
+pub use plan::BidirPlan;
+pub use radius::{DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MergeRadius, merge_radius};
 
 /// Light paths traced by the preprocess that sizes the light vertex cache.
 const PREPROCESS_LIGHT_PATHS: u32 = 10_000;
@@ -114,6 +114,31 @@ impl VcmSettings {
             prune: true,
             lambert_lanes: true,
         }
+    }
+
+    /// Fails, saying why, where the settings name no bidirectional algorithm or an invalid
+    /// number of connections, merge radius or α.
+    pub fn check(&self) -> Result<(), RenderError> {
+        if !self.algorithm.is_bidirectional() {
+            return Err(RenderError::InvalidSetting(
+                "path tracing is the path tracer's (`PathTracer`), not the VCM integrator's".into(),
+            ));
+        }
+        if !(1..=MAX_CONNECTIONS).contains(&self.connections) {
+            return Err(RenderError::InvalidSetting(format!(
+                "connections per camera vertex must be 1 to {MAX_CONNECTIONS} (asked for {})",
+                self.connections
+            )));
+        }
+        self.radius
+            .validated()
+            .map_err(RenderError::InvalidSetting)?;
+        if !(self.alpha > 0.0 && self.alpha <= 1.0) {
+            return Err(RenderError::InvalidSetting(
+                "alpha must be in (0, 1]".into(),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -184,26 +209,7 @@ impl Vcm {
     ) -> Result<Vcm, RenderError> {
         let VcmSettings { width, height, .. } = settings;
         crate::integrator::check_image_size(width, height)?;
-        if !settings.algorithm.is_bidirectional() {
-            return Err(RenderError::InvalidSetting(
-                "path tracing is the path tracer's (`PathTracer`), not the VCM integrator's".into(),
-            ));
-        }
-        if !(1..=MAX_CONNECTIONS).contains(&settings.connections) {
-            return Err(RenderError::InvalidSetting(format!(
-                "connections per camera vertex must be 1 to {MAX_CONNECTIONS} (asked for {})",
-                settings.connections
-            )));
-        }
-        settings
-            .radius
-            .validated()
-            .map_err(RenderError::InvalidSetting)?;
-        if !(settings.alpha > 0.0 && settings.alpha <= 1.0) {
-            return Err(RenderError::InvalidSetting(
-                "alpha must be in (0, 1]".into(),
-            ));
-        }
+        settings.check()?;
         let plan = BidirPlan::new(settings.algorithm, &scene.features, settings.prune);
         let projection = scene.camera.projection(width, height);
         let size = Vec2::new(width as f32, height as f32);
@@ -244,9 +250,8 @@ impl Vcm {
     /// renders iterations f · S to f · S + S − 1): r₀ · (iteration + 1)^((α − 1) / 2); 0
     /// where the frames do not merge.
     pub fn radius(&self, iteration: u64) -> f32 {
-        let exponent = 0.5 * (self.settings.alpha - 1.0);
         let r0 = self.first_radius.as_ref().map_or(0.0, |(r0, _)| *r0);
-        r0 * ((iteration as f32) + 1.0).powf(exponent)
+        merge_radius(r0, self.settings.alpha, iteration)
     }
 
     /// The light vertex caches of the last frame, one per sample per pixel (each empty, with

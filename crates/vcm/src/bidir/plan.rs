@@ -6,6 +6,7 @@ use vcm_scene::shading_plan::decide;
 use vcm_scene::{Decision, SceneFeatures};
 
 use super::Algorithm;
+use super::mis::MisFactors;
 
 /// The parts of a frame that run for one algorithm on one scene.
 ///
@@ -14,7 +15,7 @@ use super::Algorithm;
 /// surfaces merges nothing and builds no hash grid: every path then has a vertex that
 /// connections sample, and VCM runs with BPT's techniques and weights (the same expectation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct BidirPlan {
+pub struct BidirPlan {
     /// Light vertices are kept in the cache (for connections or merging).
     pub cache: bool,
     /// Light vertices are connected to the camera.
@@ -44,6 +45,14 @@ impl BidirPlan {
     /// Whether light paths are traced at all.
     pub fn light_paths(&self) -> bool {
         self.cache || self.splats
+    }
+
+    /// The MIS factors of an iteration that merges within `radius` and traces `light_paths`
+    /// light paths: [η_VCM where merging, 1/η_VCM where connecting and merging, 1/η_VCM where
+    /// merging, 1 where connecting] (`MisFactors`).
+    pub fn mis_factors(&self, radius: f32, light_paths: f32) -> [f32; 4] {
+        let f = MisFactors::new(self.connects, self.merges, radius, light_paths);
+        [f.merge, f.connect, f.hit, f.connections]
     }
 
     /// Each part and why it runs or is left out, for `algorithm` on a scene with `features`.

@@ -99,7 +99,7 @@ impl MergeRadius {
     /// and how it was found (for the integrator's decisions). A footprint that no camera
     /// ray measures (they all leave the scene) falls back to the default fraction of the
     /// scene's radius.
-    pub(crate) fn initial(
+    pub fn initial(
         self,
         scene: &Scene,
         traversal: &dyn Traversal,
@@ -129,6 +129,13 @@ impl MergeRadius {
             }
         }
     }
+}
+
+/// The merge radius of iteration `iteration` (from 0) of a render whose first is `r0` and
+/// whose radius shrinks with exponent `alpha`: r₀ · (iteration + 1)^((α − 1) / 2).
+pub fn merge_radius(r0: f32, alpha: f32, iteration: u64) -> f32 {
+    let exponent = 0.5 * (alpha - 1.0);
+    r0 * ((iteration as f32) + 1.0).powf(exponent)
 }
 
 /// The median radius of a pixel's footprint at the first hits of a grid of camera rays
