@@ -147,14 +147,6 @@ fn connect(
     return Shadow(true, origin, target_point - origin, 1.0 - GAMMA_16, contribution);
 }
 
-// The bucket of a grid cell (`HashGrid::bucket`, Teschner et al. 2003): the low bits of the
-// 64-bit hash, which 32-bit arithmetic gives alike.
-fn grid_bucket(it: Iteration, cell: vec3<i32>) -> u32 {
-    let c = bitcast<vec3<u32>>(cell);
-    let h = (c.x * 73856093u) ^ (c.y * 19349663u) ^ (c.z * 83492791u);
-    return h & it.bucket_mask;
-}
-
 // The buckets a query at `query` reads (`HashGrid::cells`): its cell's and, per axis, the
 // neighbour on the side of the cell it lies in, where the sphere of the radius reaches; each
 // once, NO_BUCKET for the others.

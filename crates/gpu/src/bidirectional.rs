@@ -123,7 +123,7 @@ impl Integrator for GpuBidirectional {
                 .to_string()
         } else {
             let grids = if self.plan.merges {
-                ", the hash grids built on the host over the cache (which comes back for them)"
+                ", the hash grids built over it"
             } else {
                 ""
             };

@@ -6,9 +6,7 @@
 use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
 use vcm::exact_sum::{ExactSum, WORDS};
-use vcm::hash_grid::HashGrid;
 use vcm::{
     Algorithm, BidirPlan, Film, FrameStats, PixelSum, RenderError, Schedule, StopFlag, merge_radius,
 };
@@ -16,6 +14,7 @@ use vcm_scene::Scene;
 use vcm_traversal_wgpu::GpuBvh;
 
 use crate::error::GpuRenderError;
+use crate::grid::{GridBuffers, GridBuilder};
 use crate::kernel::{LightPass, Params, Sampling, SceneKernel, check_host_estimate, film_estimate};
 use crate::shader::Kernel;
 
@@ -63,6 +62,8 @@ pub(crate) struct GpuFrames {
     pub size: (u32, u32),
     paths_per_dispatch: u64,
     buffers: FrameBuffers,
+    /// The kernels that build the hash grids, once a frame merges.
+    grids: Option<GridBuilder>,
     samples_per_frame: u32,
     stop: StopFlag,
     /// What failed on the GPU, once something has: no frame renders after it.
@@ -139,6 +140,7 @@ impl GpuFrames {
             size,
             paths_per_dispatch,
             buffers,
+            grids: None,
             samples_per_frame: 1,
             stop: StopFlag::new(),
             failure: None,
@@ -348,67 +350,45 @@ impl GpuFrames {
         Ok(true)
     }
 
-    /// Builds each iteration's hash grid over its light vertices within its radius, on the
-    /// host with the CPU's [`HashGrid`] (the cache comes back for it), and uploads them
-    /// (always `true`, to chain with the passes).
+    /// Builds each iteration's hash grid over its light vertices within its radius on the
+    /// device (`grid.wgsl`: the CPU's `HashGrid::build`), recording each grid's layout in
+    /// `iterations` (always `true`, to chain with the passes).
     fn build_grids(&mut self, iterations: &mut [IterationRecord]) -> Result<bool, String> {
         let gpu = Arc::clone(&self.kernels[0].gpu);
+        let mut starts = 0u64;
+        for it in iterations.iter_mut() {
+            // As many buckets as vertices, a power of two, and the total after them.
+            let buckets = it.cache_count.max(1).next_power_of_two();
+            it.grid_starts = starts as u32;
+            starts += u64::from(buckets) + 1;
+            it.grid_entries = it.cache_start;
+            it.bucket_mask = buckets - 1;
+            // Cells 2r wide.
+            it.inv_cell_size = 0.5 / it.radius;
+            it.radius_sq = it.radius * it.radius;
+            it.entry_count = it.cache_count;
+        }
         let vertices: u64 = iterations.iter().map(|it| u64::from(it.cache_count)).sum();
-        let bytes = vertices * size_of::<LightVertex>() as u64;
-        let positions: Vec<Vec3> = if bytes == 0 {
-            Vec::new()
-        } else {
-            let cache = &self.buffers.bindings[CACHE];
-            let readback = self
-                .buffers
-                .kernel_buffer(&self.kernels, "cache read-back", bytes);
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            encoder.copy_buffer_to_buffer(cache, 0, &readback, 0, bytes);
-            gpu.read_back(encoder, (&readback, bytes), |bytes| {
-                let vertices: Vec<LightVertex> = bytemuck::pod_collect_to_vec(bytes);
-                vertices.iter().map(|v| Vec3::from(v.position)).collect()
-            })?
-        };
-        let grids: Vec<HashGrid> = iterations
-            .iter()
-            .map(|it| {
-                let start = it.cache_start as usize;
-                let points = &positions[start..start + it.cache_count as usize];
-                HashGrid::build(points, it.radius)
-            })
-            .collect();
-        let (mut starts, mut entries) = (Vec::new(), Vec::new());
-        for (it, grid) in iterations.iter_mut().zip(&grids) {
-            let layout = grid.layout();
-            it.grid_starts = starts.len() as u32;
-            it.grid_entries = entries.len() as u32;
-            it.grid_min = layout.min.to_array();
-            it.grid_max = layout.max.to_array();
-            it.inv_cell_size = layout.inv_cell_size;
-            it.bucket_mask = layout.bucket_mask;
-            it.radius_sq = layout.radius_sq;
-            it.entry_count = layout.entries.len() as u32;
-            starts.extend_from_slice(layout.starts);
-            entries.extend(layout.entries.map(|(position, index)| GridEntry {
-                position: position.to_array(),
-                index,
-            }));
+        let entry_bytes = vertices * size_of::<GridEntry>() as u64;
+        if 4 * starts > gpu.max_binding_bytes() || entry_bytes > gpu.max_binding_bytes() {
+            return Err(format!(
+                "the frame's hash grids take {} bytes, more than the device can bind",
+                4 * starts + entry_bytes
+            ));
         }
-        for (binding, bytes) in [
-            (GRID_STARTS, bytemuck::cast_slice::<u32, u8>(&starts)),
-            (GRID_ENTRIES, bytemuck::cast_slice(&entries)),
-        ] {
-            if bytes.len() as u64 > gpu.max_binding_bytes() {
-                return Err(format!(
-                    "the frame's hash grids take {} bytes, more than the device can bind",
-                    bytes.len()
-                ));
-            }
-            self.buffers.fit(&self.kernels, binding, bytes.len() as u64);
-            gpu.queue
-                .write_buffer(&self.buffers.bindings[binding], 0, bytes);
-        }
+        self.buffers.fit(&self.kernels, GRID_STARTS, 4 * starts);
+        self.buffers.fit(&self.kernels, GRID_ENTRIES, entry_bytes);
         self.write_iterations(iterations);
+        let b = &self.buffers.bindings;
+        let buffers = GridBuffers {
+            cache: &b[CACHE],
+            iterations: &b[ITERATIONS],
+            starts: &b[GRID_STARTS],
+            entries: &b[GRID_ENTRIES],
+        };
+        let grids = self.grids.get_or_insert_with(|| GridBuilder::new(&gpu));
+        let counts = (vertices as u32, iterations.len() as u32, starts as u32);
+        grids.build(&gpu, &buffers, counts)?;
         Ok(true)
     }
 
@@ -494,42 +474,42 @@ fn exact_sum(limbs: &[u32]) -> ExactSum {
 /// `LightVertex` of bidir.wgsl.
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
-struct LightVertex {
-    position: [f32; 3],
-    path_length: u32,
-    wo: [f32; 3],
-    triangle: u32,
-    throughput: [f32; 3],
-    u: f32,
-    mis: [f32; 3],
-    v: f32,
+pub(crate) struct LightVertex {
+    pub(crate) position: [f32; 3],
+    pub(crate) path_length: u32,
+    pub(crate) wo: [f32; 3],
+    pub(crate) triangle: u32,
+    pub(crate) throughput: [f32; 3],
+    pub(crate) u: f32,
+    pub(crate) mis: [f32; 3],
+    pub(crate) v: f32,
 }
 
 /// `Iteration` of bidir.wgsl.
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
-struct IterationRecord {
-    cache_start: u32,
-    cache_count: u32,
-    grid_starts: u32,
-    grid_entries: u32,
-    factors: [f32; 4],
-    grid_min: [f32; 3],
-    inv_cell_size: f32,
-    grid_max: [f32; 3],
-    bucket_mask: u32,
-    radius: f32,
-    radius_sq: f32,
-    entry_count: u32,
-    unused: u32,
+pub(crate) struct IterationRecord {
+    pub(crate) cache_start: u32,
+    pub(crate) cache_count: u32,
+    pub(crate) grid_starts: u32,
+    pub(crate) grid_entries: u32,
+    pub(crate) factors: [f32; 4],
+    pub(crate) grid_min: [f32; 3],
+    pub(crate) inv_cell_size: f32,
+    pub(crate) grid_max: [f32; 3],
+    pub(crate) bucket_mask: u32,
+    pub(crate) radius: f32,
+    pub(crate) radius_sq: f32,
+    pub(crate) entry_count: u32,
+    pub(crate) unused: u32,
 }
 
 /// `GridEntry` of bidir.wgsl.
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
-struct GridEntry {
-    position: [f32; 3],
-    index: u32,
+pub(crate) struct GridEntry {
+    pub(crate) position: [f32; 3],
+    pub(crate) index: u32,
 }
 
 impl FrameBuffers {
@@ -612,12 +592,6 @@ impl FrameBuffers {
             self.index_readback = kernel.buffer(label, size, U::MAP_READ | U::COPY_DST);
         }
         self.bind(kernels);
-    }
-
-    /// A read-back buffer of `bytes`.
-    fn kernel_buffer(&self, kernels: &[SceneKernel], label: &str, bytes: u64) -> wgpu::Buffer {
-        use wgpu::BufferUsages as U;
-        kernels[0].buffer(label, bytes, U::MAP_READ | U::COPY_DST)
     }
 }
 

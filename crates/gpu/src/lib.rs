@@ -14,7 +14,7 @@
 //! [`GpuBidirectional`] does the same for light tracing — each invocation takes one camera
 //! sample to its first hit and follows one light path from its light, in importance
 //! transport, connecting its vertices to the camera — and for BPT, PPM, BPM and VCM: the
-//! light paths store their vertices in a cache on the device (in the CPU's order), the host
+//! light paths store their vertices in a cache on the device (in the CPU's order), the device
 //! builds the CPU's hash grids over it where the algorithm merges, and the camera paths
 //! sample lights, connect to cached vertices and merge with those nearby, all weighted by MIS
 //! as the CPU weighs them. Every kernel adds to a film on the device whose exact sums make the order
@@ -37,6 +37,7 @@ mod bidirectional;
 mod bsdf_probe;
 mod error;
 mod frames;
+mod grid;
 mod kernel;
 mod path_tracer;
 mod plan;

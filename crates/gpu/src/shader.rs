@@ -17,6 +17,10 @@ pub const SCENE_WGSL: &str = include_str!("../shaders/scene.wgsl");
 pub const FILM_WGSL: &str = include_str!("../shaders/film.wgsl");
 /// The path tracing kernel.
 pub const PATH_TRACER_WGSL: &str = include_str!("../shaders/path_tracer.wgsl");
+/// The light vertex cache's and the hash grids' layouts, and the grid's bucket hash.
+pub const CACHE_WGSL: &str = include_str!("../shaders/cache.wgsl");
+/// The hash grids built on the device.
+pub const GRID_WGSL: &str = include_str!("../shaders/grid.wgsl");
 /// What the bidirectional kernels share: MIS quantities and weights, the light vertex cache.
 pub const BIDIR_WGSL: &str = include_str!("../shaders/bidir.wgsl");
 /// The light pass: light tracing, or the bidirectional algorithms' light vertices.
@@ -69,8 +73,8 @@ impl Kernel {
     fn sources(self) -> &'static [&'static str] {
         match self {
             Kernel::PathTracer => &[PATH_TRACER_WGSL],
-            Kernel::LightTracer => &[BIDIR_WGSL, LIGHT_TRACER_WGSL],
-            Kernel::BidirCamera => &[BIDIR_WGSL, BIDIR_CAMERA_WGSL],
+            Kernel::LightTracer => &[CACHE_WGSL, BIDIR_WGSL, LIGHT_TRACER_WGSL],
+            Kernel::BidirCamera => &[CACHE_WGSL, BIDIR_WGSL, BIDIR_CAMERA_WGSL],
         }
     }
 }
