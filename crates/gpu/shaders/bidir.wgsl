@@ -5,7 +5,8 @@
 // sampling/rng.rs).
 //
 // Bindings (group 0): 6 per light path of the frame its stored vertices (counted by the
-// light pass's first run) or where they start (for its second); 7 the vertices, iteration by
+// light pass's first run) or where they start in its iteration (for its second, index.wgsl);
+// 7 the vertices, iteration by
 // iteration, each iteration's in the order of its light paths; 8 the frame's iterations; and
 // for the camera pass 9 and 10 the iterations' hash grids.
 

@@ -1,6 +1,6 @@
 // The light vertex cache and the iterations' hash grids as the bidirectional kernels and the
-// grid's build share them (vcm's light_vertex_cache.rs, hash_grid.rs): the layouts, and the
-// bucket of a grid cell.
+// builds of the index and the grids share them (vcm's light_vertex_cache.rs, hash_grid.rs):
+// the layouts, the bucket of a grid cell, and the workgroup's prefix sum the builds use.
 
 // A cached light vertex (`LightVertex`): where it is, toward the previous vertex, the path's
 // throughput and MIS quantities there, the hit it was (to shade it again), and the segments
@@ -57,4 +57,28 @@ fn grid_bucket(it: Iteration, cell: vec3<i32>) -> u32 {
     let c = bitcast<vec3<u32>>(cell);
     let h = (c.x * 73856093u) ^ (c.y * 19349663u) ^ (c.z * 83492791u);
     return h & it.bucket_mask;
+}
+
+const SCAN_WORKGROUP: u32 = 256u;
+
+var<workgroup> chunk_totals: array<u32, SCAN_WORKGROUP>;
+var<workgroup> chunks_sum: u32;
+
+// The exclusive prefix sum over a workgroup's lanes of each lane's `total` (the sum of its
+// chunk): this lane's offset; `chunks_sum` holds the sum of all afterwards. Called by every
+// lane of the workgroup.
+fn scan_chunks(lane: u32, total: u32) -> u32 {
+    chunk_totals[lane] = total;
+    workgroupBarrier();
+    if lane == 0u {
+        var sum = 0u;
+        for (var k = 0u; k < SCAN_WORKGROUP; k++) {
+            let t = chunk_totals[k];
+            chunk_totals[k] = sum;
+            sum += t;
+        }
+        chunks_sum = sum;
+    }
+    workgroupBarrier();
+    return chunk_totals[lane];
 }

@@ -30,7 +30,6 @@ struct GridParams {
 @group(0) @binding(7) var<uniform> grid: GridParams;
 
 const GRID_WORKGROUP: u32 = 64u;
-const SCAN_WORKGROUP: u32 = 256u;
 
 // The invocation's index over a dispatch of rows of `num_workgroups.x` workgroups.
 fn invocation(id: vec3<u32>, groups: vec3<u32>) -> u32 {
@@ -100,8 +99,6 @@ fn grid_count(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     atomicAdd(&starts[it.grid_starts + bucket], 1u);
 }
 
-var<workgroup> chunk_totals: array<u32, SCAN_WORKGROUP>;
-
 // An exclusive prefix sum of iteration `wg.x`'s bucket counts, each invocation over a chunk
 // of them, then the total after the last bucket.
 @compute @workgroup_size(SCAN_WORKGROUP)
@@ -116,19 +113,10 @@ fn grid_scan(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     for (var b = first; b < end; b++) {
         total += atomicLoad(&starts[it.grid_starts + b]);
     }
-    chunk_totals[lane] = total;
-    workgroupBarrier();
+    var running = scan_chunks(lane, total);
     if lane == 0u {
-        var sum = 0u;
-        for (var k = 0u; k < SCAN_WORKGROUP; k++) {
-            let t = chunk_totals[k];
-            chunk_totals[k] = sum;
-            sum += t;
-        }
-        atomicStore(&starts[it.grid_starts + buckets], sum);
+        atomicStore(&starts[it.grid_starts + buckets], chunks_sum);
     }
-    workgroupBarrier();
-    var running = chunk_totals[lane];
     for (var b = first; b < end; b++) {
         let count = atomicLoad(&starts[it.grid_starts + b]);
         atomicStore(&starts[it.grid_starts + b], running);

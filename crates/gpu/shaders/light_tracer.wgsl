@@ -117,7 +117,7 @@ fn trace_light_path(path: u32, index: u32, iteration: u32) -> vec2<u32> {
     var stored = 0u;
     var next_slot = 0u;
     if mode == STORE_VERTICES {
-        next_slot = vertex_index[path];
+        next_slot = iterations[path % params.samples].cache_start + vertex_index[path];
     }
     let key = hash_key3(params.seed, vec2(iteration, 0u), vec2(LIGHT_STREAM, 0u));
     var rng = sequence_sampler(key, index, params.independent != 0u);

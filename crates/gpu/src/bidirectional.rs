@@ -135,8 +135,8 @@ impl Integrator for GpuBidirectional {
         let mut decisions = vec![Decision::runs(
             "shading on the GPU",
             format!(
-                "{how} on {}, adding to the film on the device; only the film and the vertex \
-                 counts come back",
+                "{how} on {}, adding to the film on the device; only the film and each \
+                 iteration's vertex count come back",
                 kernel.gpu.describe()
             ),
         )];

@@ -15,6 +15,7 @@ use vcm_traversal_wgpu::GpuBvh;
 
 use crate::error::GpuRenderError;
 use crate::grid::{GridBuffers, GridBuilder};
+use crate::index::IndexBuilder;
 use crate::kernel::{LightPass, Params, Sampling, SceneKernel, check_host_estimate, film_estimate};
 use crate::shader::Kernel;
 
@@ -62,6 +63,8 @@ pub(crate) struct GpuFrames {
     pub size: (u32, u32),
     paths_per_dispatch: u64,
     buffers: FrameBuffers,
+    /// The kernels that build the light vertex index, once a frame caches.
+    index: Option<IndexBuilder>,
     /// The kernels that build the hash grids, once a frame merges.
     grids: Option<GridBuilder>,
     samples_per_frame: u32,
@@ -77,7 +80,6 @@ pub(crate) struct GpuFrames {
 struct FrameBuffers {
     bindings: [wgpu::Buffer; 11],
     readback: wgpu::Buffer,
-    index_readback: wgpu::Buffer,
     /// Bind group 0 of each kernel.
     groups: Vec<wgpu::BindGroup>,
 }
@@ -140,6 +142,7 @@ impl GpuFrames {
             size,
             paths_per_dispatch,
             buffers,
+            index: None,
             grids: None,
             samples_per_frame: 1,
             stop: StopFlag::new(),
@@ -207,7 +210,7 @@ impl GpuFrames {
                     self.prepare_index(invocations, samples)?;
                     self.write_iterations(&iterations);
                     self.run_pass(0, pass(LightPass::CountVertices), frame, true)?
-                        && self.index_vertices(&mut iterations, invocations as usize)?
+                        && self.index_vertices(&mut iterations)?
                         && self.run_pass(0, pass(LightPass::StoreVertices), frame, false)?
                         && (!bidir.plan.merges || self.build_grids(&mut iterations)?)
                         && self.run_pass(1, pass(LightPass::LightTracing), frame, false)?
@@ -300,40 +303,36 @@ impl GpuFrames {
         Ok(())
     }
 
-    /// Turns the light vertices each of the frame's `paths` light paths counted into where
-    /// they go in the cache — iteration by iteration, each iteration's in the order of its
-    /// paths, as the CPU's cache keeps them — records each iteration's in `iterations`, and
-    /// makes room for them (always `true`, to chain with the passes).
-    fn index_vertices(
-        &mut self,
-        iterations: &mut [IterationRecord],
-        paths: usize,
-    ) -> Result<bool, String> {
+    /// Turns the light vertices each light path counted into where they go in the cache, on
+    /// the device (`index.wgsl`): iteration by iteration, each iteration's in the order of
+    /// its paths, as the CPU's cache keeps them. Reads back each iteration's part into
+    /// `iterations` and makes room for them (always `true`, to chain with the passes).
+    fn index_vertices(&mut self, iterations: &mut [IterationRecord]) -> Result<bool, String> {
         let gpu = Arc::clone(&self.kernels[0].gpu);
+        let (width, height) = self.size;
+        let samples = iterations.len() as u32;
+        let index = self.index.get_or_insert_with(|| IndexBuilder::new(&gpu));
         let b = &self.buffers;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let count_bytes = 4 * paths as u64;
-        encoder.copy_buffer_to_buffer(&b.bindings[INDEX], 0, &b.index_readback, 0, count_bytes);
-        let counts: Vec<u32> = gpu.read_back(
-            encoder,
-            (&b.index_readback, count_bytes),
-            bytemuck::pod_collect_to_vec,
-        )?;
-        let samples = iterations.len();
-        let mut offsets = vec![0u32; paths];
-        let mut total = 0u64;
-        for (sample, iteration) in iterations.iter_mut().enumerate() {
-            let first = total;
-            // Path number p = pixel · samples + sample.
-            for path in (sample..paths).step_by(samples) {
-                offsets[path] = total as u32;
-                total += u64::from(counts[path]);
-            }
-            iteration.cache_start = first as u32;
-            iteration.cache_count = (total - first) as u32;
+        let buffers = (&b.bindings[INDEX], &b.bindings[ITERATIONS]);
+        index.record(&gpu, &mut encoder, buffers, (width * height, samples));
+        let bytes = size_of_val(iterations) as u64;
+        let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("iterations read-back"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        encoder.copy_buffer_to_buffer(&b.bindings[ITERATIONS], 0, &readback, 0, bytes);
+        let records: Vec<IterationRecord> =
+            gpu.read_back(encoder, (&readback, bytes), bytemuck::pod_collect_to_vec)?;
+        for (iteration, record) in iterations.iter_mut().zip(&records) {
+            iteration.cache_start = record.cache_start;
+            iteration.cache_count = record.cache_count;
         }
+        let total: u64 = iterations.iter().map(|it| u64::from(it.cache_count)).sum();
         let cache_bytes = total * size_of::<LightVertex>() as u64;
-        if cache_bytes > gpu.max_binding_bytes() || total > u64::from(u32::MAX) {
+        if cache_bytes > gpu.max_binding_bytes() {
             return Err(format!(
                 "the frame's {total} light vertices take {cache_bytes} bytes, more than the \
                  device can bind ({} bytes): render fewer samples per frame or a smaller image",
@@ -341,12 +340,6 @@ impl GpuFrames {
             ));
         }
         self.buffers.fit(&self.kernels, CACHE, cache_bytes);
-        gpu.queue.write_buffer(
-            &self.buffers.bindings[INDEX],
-            0,
-            bytemuck::cast_slice(&offsets),
-        );
-        self.write_iterations(iterations);
         Ok(true)
     }
 
@@ -541,7 +534,6 @@ impl FrameBuffers {
             ("grid entries", size_of::<GridEntry>()),
         ]
         .map(|(label, bytes)| kernel.buffer(label, bytes as u64, output));
-        let index_readback = kernel.buffer("light vertex counts", 16, U::MAP_READ | U::COPY_DST);
         let bindings = [
             params,
             red,
@@ -558,7 +550,6 @@ impl FrameBuffers {
         let mut buffers = FrameBuffers {
             bindings,
             readback,
-            index_readback,
             groups: Vec::new(),
         };
         buffers.bind(kernels);
@@ -578,7 +569,7 @@ impl FrameBuffers {
     }
 
     /// Makes binding `binding` at least `bytes` long (growing it by half again, a new
-    /// buffer), and the index's read-back copy with the index, rebinding `kernels`.
+    /// buffer), rebinding `kernels`.
     fn fit(&mut self, kernels: &[SceneKernel], binding: usize, bytes: u64) {
         if bytes <= self.bindings[binding].size() {
             return;
@@ -588,9 +579,6 @@ impl FrameBuffers {
         let kernel = &kernels[0];
         let label = "grown frame buffer";
         self.bindings[binding] = kernel.buffer(label, size, U::STORAGE | U::COPY_SRC | U::COPY_DST);
-        if binding == INDEX {
-            self.index_readback = kernel.buffer(label, size, U::MAP_READ | U::COPY_DST);
-        }
         self.bind(kernels);
     }
 }

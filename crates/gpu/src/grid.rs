@@ -5,6 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use vcm_traversal_wgpu::GpuDevice;
 
+use crate::compute::{Kernels, record};
 use crate::shader::{CACHE_WGSL, GRID_WGSL};
 
 /// `GridParams` of `grid.wgsl`.
@@ -40,10 +41,16 @@ enum Over {
 /// Invocations per workgroup (`GRID_WORKGROUP` of `grid.wgsl`).
 const WORKGROUP: u64 = 64;
 
+/// Workgroups (x, y) for `count` invocations in rows of at most `max_groups` workgroups.
+fn spread(count: u32, max_groups: u64) -> (u32, u32) {
+    let groups = u64::from(count).div_ceil(WORKGROUP).max(1);
+    let x = groups.min(max_groups);
+    (x as u32, groups.div_ceil(x) as u32)
+}
+
 /// The grid-building kernels and their scratch buffers.
 pub(crate) struct GridBuilder {
-    layout: wgpu::BindGroupLayout,
-    pipelines: Vec<wgpu::ComputePipeline>,
+    kernels: Kernels,
     params: wgpu::Buffer,
     /// Each vertex's bucket, each bucket's cursor, each iteration's bounds.
     scratch: [wgpu::Buffer; 3],
@@ -61,56 +68,13 @@ pub(crate) struct GridBuffers<'a> {
 impl GridBuilder {
     /// The kernels compiled on `gpu`.
     pub fn new(gpu: &GpuDevice) -> GridBuilder {
-        let device = &gpu.device;
-        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let mut entries: Vec<_> = (0..7)
-            .map(|binding| storage(binding, binding == 0))
-            .collect();
-        entries.push(wgpu::BindGroupLayoutEntry {
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            ..storage(7, true)
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("grid build"),
-            entries: &entries,
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("grid build"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("grid build"),
-            source: wgpu::ShaderSource::Wgsl(format!("{CACHE_WGSL}\n{GRID_WGSL}").into()),
-        });
-        let pipelines = KERNELS
-            .iter()
-            .map(|(entry, _)| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-            })
-            .collect();
+        let entries: Vec<&str> = KERNELS.iter().map(|(entry, _)| *entry).collect();
+        // The cache is read; the iterations, starts, entries and scratch buffers written.
+        let read_only = [true, false, false, false, false, false, false];
+        let source = format!("{CACHE_WGSL}\n{GRID_WGSL}");
+        let kernels = Kernels::new(gpu, "grid build", source, &entries, &read_only);
         let buffer = |label, size, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size,
                 usage,
@@ -126,8 +90,7 @@ impl GridBuilder {
         let scratch = ["bucket of", "cursors", "bounds"]
             .map(|label| buffer(label, 16, U::STORAGE | U::COPY_DST | U::COPY_SRC));
         GridBuilder {
-            layout,
-            pipelines,
+            kernels,
             params,
             scratch,
         }
@@ -185,44 +148,23 @@ impl GridBuilder {
             bounds,
             &self.params,
         ];
-        let entries: Vec<_> = (0u32..)
-            .zip(bound)
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("grid build"),
-            layout: &self.layout,
-            entries: &entries,
-        });
+        let group = self.kernels.group(gpu, &bound);
         let mut encoder = device.create_command_encoder(&Default::default());
         encoder.clear_buffer(buffers.starts, 0, Some(4 * u64::from(starts)));
         let max_groups = u64::from(device.limits().max_compute_workgroups_per_dimension);
-        for ((entry, over), pipeline) in KERNELS.iter().zip(&self.pipelines) {
+        for ((entry, over), pipeline) in KERNELS.iter().zip(&self.kernels.pipelines) {
             if *entry == "grid_scatter" {
                 // The cursors start where the buckets do.
                 let bytes = 4 * u64::from(starts);
                 encoder.copy_buffer_to_buffer(buffers.starts, 0, cursors, 0, bytes);
             }
-            let (x, y) = match over {
+            let workgroups = match over {
                 Over::Workgroups => (iterations, 1),
-                _ => {
-                    let count = match over {
-                        Over::Vertices => vertices,
-                        Over::Iterations => iterations,
-                        _ => starts,
-                    };
-                    let groups = u64::from(count).div_ceil(WORKGROUP).max(1);
-                    let x = groups.min(max_groups);
-                    (x as u32, groups.div_ceil(x) as u32)
-                }
+                Over::Vertices => spread(vertices, max_groups),
+                Over::Iterations => spread(iterations, max_groups),
+                Over::Starts => spread(starts, max_groups),
             };
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(x, y, 1);
+            record(&mut encoder, (pipeline, &group), workgroups);
         }
         gpu.wait(gpu.queue.submit([encoder.finish()]))
     }

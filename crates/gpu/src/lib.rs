@@ -35,9 +35,11 @@
 mod bidirectional;
 #[cfg(test)]
 mod bsdf_probe;
+mod compute;
 mod error;
 mod frames;
 mod grid;
+mod index;
 mod kernel;
 mod path_tracer;
 mod plan;

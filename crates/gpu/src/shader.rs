@@ -19,6 +19,8 @@ pub const FILM_WGSL: &str = include_str!("../shaders/film.wgsl");
 pub const PATH_TRACER_WGSL: &str = include_str!("../shaders/path_tracer.wgsl");
 /// The light vertex cache's and the hash grids' layouts, and the grid's bucket hash.
 pub const CACHE_WGSL: &str = include_str!("../shaders/cache.wgsl");
+/// The light vertex index built on the device.
+pub const INDEX_WGSL: &str = include_str!("../shaders/index.wgsl");
 /// The hash grids built on the device.
 pub const GRID_WGSL: &str = include_str!("../shaders/grid.wgsl");
 /// What the bidirectional kernels share: MIS quantities and weights, the light vertex cache.
