@@ -3,6 +3,8 @@
 
 use vcm_traversal_wgpu::GpuDevice;
 
+use crate::kernel::bind_entries;
+
 /// Compute pipelines of one module, sharing bind group 0's layout: storage buffers (read-only
 /// where asked) and a uniform buffer last.
 pub(crate) struct Kernels {
@@ -72,18 +74,8 @@ impl Kernels {
 
     /// Bind group 0 of `buffers`, in binding order (the uniform last).
     pub fn group(&self, gpu: &GpuDevice, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let entries: Vec<_> = (0u32..)
-            .zip(buffers)
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &self.layout,
-            entries: &entries,
-        })
+        let buffers = (0u32..).zip(buffers.iter().copied());
+        bind_entries(&gpu.device, &self.layout, buffers)
     }
 }
 

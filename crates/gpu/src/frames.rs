@@ -76,7 +76,7 @@ pub(crate) struct GpuFrames {
 /// The buffers of bind group 0 in binding order — the dispatches' parameters, the film's
 /// sums per channel, the dropped samples, the ray counts, the light vertex cache's index,
 /// the cache, the iterations, the hash grids' bucket starts and entries — the film's
-/// read-back copy, the index's, and each kernel's bind group.
+/// read-back copy, and each kernel's bind group.
 struct FrameBuffers {
     bindings: [wgpu::Buffer; 11],
     readback: wgpu::Buffer,

@@ -323,7 +323,8 @@ impl SceneKernel {
         group: u32,
         buffers: impl Iterator<Item = (u32, &'a wgpu::Buffer)>,
     ) -> wgpu::BindGroup {
-        bind_entries(&self.gpu.device, &self.pipeline, group, buffers)
+        let layout = self.pipeline.get_bind_group_layout(group);
+        bind_entries(&self.gpu.device, &layout, buffers)
     }
 
     /// A buffer of `size` bytes with `usage`.
@@ -394,14 +395,17 @@ fn bind<'a>(
     group: u32,
     buffers: impl Iterator<Item = &'a wgpu::Buffer>,
 ) -> wgpu::BindGroup {
-    bind_entries(device, pipeline, group, (0u32..).zip(buffers))
+    bind_entries(
+        device,
+        &pipeline.get_bind_group_layout(group),
+        (0u32..).zip(buffers),
+    )
 }
 
-/// Binds each of `buffers` (binding, buffer) in bind group `group` of `pipeline`.
-fn bind_entries<'a>(
+/// A bind group of `layout` binding each of `buffers` (binding, whole buffer).
+pub(crate) fn bind_entries<'a>(
     device: &wgpu::Device,
-    pipeline: &wgpu::ComputePipeline,
-    group: u32,
+    layout: &wgpu::BindGroupLayout,
     buffers: impl Iterator<Item = (u32, &'a wgpu::Buffer)>,
 ) -> wgpu::BindGroup {
     let entries: Vec<_> = buffers
@@ -411,11 +415,12 @@ fn bind_entries<'a>(
         })
         .collect();
     device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("scene kernel"),
-        layout: &pipeline.get_bind_group_layout(group),
+        label: None,
+        layout,
         entries: &entries,
     })
 }
+
 /// The host memory of the two films of a `width` × `height` render: the render's and the
 /// frame's, to which a frame's dispatches add before it is whole.
 pub(crate) fn film_estimate((width, height): (u32, u32)) -> MemoryEstimate {
