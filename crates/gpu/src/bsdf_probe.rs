@@ -11,8 +11,8 @@ use vcm_scene::frame::Frame;
 use vcm_scene::sampling::{Rng, Sampler};
 use vcm_scene::testing::{Chi2Config, chi2_test};
 use vcm_traversal_wgpu::{GpuDevice, device_or_skip};
-use wgpu::util::DeviceExt;
 
+use crate::probe::run_probe;
 use crate::scene_data::{lookup_tables, pack_material};
 use crate::shader::{BSDF_WGSL, host_constants};
 
@@ -49,20 +49,6 @@ fn sample_on_gpu(
     (n_g, n_s, wo): (Vec3, Vec3, Vec3),
     numbers: &[[f32; 3]],
 ) -> Vec<ProbeOutput> {
-    let device = &gpu.device;
-    let source = format!("{}{BSDF_WGSL}\n{PROBE_WGSL}", host_constants());
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("bsdf probe"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("bsdf probe"),
-        layout: None,
-        module: &module,
-        entry_point: Some("probe_bsdf"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
     let material = pack_material(Some(&Lobes::new(params).flat()), double_sided);
     let inputs: Vec<ProbeInput> = numbers
         .iter()
@@ -73,56 +59,17 @@ fn sample_on_gpu(
             u: [u_lobe, ux, uy, 0.0],
         })
         .collect();
-    let storage = |label, bytes: &[u8]| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: bytes,
-            usage: wgpu::BufferUsages::STORAGE,
-        })
-    };
-    let output_bytes = (numbers.len() * size_of::<ProbeOutput>()) as u64;
-    let buffer = |label, usage| {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: output_bytes,
-            usage,
-            mapped_at_creation: false,
-        })
-    };
-    use wgpu::BufferUsages as U;
-    let buffers = [
-        storage("material", bytemuck::bytes_of(&material)),
-        storage("tables", bytemuck::cast_slice(&lookup_tables())),
-        storage("inputs", bytemuck::cast_slice(&inputs)),
-        buffer("outputs", U::STORAGE | U::COPY_SRC),
-    ];
-    let readback = buffer("read-back", U::MAP_READ | U::COPY_DST);
-    let entries: Vec<_> = (0u32..)
-        .zip(&buffers)
-        .map(|(binding, buffer)| wgpu::BindGroupEntry {
-            binding,
-            resource: buffer.as_entire_binding(),
-        })
-        .collect();
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("bsdf probe"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &entries,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups((numbers.len() as u32).div_ceil(64), 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&buffers[3], 0, &readback, 0, output_bytes);
-    gpu.read_back(
-        encoder,
-        (&readback, output_bytes),
-        bytemuck::pod_collect_to_vec,
+    let source = format!("{}{BSDF_WGSL}\n{PROBE_WGSL}", host_constants());
+    run_probe(
+        gpu,
+        (source, "probe_bsdf"),
+        &[
+            bytemuck::bytes_of(&material),
+            bytemuck::cast_slice(&lookup_tables()),
+            bytemuck::cast_slice(&inputs),
+        ],
+        numbers.len(),
     )
-    .unwrap()
 }
 
 /// Chi-square tests in this module (Šidák-corrected together).

@@ -41,8 +41,12 @@ mod frames;
 mod grid;
 mod index;
 mod kernel;
+#[cfg(test)]
+mod mis_probe;
 mod path_tracer;
 mod plan;
+#[cfg(test)]
+mod probe;
 mod scene_data;
 pub mod shader;
 

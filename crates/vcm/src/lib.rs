@@ -71,6 +71,7 @@ mod walk;
 mod wave;
 
 pub use algorithm::Algorithm;
+pub use bidir::mis_paths;
 pub use bidir::{
     BidirPlan, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MAX_CONNECTIONS,
     MergeRadius, Vcm, VcmSettings, merge_radius,

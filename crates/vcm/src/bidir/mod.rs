@@ -28,6 +28,7 @@ mod camera_pass;
 mod light_pass;
 mod memory;
 pub(crate) mod mis;
+pub mod mis_paths;
 mod path_order;
 mod plan;
 mod radius;
