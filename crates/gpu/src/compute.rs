@@ -2,6 +2,7 @@
 //! for what the frames build on the device (the light vertex index, the hash grids).
 
 use vcm_traversal_wgpu::GpuDevice;
+use vcm_traversal_wgpu::shader::buffer_layout;
 
 use crate::kernel::bind_entries;
 
@@ -23,23 +24,13 @@ impl Kernels {
         read_only: &[bool],
     ) -> Kernels {
         let device = &gpu.device;
-        let buffer = |binding: u32, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
         let mut bindings: Vec<_> = (0u32..)
             .zip(read_only)
             .map(|(binding, &read_only)| {
-                buffer(binding, wgpu::BufferBindingType::Storage { read_only })
+                buffer_layout(binding, wgpu::BufferBindingType::Storage { read_only })
             })
             .collect();
-        bindings.push(buffer(
+        bindings.push(buffer_layout(
             read_only.len() as u32,
             wgpu::BufferBindingType::Uniform,
         ));

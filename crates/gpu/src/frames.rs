@@ -16,8 +16,10 @@ use vcm_traversal_wgpu::GpuBvh;
 use crate::error::GpuRenderError;
 use crate::grid::{GridBuffers, GridBuilder};
 use crate::index::IndexBuilder;
-use crate::kernel::{LightPass, Params, Sampling, SceneKernel, check_host_estimate, film_estimate};
-use crate::shader::Kernel;
+use crate::kernel::{
+    INDIRECT_BYTES, LightPass, Params, Sampling, SceneKernel, check_host_estimate, film_estimate,
+};
+use crate::shader::{Kernel, WORKGROUP_SIZE};
 
 /// u32 limbs of one exact sum on the device (`SUM_LIMBS` of `film.wgsl`).
 const SUM_LIMBS: usize = 2 * WORDS;
@@ -31,11 +33,22 @@ const PATHS_PER_DISPATCH: u64 = 1 << 20;
 /// Invocations per dispatch on a CPU implementation (lavapipe), which runs them on a few
 /// cores.
 const PATHS_PER_SOFTWARE_DISPATCH: u64 = 1 << 15;
+/// Bytes of one path's state in the path tracer's wavefront (`PathState` of
+/// `path_tracer.wgsl`).
+const PATH_STATE_BYTES: u64 = 176;
+/// Bytes of the wavefront's queue counts (`Wave` of `path_tracer.wgsl`).
+const WAVE_BYTES: u64 = 32;
+/// Rounds of the wavefront recorded between two looks at how many paths are left.
+const ROUNDS_PER_SUBMIT: u32 = 4;
+/// Once at most 1 / TAIL_FRACTION of a dispatch's paths are left, each is taken to its end in
+/// one invocation: rounds would be mostly empty by then, and a few paths (behind glass,
+/// between mirrors) run for hundreds of segments.
+const TAIL_FRACTION: u32 = 16;
 
 /// How a frame runs its kernels.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum FramePlan {
-    /// The path tracer: one pass of its kernel.
+    /// The path tracer: its wavefront, started over each dispatch's paths.
     PathTracing,
     /// A bidirectional algorithm: light tracing in one pass of the light kernel; the others
     /// count their light vertices, store them, build the iterations' hash grids where they
@@ -75,11 +88,15 @@ pub(crate) struct GpuFrames {
 
 /// The buffers of bind group 0 in binding order — the dispatches' parameters, the film's
 /// sums per channel, the dropped samples, the ray counts, the light vertex cache's index,
-/// the cache, the iterations, the hash grids' bucket starts and entries — the film's
-/// read-back copy, and each kernel's bind group.
+/// the cache, the iterations, the hash grids' bucket starts and entries, the wavefront's
+/// path states, queues and queue counts — the film's and the queue counts' read-back
+/// copies, the wavefront's dispatch arguments, and each kernel's bind group.
 struct FrameBuffers {
-    bindings: [wgpu::Buffer; 11],
+    bindings: [wgpu::Buffer; 14],
     readback: wgpu::Buffer,
+    wave_readback: wgpu::Buffer,
+    /// The workgroups of the wavefront's next round (indirect dispatch arguments).
+    indirect: wgpu::Buffer,
     /// Bind group 0 of each kernel.
     groups: Vec<wgpu::BindGroup>,
 }
@@ -92,6 +109,9 @@ const CACHE: usize = 7;
 const ITERATIONS: usize = 8;
 const GRID_STARTS: usize = 9;
 const GRID_ENTRIES: usize = 10;
+const PATH_STATES: usize = 11;
+const QUEUES: usize = 12;
+const WAVE: usize = 13;
 
 impl GpuFrames {
     /// The kernels of `plan` compiled for `scene` on the hierarchy `bvh`, and their frames at
@@ -118,11 +138,17 @@ impl GpuFrames {
                 gpu.max_binding_bytes()
             )));
         }
-        let paths_per_dispatch = if gpu.is_software() {
+        let mut paths_per_dispatch = if gpu.is_software() {
             PATHS_PER_SOFTWARE_DISPATCH
         } else {
             PATHS_PER_DISPATCH
         };
+        if let FramePlan::PathTracing = plan {
+            // The paths' states fit one binding.
+            let fitting = gpu.max_binding_bytes() / PATH_STATE_BYTES;
+            paths_per_dispatch =
+                paths_per_dispatch.min(fitting / WORKGROUP_SIZE as u64 * WORKGROUP_SIZE as u64);
+        }
         let kernels = match plan {
             FramePlan::PathTracing => vec![SceneKernel::new(Kernel::PathTracer, scene, bvh)?],
             FramePlan::Bidirectional(bidir) => {
@@ -135,7 +161,12 @@ impl GpuFrames {
                 }
             }
         };
-        let buffers = FrameBuffers::new(&kernels, channel_bytes);
+        let mut buffers = FrameBuffers::new(&kernels, channel_bytes);
+        if let FramePlan::PathTracing = plan {
+            buffers.fit(&kernels, PATH_STATES, paths_per_dispatch * PATH_STATE_BYTES);
+            // Two round queues and the shadow queue.
+            buffers.fit(&kernels, QUEUES, 3 * 4 * paths_per_dispatch);
+        }
         Ok(GpuFrames {
             kernels,
             plan,
@@ -254,9 +285,46 @@ impl GpuFrames {
             let encoder = scene_kernel.encode(dispatch, pass, frame, range, &cleared);
             // The first dispatch clears the outputs; the others add to them.
             cleared.clear();
-            gpu.wait(gpu.queue.submit([encoder.finish()]))?;
+            if let FramePlan::PathTracing = self.plan {
+                self.run_wavefront(encoder, range.1)?;
+            } else {
+                gpu.wait(gpu.queue.submit([encoder.finish()]))?;
+            }
         }
         Ok(true)
+    }
+
+    /// Runs the path tracer's wavefront over `paths` paths that `encoder` starts: rounds of
+    /// extending the queued paths and tracing their shadow rays, [`ROUNDS_PER_SUBMIT`] at a
+    /// time, each time reading back how many paths go on, until few enough are left to take
+    /// each to its end in one invocation ([`TAIL_FRACTION`]).
+    fn run_wavefront(&self, mut encoder: wgpu::CommandEncoder, paths: u64) -> Result<(), String> {
+        let b = &self.buffers;
+        let kernel = &self.kernels[0];
+        let gpu = &kernel.gpu;
+        let wave = &b.bindings[WAVE];
+        // Every path is queued for the first round (`Wave` of path_tracer.wgsl).
+        let paths = paths as u32;
+        let start = [paths.div_ceil(WORKGROUP_SIZE), 1, 1, paths, 0, 0, 0, 0];
+        gpu.queue
+            .write_buffer(wave, 0, bytemuck::cast_slice(&start));
+        gpu.queue
+            .write_buffer(&b.indirect, 0, bytemuck::cast_slice(&start[..3]));
+        let buffers = (&b.groups[0], wave, &b.indirect);
+        loop {
+            kernel.record_rounds(&mut encoder, buffers, ROUNDS_PER_SUBMIT);
+            encoder.copy_buffer_to_buffer(wave, 0, &b.wave_readback, 0, WAVE_BYTES);
+            let read = |bytes: &[u8]| bytemuck::pod_read_unaligned::<[u32; 8]>(bytes)[3];
+            let left = gpu.read_back(encoder, (&b.wave_readback, WAVE_BYTES), read)?;
+            if left == 0 {
+                return Ok(());
+            }
+            encoder = gpu.device.create_command_encoder(&Default::default());
+            if left * TAIL_FRACTION <= paths {
+                kernel.record_tail(&mut encoder, (&b.groups[0], &b.indirect));
+                return gpu.wait(gpu.queue.submit([encoder.finish()]));
+            }
+        }
     }
 
     /// The frame's iterations as `bidir` renders them: their merge radii and MIS factors.
@@ -507,49 +575,54 @@ pub(crate) struct GridEntry {
 
 impl FrameBuffers {
     /// Buffers for the frames of `kernels` with `channel_bytes` of sums per channel; the
-    /// cache, its index, the iterations and the grids hold nothing yet.
+    /// cache, its index, the iterations, the grids and the path tracer's paths and queues
+    /// hold nothing yet.
     fn new(kernels: &[SceneKernel], channel_bytes: u64) -> FrameBuffers {
         use wgpu::BufferUsages as U;
         let kernel = &kernels[0];
         let output = U::STORAGE | U::COPY_SRC | U::COPY_DST;
-        let params = kernel.buffer(
-            "frame parameters",
-            size_of::<Params>() as u64,
-            U::UNIFORM | U::COPY_DST,
-        );
-        let [red, green, blue] = ["film red", "film green", "film blue"]
-            .map(|label| kernel.buffer(label, channel_bytes, output));
-        let dropped = kernel.buffer("dropped samples", 4, output);
-        let rays = kernel.buffer("ray counts", RAY_COUNT_BYTES, output);
-        let readback = kernel.buffer(
-            "film read-back",
-            3 * channel_bytes + 4 + RAY_COUNT_BYTES,
-            U::MAP_READ | U::COPY_DST,
-        );
-        let [index, cache, iterations, grid_starts, grid_entries] = [
-            ("light vertex index", 16),
-            ("light vertex cache", size_of::<LightVertex>()),
-            ("iterations", size_of::<IterationRecord>()),
-            ("grid bucket starts", 16),
-            ("grid entries", size_of::<GridEntry>()),
-        ]
-        .map(|(label, bytes)| kernel.buffer(label, bytes as u64, output));
+        let film = |label| (label, channel_bytes, output);
+        // In binding order.
         let bindings = [
-            params,
-            red,
-            green,
-            blue,
-            dropped,
-            rays,
-            index,
-            cache,
-            iterations,
-            grid_starts,
-            grid_entries,
-        ];
+            (
+                "frame parameters",
+                size_of::<Params>() as u64,
+                U::UNIFORM | U::COPY_DST,
+            ),
+            film("film red"),
+            film("film green"),
+            film("film blue"),
+            ("dropped samples", 4, output),
+            ("ray counts", RAY_COUNT_BYTES, output),
+            ("light vertex index", 16, output),
+            (
+                "light vertex cache",
+                size_of::<LightVertex>() as u64,
+                output,
+            ),
+            ("iterations", size_of::<IterationRecord>() as u64, output),
+            ("grid bucket starts", 16, output),
+            ("grid entries", size_of::<GridEntry>() as u64, output),
+            ("path states", PATH_STATE_BYTES, output),
+            ("path queues", 16, output),
+            ("queue counts", WAVE_BYTES, output),
+        ]
+        .map(|(label, bytes, usage)| kernel.buffer(label, bytes, usage));
+        let [readback, wave_readback] = [
+            ("film read-back", 3 * channel_bytes + 4 + RAY_COUNT_BYTES),
+            ("queue counts read-back", WAVE_BYTES),
+        ]
+        .map(|(label, bytes)| kernel.buffer(label, bytes, U::MAP_READ | U::COPY_DST));
+        let indirect = kernel.buffer(
+            "round workgroups",
+            INDIRECT_BYTES.next_multiple_of(16),
+            U::INDIRECT | U::COPY_DST,
+        );
         let mut buffers = FrameBuffers {
             bindings,
             readback,
+            wave_readback,
+            indirect,
             groups: Vec::new(),
         };
         buffers.bind(kernels);
@@ -568,15 +641,16 @@ impl FrameBuffers {
             .collect();
     }
 
-    /// Makes binding `binding` at least `bytes` long (growing it by half again, a new
-    /// buffer), rebinding `kernels`.
+    /// Makes binding `binding` at least `bytes` long (growing it by half again where the
+    /// device can bind that, a new buffer), rebinding `kernels`.
     fn fit(&mut self, kernels: &[SceneKernel], binding: usize, bytes: u64) {
         if bytes <= self.bindings[binding].size() {
             return;
         }
         use wgpu::BufferUsages as U;
-        let size = (bytes + bytes / 2).next_multiple_of(16);
         let kernel = &kernels[0];
+        let size = (bytes + bytes / 2).min(kernel.gpu.max_binding_bytes().max(bytes));
+        let size = size.next_multiple_of(16);
         let label = "grown frame buffer";
         self.bindings[binding] = kernel.buffer(label, size, U::STORAGE | U::COPY_SRC | U::COPY_DST);
         self.bind(kernels);
@@ -803,5 +877,24 @@ mod tests {
             assert_eq!(film_of(algorithm, &scene, 97), whole, "{algorithm:?}");
             assert!(whole.mean().iter().any(|p| p.max_element() > 0.0));
         }
+    }
+}
+
+#[cfg(test)]
+mod layout_tests {
+    use super::*;
+    use crate::shader::PATH_TRACER_WGSL;
+    use vcm_traversal_wgpu::NodeLayout;
+    use vcm_traversal_wgpu::shader::{struct_size, traversal_functions};
+
+    #[test]
+    fn the_wavefronts_sizes_are_the_shaders() {
+        // The structs' members come from the shared sources before the path tracer's.
+        let traversal = traversal_functions(NodeLayout::Wide, 32, false);
+        let module = crate::shader::kernel_module(Kernel::PathTracer, &traversal, false);
+        assert!(module.contains(PATH_TRACER_WGSL));
+        let size = |name| struct_size(&module, name).map(u64::from);
+        assert_eq!(size("PathState"), Some(PATH_STATE_BYTES));
+        assert_eq!(size("Wave"), Some(WAVE_BYTES));
     }
 }

@@ -8,6 +8,7 @@ use vcm::memory::{AvailableMemory, MemoryEstimate, check_budget};
 use vcm::{Algorithm, BidirPlan, Film, RenderError};
 use vcm_scene::Scene;
 use vcm_scene::sampling::SampleSequence;
+use vcm_traversal_wgpu::shader::buffer_layouts;
 use vcm_traversal_wgpu::{GpuBvh, GpuDevice, GpuError, dispatch_shape};
 
 use crate::error::GpuRenderError;
@@ -50,6 +51,9 @@ const _: () = assert!(
     size_of::<Params>() == 144,
     "the size of Params in scene.wgsl"
 );
+
+/// Bytes of a dispatch's workgroup counts (x, y, z) read from a buffer.
+pub(crate) const INDIRECT_BYTES: u64 = 12;
 
 /// What the light pass does (`light_pass` of `Params`, bidir.wgsl).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -138,6 +142,8 @@ pub(crate) struct SceneKernel {
     pub gpu: Arc<GpuDevice>,
     pub scene: Arc<Scene>,
     pub pipeline: wgpu::ComputePipeline,
+    /// The pipelines of its stages ([`Kernel::stages`]), on the entry point's layout.
+    stages: Vec<wgpu::ComputePipeline>,
     /// The scene's buffers by bind group: 1 the hierarchy, 2 the alpha masks where there are
     /// any, then the shading data ([`shading_group`]).
     scene_buffers: Vec<(u32, Vec<wgpu::Buffer>)>,
@@ -188,13 +194,14 @@ impl SceneKernel {
         }
         scene_buffers.push((shading_group(bvh.has_alpha_masks()), shading));
         let traversal = (bvh.traversal_functions(), bvh.has_alpha_masks());
-        let pipeline = compile(&gpu.device, kernel, &traversal, &plan);
+        let (pipeline, stages) = compile(&gpu.device, kernel, &traversal, &plan);
         let scene_groups = bind_scene(&gpu.device, &pipeline, &scene_buffers);
         Ok(SceneKernel {
             kind: kernel,
             gpu,
             scene,
             pipeline,
+            stages,
             scene_buffers,
             scene_groups,
             traversal,
@@ -208,13 +215,14 @@ impl SceneKernel {
     /// `kernel` for the same scene, on the same buffers.
     pub fn sibling(&self, kernel: Kernel) -> SceneKernel {
         let device = &self.gpu.device;
-        let pipeline = compile(device, kernel, &self.traversal, &self.plan);
+        let (pipeline, stages) = compile(device, kernel, &self.traversal, &self.plan);
         let scene_groups = bind_scene(device, &pipeline, &self.scene_buffers);
         SceneKernel {
             kind: kernel,
             gpu: Arc::clone(&self.gpu),
             scene: Arc::clone(&self.scene),
             pipeline,
+            stages,
             scene_buffers: self.scene_buffers.clone(),
             scene_groups,
             traversal: self.traversal.clone(),
@@ -285,7 +293,8 @@ impl SceneKernel {
 
     /// A command encoder that writes the parameters of invocations `range` (first, count) of
     /// the frame `frame` (first sample, samples per pixel) and `light_pass` into `params`,
-    /// clears `outputs` and dispatches the kernel with `dispatch` as bind group 0.
+    /// clears `outputs` and dispatches the kernel's first stage with `dispatch` as bind
+    /// group 0.
     pub fn encode(
         &self,
         (params, dispatch): (&wgpu::Buffer, &wgpu::BindGroup),
@@ -303,18 +312,71 @@ impl SceneKernel {
             encoder.clear_buffer(output, 0, None);
         }
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("scene kernel"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, dispatch, &[]);
-            for (index, group) in &self.scene_groups {
-                pass.set_bind_group(*index, group, &[]);
-            }
+            let mut pass = self.pass(&mut encoder, dispatch);
+            pass.set_pipeline(&self.stages[0]);
             pass.dispatch_workgroups(x, y, 1);
         }
         encoder
+    }
+
+    /// Records `rounds` rounds of the path tracer's wavefront on `encoder` with `dispatch`
+    /// as bind group 0: each takes the queued paths one vertex further and traces their
+    /// shadow rays, in the workgroups `indirect` holds, advances the queues (one
+    /// invocation), and copies the next round's workgroups from the start of `wave` (a
+    /// buffer bound as storage cannot also give a dispatch its arguments).
+    pub fn record_rounds(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (dispatch, wave, indirect): (&wgpu::BindGroup, &wgpu::Buffer, &wgpu::Buffer),
+        rounds: u32,
+    ) {
+        for _ in 0..rounds {
+            {
+                let mut pass = self.pass(encoder, dispatch);
+                for stage in ["extend_paths", "trace_shadows"] {
+                    pass.set_pipeline(self.stage(stage));
+                    pass.dispatch_workgroups_indirect(indirect, 0);
+                }
+                pass.set_pipeline(self.stage("advance_paths"));
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            encoder.copy_buffer_to_buffer(wave, 0, indirect, 0, INDIRECT_BYTES);
+        }
+    }
+
+    /// Records the wavefront's tail on `encoder`: the queued paths taken to their end, in
+    /// the workgroups `indirect` holds.
+    pub fn record_tail(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (dispatch, indirect): (&wgpu::BindGroup, &wgpu::Buffer),
+    ) {
+        let mut pass = self.pass(encoder, dispatch);
+        pass.set_pipeline(self.stage("finish_paths"));
+        pass.dispatch_workgroups_indirect(indirect, 0);
+    }
+
+    /// The pipeline of stage `entry`.
+    fn stage(&self, entry: &str) -> &wgpu::ComputePipeline {
+        let index = self.kind.stages().iter().position(|&stage| stage == entry);
+        &self.stages[index.expect("a stage of the kernel")]
+    }
+
+    /// A compute pass on `encoder` with `dispatch` as bind group 0 and the scene's groups.
+    fn pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        dispatch: &wgpu::BindGroup,
+    ) -> wgpu::ComputePass<'e> {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(self.kind.entry()),
+            timestamp_writes: None,
+        });
+        pass.set_bind_group(0, dispatch, &[]);
+        for (index, group) in &self.scene_groups {
+            pass.set_bind_group(*index, group, &[]);
+        }
+        pass
     }
 
     /// Binds each of `buffers` (binding, buffer) in the kernel's bind group `group`.
@@ -339,29 +401,64 @@ impl SceneKernel {
 }
 
 /// The pipeline of `kernel` over `traversal` (its WGSL, and whether it tests alpha masks),
-/// specialised by `plan`.
+/// specialised by `plan`, and those of its stages. A kernel of one stage has the layout its
+/// bindings give it; the stages of one of several share a layout of every buffer the module
+/// declares, so that one set of bind groups serves them all.
 fn compile(
     device: &wgpu::Device,
     kernel: Kernel,
     (traversal, alpha_masks): &(String, bool),
     plan: &KernelPlan,
-) -> wgpu::ComputePipeline {
+) -> (wgpu::ComputePipeline, Vec<wgpu::ComputePipeline>) {
+    let source = kernel_module(kernel, traversal, *alpha_masks);
+    let shared_layout = (kernel.stages().len() > 1).then(|| {
+        let groups = buffer_layouts(&source).expect("the kernels' sources validate");
+        let groups: Vec<wgpu::BindGroupLayout> = groups
+            .iter()
+            .map(|entries| {
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(kernel.entry()),
+                    entries,
+                })
+            })
+            .collect();
+        device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(kernel.entry()),
+            bind_group_layouts: &groups.iter().map(Some).collect::<Vec<_>>(),
+            immediate_size: 0,
+        })
+    });
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(kernel.entry()),
-        source: wgpu::ShaderSource::Wgsl(kernel_module(kernel, traversal, *alpha_masks).into()),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
     });
     let constants = plan.constants();
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(kernel.entry()),
-        layout: None,
-        module: &module,
-        entry_point: Some(kernel.entry()),
-        compilation_options: wgpu::PipelineCompilationOptions {
-            constants: &constants,
-            ..Default::default()
-        },
-        cache: None,
-    })
+    let pipeline = |entry| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: shared_layout.as_ref(),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            },
+            cache: None,
+        })
+    };
+    let stages: Vec<_> = kernel
+        .stages()
+        .iter()
+        .map(|&entry| pipeline(entry))
+        .collect();
+    let main = kernel
+        .stages()
+        .iter()
+        .position(|&entry| entry == kernel.entry());
+    (
+        stages[main.expect("the entry point is a stage")].clone(),
+        stages,
+    )
 }
 
 /// The bind groups of `pipeline` over the scene's `buffers` (by group).

@@ -2,11 +2,12 @@
 //! tracing, BPT, PPM, BPM, VCM) as WGSL compute kernels through wgpu.
 //!
 //! [`GpuPathTracer`] renders with the hierarchy of a [`GpuBvh`](vcm_traversal_wgpu::GpuBvh)
-//! and the scene's shading data uploaded once: each kernel invocation follows one camera path
-//! to its end (camera ray, closest hits, emission with MIS, one light sample with its shadow
-//! ray, BSDF sampling, Russian roulette) and adds its radiance to the frame's film on the
-//! device; only that film comes back, and the host merges it into the render's once the
-//! frame is whole (an interrupted frame adds nothing). The kernel draws
+//! and the scene's shading data uploaded once, as a wavefront: the paths keep their state in
+//! storage buffers, and round by round one kernel takes the queued paths one vertex further
+//! (closest hit, emission with MIS, one light sample, BSDF sampling, Russian roulette) and
+//! another traces their shadow rays; each path adds its radiance to the frame's film on the
+//! device once it ends. Only that film comes back, and the host merges it into the render's
+//! once the frame is whole (an interrupted frame adds nothing). The kernels draw
 //! the same numbers as the CPU for the same path ([`vcm_scene::sampling::SobolSampler`] in
 //! `shaders/sampler.wgsl`) and shades with the same operations, so both backends render the
 //! same image up to floating-point rounding per path, not only in expectation.

@@ -62,8 +62,9 @@ impl Integrator for GpuPathTracer {
             Decision::runs(
                 "shading on the GPU",
                 format!(
-                    "one WGSL kernel follows each path to its end on {}, adding it to the film \
-                     on the device; only the film comes back",
+                    "a wavefront of WGSL kernels on {} takes the paths vertex by vertex \
+                     (queues in storage buffers, shadow rays in a kernel of their own), adding \
+                     them to the film on the device; only the film comes back",
                     kernel.gpu.describe()
                 ),
             ),

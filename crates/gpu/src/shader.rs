@@ -36,7 +36,8 @@ pub const WORKGROUP_SIZE: u32 = 64;
 /// A kernel of this crate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kernel {
-    /// Each invocation follows one camera path to its end (`path_tracer.wgsl`).
+    /// The path tracer's wavefront (`path_tracer.wgsl`): paths started at the camera, then
+    /// taken one vertex further and their shadow rays traced round by round.
     PathTracer,
     /// Each invocation follows one light path to its end, and for light tracing alone takes
     /// one camera sample's first hit (`light_tracer.wgsl`).
@@ -50,22 +51,41 @@ impl Kernel {
     /// Every kernel.
     pub const ALL: [Kernel; 3] = [Kernel::PathTracer, Kernel::LightTracer, Kernel::BidirCamera];
 
-    /// Its entry point.
+    /// Its entry point whose bindings every stage's are among: the one its bind groups are
+    /// laid out for.
     pub fn entry(self) -> &'static str {
         match self {
-            Kernel::PathTracer => "render_paths",
+            Kernel::PathTracer => "extend_paths",
             Kernel::LightTracer => "trace_light_paths",
             Kernel::BidirCamera => "connect_camera_paths",
+        }
+    }
+
+    /// Its entry points, the first dispatched over the frame's invocations; for the path
+    /// tracer then, round by round, the paths taken one vertex further, their shadow rays
+    /// and the queues advanced (indirect dispatches), and the last paths taken to their end.
+    pub fn stages(self) -> &'static [&'static str] {
+        match self {
+            Kernel::PathTracer => &[
+                "start_paths",
+                "extend_paths",
+                "trace_shadows",
+                "advance_paths",
+                "finish_paths",
+            ],
+            Kernel::LightTracer => &["trace_light_paths"],
+            Kernel::BidirCamera => &["connect_camera_paths"],
         }
     }
 
     /// The bindings of its bind group 0: 0 the parameters, 1–4 the film (sums, dropped
     /// samples), 5 the ray counts; for the light pass 6 the cache's index; for both
     /// bidirectional passes 7 the cache and 8 the iterations; for the camera pass 9 and 10
-    /// the hash grids' bucket starts and entries.
+    /// the hash grids' bucket starts and entries; for the path tracer 11 the paths' states,
+    /// 12 the queues and 13 their counts.
     pub fn dispatch_bindings(self) -> &'static [u32] {
         match self {
-            Kernel::PathTracer => &[0, 1, 2, 3, 4, 5],
+            Kernel::PathTracer => &[0, 1, 2, 3, 4, 5, 11, 12, 13],
             Kernel::LightTracer => &[0, 1, 2, 3, 4, 5, 6, 7, 8],
             Kernel::BidirCamera => &[0, 1, 2, 3, 4, 5, 7, 8, 9, 10],
         }
@@ -138,7 +158,7 @@ mod tests {
                 for masks in [false, true] {
                     let traversal = traversal_functions(layout, 32, masks);
                     let module = kernel_module(kernel, &traversal, masks);
-                    if let Err(error) = validate_module(&module, &[kernel.entry()]) {
+                    if let Err(error) = validate_module(&module, kernel.stages()) {
                         panic!("{kernel:?}: {error}");
                     }
                 }

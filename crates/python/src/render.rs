@@ -43,7 +43,7 @@ use crate::vcm_error;
 ///     alpha: the merge radius's reduction exponent (ppm, bpm, vcm).
 ///     no_prune: run every part of the algorithm, even those the scene does not need.
 ///     backend: "cpu" (default) or "gpu" (WGSL compute shaders through wgpu).
-///     shading: "cpu" (default) or "gpu": whole paths in one WGSL kernel on the GPU
+///     shading: "cpu" (default) or "gpu": whole paths in WGSL kernels on the GPU
 ///         backend's device (needs backend="gpu"; "auto" means path tracing there).
 ///     spp_per_frame, scheduler ("none", "tile", "queue"), tile_size: how work is scheduled
 ///         (the image does not depend on them).

@@ -83,6 +83,62 @@ pub fn validate_module(source: &str, entries: &[&str]) -> Result<(), String> {
     Ok(())
 }
 
+/// The bind group layout entries of every buffer `source` declares, per group from 0 to the
+/// highest it uses: a uniform buffer, or a storage buffer read-only unless declared
+/// `read_write`. One pipeline layout made of them serves every entry point of the module, so
+/// that its kernels share bind groups (layouts that wgpu derives belong to one pipeline).
+pub fn buffer_layouts(source: &str) -> Result<Vec<Vec<wgpu::BindGroupLayoutEntry>>, String> {
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| format!("WGSL parse error:\n{}", e.emit_to_string(source)))?;
+    let mut groups: Vec<Vec<wgpu::BindGroupLayoutEntry>> = Vec::new();
+    for (_, global) in module.global_variables.iter() {
+        let Some(binding) = &global.binding else {
+            continue;
+        };
+        let ty = match global.space {
+            naga::AddressSpace::Uniform => wgpu::BufferBindingType::Uniform,
+            naga::AddressSpace::Storage { access } => wgpu::BufferBindingType::Storage {
+                read_only: !access.contains(naga::StorageAccess::STORE),
+            },
+            other => return Err(format!("a binding in {other:?}, not a buffer")),
+        };
+        let group = binding.group as usize;
+        if groups.len() <= group {
+            groups.resize_with(group + 1, Vec::new);
+        }
+        groups[group].push(buffer_layout(binding.binding, ty));
+    }
+    Ok(groups)
+}
+
+/// The layout entry of a whole buffer of type `ty` at `binding`, for compute shaders.
+pub fn buffer_layout(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// The size in bytes of struct `name` of the WGSL module `source` (its array stride), for
+/// tests that a host's constant matches the shader's layout; `None` where the module does
+/// not parse or has no such struct.
+pub fn struct_size(source: &str, name: &str) -> Option<u32> {
+    let module = naga::front::wgsl::parse_str(source).ok()?;
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).ok()?;
+    let (handle, _) = module
+        .types
+        .iter()
+        .find(|(_, ty)| ty.name.as_deref() == Some(name))?;
+    Some(layouter[handle].to_stride())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
