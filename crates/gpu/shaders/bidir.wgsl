@@ -6,16 +6,19 @@
 //
 // Bindings (group 0): 6 per light path of the frame its stored vertices (counted by the
 // light pass's first run) or where they start in its iteration (for its second, index.wgsl);
-// 7 the vertices, iteration by
-// iteration, each iteration's in the order of its light paths; 8 the frame's iterations; and
-// for the camera pass 9 and 10 the iterations' hash grids.
+// 7 the vertices, iteration by iteration, each iteration's in the order of its light paths;
+// 8 the frame's iterations; for the camera pass 9 and 10 the iterations' hash grids; and for
+// the light pass 14 the first vertices of each light path, `params.kept_vertices` a path.
 
 // What the light pass does (`Params::light_pass`): trace light paths for light tracing
-// alone (weight 1, with the camera's first hits), count the vertices each path would store,
-// or store them and splat with the bidirectional weights.
+// alone (weight 1, with the camera's first hits); or, for the bidirectional algorithms, in a
+// first run trace them, splat with the bidirectional weights, count each path's cacheable
+// vertices and keep the first `params.kept_vertices` of them in `scratch`, and, once the
+// index says where each path's vertices go, in a second run copy those into the cache and
+// trace again only the paths that have more, to store the rest.
 const LIGHT_TRACING: u32 = 0u;
-const COUNT_VERTICES: u32 = 1u;
-const STORE_VERTICES: u32 = 2u;
+const FIRST_VERTICES: u32 = 1u;
+const LATER_VERTICES: u32 = 2u;
 
 // The parts that run (`Params::plan`, vcm's `BidirPlan`): light vertices connect to the
 // camera; camera vertices take light samples and connect to cached vertices; they merge
@@ -40,6 +43,7 @@ struct SubpathMis {
 @group(0) @binding(6) var<storage, read_write> vertex_index: array<u32>;
 @group(0) @binding(7) var<storage, read_write> cache: array<LightVertex>;
 @group(0) @binding(8) var<storage, read> iterations: array<Iteration>;
+@group(0) @binding(14) var<storage, read_write> scratch: array<LightVertex>;
 
 // The MIS factors of the invocation's iteration, set where it starts.
 var<private> factors: MisFactors;

@@ -1,7 +1,9 @@
 // The light pass as one kernel: vcm's light pass with its camera connections (bidir's
 // light_pass.rs) — for light tracing alone together with the camera pass it keeps, which
 // finds the lights seen directly (camera_pass.rs); for the bidirectional algorithms run
-// twice, counting each path's cacheable vertices and then storing them (bidir.wgsl). Invocation k of a frame's dispatches takes index i = k / samples
+// twice, first counting each path's cacheable vertices (keeping the first few), then storing
+// them where the index says (bidir.wgsl). Invocation k of a frame's dispatches takes index
+// i = k / samples
 // of iteration first_sample + k % samples: pixel i's camera sample and the iteration's light
 // path i, each drawing the CPU's numbers for it, so that both backends follow the same
 // paths. A light path's vertices that scatter toward the camera and see it make splats.
@@ -106,18 +108,39 @@ fn seen_directly(pixel: u32, iteration: u32) -> vec3<f32> {
     return emission(s, hit, direction, -1.0);
 }
 
+// The cacheable vertices of light path `path` (`index` of its iteration), from the index
+// the device built: where the next path's start, or the iteration's end, after its own.
+fn indexed_count(path: u32, index: u32) -> u32 {
+    let sample = path % params.samples;
+    var end = iterations[sample].cache_count;
+    if index + 1u < params.width * params.height {
+        end = vertex_index[path + params.samples];
+    }
+    return end - vertex_index[path];
+}
+
 // Follows light path `index` of `iteration` (the frame's path `path`) from its light to its
 // end and does what `params.light_pass` says at each diffuse or glossy vertex: splat it
-// (light tracing alone: weight 1), count it, or store it in the cache and splat it with the
-// bidirectional weight. Returns the closest-hit and shadow rays it traced.
+// (light tracing alone: weight 1); or count it, keep it in `scratch` if it is one of the
+// first `params.kept_vertices` and splat it with the bidirectional weight; or store it in
+// the cache — after copying the kept ones there, and only for a path with more than those.
+// Returns the closest-hit and shadow rays it traced.
 fn trace_light_path(path: u32, index: u32, iteration: u32) -> vec2<u32> {
     let mode = params.light_pass;
+    let kept = params.kept_vertices;
     var light_rays = 0u;
     var shadow_rays = 0u;
     var stored = 0u;
-    var next_slot = 0u;
-    if mode == STORE_VERTICES {
-        next_slot = iterations[path % params.samples].cache_start + vertex_index[path];
+    var first_slot = 0u;
+    if mode == LATER_VERTICES {
+        first_slot = iterations[path % params.samples].cache_start + vertex_index[path];
+        let count = indexed_count(path, index);
+        for (var k = 0u; k < min(count, kept); k++) {
+            cache[first_slot + k] = scratch[path * kept + k];
+        }
+        if count <= kept {
+            return vec2(0u);
+        }
     }
     let key = hash_key3(params.seed, vec2(iteration, 0u), vec2(LIGHT_STREAM, 0u));
     var rng = sequence_sampler(key, index, params.independent != 0u);
@@ -183,12 +206,13 @@ fn trace_light_path(path: u32, index: u32, iteration: u32) -> vec2<u32> {
                     vec3(mis.d_vcm, mis.d_vc, mis.d_vm),
                     hit.v,
                 );
-                if mode == STORE_VERTICES {
-                    cache[next_slot] = vertex;
-                    next_slot += 1u;
+                if mode == FIRST_VERTICES && stored < kept {
+                    scratch[path * kept + stored] = vertex;
+                } else if mode == LATER_VERTICES && stored >= kept {
+                    cache[first_slot + stored] = vertex;
                 }
                 stored += 1u;
-                let splats = mode != COUNT_VERTICES && plan_has(SPLATS);
+                let splats = mode != LATER_VERTICES && plan_has(SPLATS);
                 if splats && segments < params.max_segments && out.valid {
                     splat = connect_to_camera(s, b, out, vertex, walk.medium);
                 }
@@ -216,7 +240,7 @@ fn trace_light_path(path: u32, index: u32, iteration: u32) -> vec2<u32> {
         }
         break;
     }
-    if mode == COUNT_VERTICES {
+    if mode == FIRST_VERTICES {
         vertex_index[path] = stored;
     }
     return vec2(light_rays, shadow_rays);

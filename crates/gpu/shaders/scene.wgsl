@@ -51,6 +51,8 @@ struct Params {
     light_pass: u32,
     // The parts of a bidirectional algorithm that run (`BidirPlan`, bidir.wgsl).
     plan: u32,
+    // Vertices of each light path the light pass's first run keeps in `scratch` (bidir.wgsl).
+    kept_vertices: u32,
 }
 
 // A triangle as shading sees it: corners (w: the material, the area light or NO_LIGHT, as

@@ -128,8 +128,9 @@ impl Integrator for GpuBidirectional {
                 ""
             };
             format!(
-                "WGSL kernels trace the light paths twice (counting their vertices, then \
-                 storing them in the cache in the CPU's order{grids}), then the camera paths"
+                "WGSL kernels trace the light paths (counting their vertices and keeping \
+                 the first few), store them in the cache in the CPU's order, tracing again \
+                 the paths with more{grids}, then the camera paths"
             )
         };
         let mut decisions = vec![Decision::runs(

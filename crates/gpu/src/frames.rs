@@ -38,6 +38,10 @@ const PATHS_PER_SOFTWARE_DISPATCH: u64 = 1 << 15;
 const PATH_STATE_BYTES: u64 = 176;
 /// Bytes of the wavefront's queue counts (`Wave` of `path_tracer.wgsl`).
 const WAVE_BYTES: u64 = 32;
+/// Cacheable vertices of each light path that the light pass's first run keeps, so that
+/// only the paths with more are traced again to store the rest (fewer where the frame's
+/// would not fit one binding): most light paths end within a few vertices.
+const KEPT_VERTICES: u64 = 4;
 /// Rounds of the wavefront recorded between two looks at how many paths are left.
 const ROUNDS_PER_SUBMIT: u32 = 4;
 /// Once at most 1 / TAIL_FRACTION of a dispatch's paths are left, each is taken to its end in
@@ -89,10 +93,11 @@ pub(crate) struct GpuFrames {
 /// The buffers of bind group 0 in binding order — the dispatches' parameters, the film's
 /// sums per channel, the dropped samples, the ray counts, the light vertex cache's index,
 /// the cache, the iterations, the hash grids' bucket starts and entries, the wavefront's
-/// path states, queues and queue counts — the film's and the queue counts' read-back
+/// path states, queues and queue counts, the light paths' kept vertices — the film's and
+/// the queue counts' read-back
 /// copies, the wavefront's dispatch arguments, and each kernel's bind group.
 struct FrameBuffers {
-    bindings: [wgpu::Buffer; 14],
+    bindings: [wgpu::Buffer; 15],
     readback: wgpu::Buffer,
     wave_readback: wgpu::Buffer,
     /// The workgroups of the wavefront's next round (indirect dispatch arguments).
@@ -112,6 +117,7 @@ const GRID_ENTRIES: usize = 10;
 const PATH_STATES: usize = 11;
 const QUEUES: usize = 12;
 const WAVE: usize = 13;
+const SCRATCH: usize = 14;
 
 impl GpuFrames {
     /// The kernels of `plan` compiled for `scene` on the hierarchy `bvh`, and their frames at
@@ -239,10 +245,12 @@ impl GpuFrames {
                     self.run_pass(0, pass(LightPass::LightTracing), frame, true)?
                 } else {
                     self.prepare_index(invocations, samples)?;
+                    let kept = self.prepare_kept_vertices(invocations);
                     self.write_iterations(&iterations);
-                    self.run_pass(0, pass(LightPass::CountVertices), frame, true)?
+                    let later = LightPass::LaterVertices { kept };
+                    self.run_pass(0, pass(LightPass::FirstVertices { kept }), frame, true)?
                         && self.index_vertices(&mut iterations)?
-                        && self.run_pass(0, pass(LightPass::StoreVertices), frame, false)?
+                        && self.run_pass(0, pass(later), frame, false)?
                         && (!bidir.plan.merges || self.build_grids(&mut iterations)?)
                         && self.run_pass(1, pass(LightPass::LightTracing), frame, false)?
                 }
@@ -369,6 +377,18 @@ impl GpuFrames {
         }
         self.buffers.fit(&self.kernels, INDEX, bytes);
         Ok(())
+    }
+
+    /// Makes room for the first vertices of the frame's `paths` light paths that the light
+    /// pass's first run keeps, and returns how many a path: [`KEPT_VERTICES`], or fewer where
+    /// they would not fit one binding (none at worst: every path is traced again).
+    fn prepare_kept_vertices(&mut self, paths: u64) -> u32 {
+        let vertex = size_of::<LightVertex>() as u64;
+        let fitting = self.kernels[0].gpu.max_binding_bytes() / (paths * vertex).max(1);
+        let kept = KEPT_VERTICES.min(fitting);
+        self.buffers
+            .fit(&self.kernels, SCRATCH, (paths * kept * vertex).max(vertex));
+        kept as u32
     }
 
     /// Turns the light vertices each light path counted into where they go in the cache, on
@@ -575,8 +595,8 @@ pub(crate) struct GridEntry {
 
 impl FrameBuffers {
     /// Buffers for the frames of `kernels` with `channel_bytes` of sums per channel; the
-    /// cache, its index, the iterations, the grids and the path tracer's paths and queues
-    /// hold nothing yet.
+    /// cache, its index, the iterations, the grids, the kept light vertices and the path
+    /// tracer's paths and queues hold nothing yet.
     fn new(kernels: &[SceneKernel], channel_bytes: u64) -> FrameBuffers {
         use wgpu::BufferUsages as U;
         let kernel = &kernels[0];
@@ -606,6 +626,11 @@ impl FrameBuffers {
             ("path states", PATH_STATE_BYTES, output),
             ("path queues", 16, output),
             ("queue counts", WAVE_BYTES, output),
+            (
+                "kept light vertices",
+                size_of::<LightVertex>() as u64,
+                output,
+            ),
         ]
         .map(|(label, bytes, usage)| kernel.buffer(label, bytes, usage));
         let [readback, wave_readback] = [

@@ -45,26 +45,41 @@ pub(crate) struct Params {
     connections: u32,
     light_pass: u32,
     plan: u32,
+    kept_vertices: u32,
+    padding: [u32; 3],
 }
 
 const _: () = assert!(
-    size_of::<Params>() == 144,
+    size_of::<Params>() == 160,
     "the size of Params in scene.wgsl"
 );
 
 /// Bytes of a dispatch's workgroup counts (x, y, z) read from a buffer.
 pub(crate) const INDIRECT_BYTES: u64 = 12;
 
-/// What the light pass does (`light_pass` of `Params`, bidir.wgsl).
+/// What the light pass does (`light_pass` and `kept_vertices` of `Params`, bidir.wgsl).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum LightPass {
     /// Light tracing alone, with the camera's first hits (and for kernels without a light
     /// pass).
-    LightTracing = 0,
-    /// Count each light path's cacheable vertices.
-    CountVertices = 1,
-    /// Store them in the cache and splat with the bidirectional weights.
-    StoreVertices = 2,
+    LightTracing,
+    /// Splat with the bidirectional weights, count each light path's cacheable vertices and
+    /// keep the first `kept` of them in the scratch buffer.
+    FirstVertices { kept: u32 },
+    /// Copy the kept vertices into the cache, and trace again the paths with more than
+    /// `kept` to store the rest.
+    LaterVertices { kept: u32 },
+}
+
+impl LightPass {
+    /// `light_pass` and `kept_vertices` of `Params`.
+    fn parameters(self) -> (u32, u32) {
+        match self {
+            LightPass::LightTracing => (0, 0),
+            LightPass::FirstVertices { kept } => (1, kept),
+            LightPass::LaterVertices { kept } => (2, kept),
+        }
+    }
 }
 
 /// What a dispatch's parameters take from an integrator's settings.
@@ -285,8 +300,10 @@ impl SceneKernel {
             // As the CPU's bidirectional algorithms count them: one per pixel.
             light_paths: (width * height) as f32,
             connections,
-            light_pass: light_pass as u32,
+            light_pass: light_pass.parameters().0,
             plan,
+            kept_vertices: light_pass.parameters().1,
+            padding: [0; 3],
         };
         (params, (x, y))
     }

@@ -82,11 +82,12 @@ impl Kernel {
     /// samples), 5 the ray counts; for the light pass 6 the cache's index; for both
     /// bidirectional passes 7 the cache and 8 the iterations; for the camera pass 9 and 10
     /// the hash grids' bucket starts and entries; for the path tracer 11 the paths' states,
-    /// 12 the queues and 13 their counts.
+    /// 12 the queues and 13 their counts; for the light pass 14 the light paths' first
+    /// vertices.
     pub fn dispatch_bindings(self) -> &'static [u32] {
         match self {
             Kernel::PathTracer => &[0, 1, 2, 3, 4, 5, 11, 12, 13],
-            Kernel::LightTracer => &[0, 1, 2, 3, 4, 5, 6, 7, 8],
+            Kernel::LightTracer => &[0, 1, 2, 3, 4, 5, 6, 7, 8, 14],
             Kernel::BidirCamera => &[0, 1, 2, 3, 4, 5, 7, 8, 9, 10],
         }
     }
