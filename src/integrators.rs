@@ -52,15 +52,6 @@ impl AlgorithmOption {
             AlgorithmOption::Fixed(algorithm) => Some(algorithm),
         }
     }
-
-    /// The algorithm it renders with GPU shading, which has every algorithm's kernels:
-    /// itself, and for `auto` path tracing (the GPU runs no pilots).
-    pub fn shaded_on_gpu(self) -> Algorithm {
-        match self {
-            AlgorithmOption::Auto => Algorithm::Pt,
-            AlgorithmOption::Fixed(algorithm) => algorithm,
-        }
-    }
 }
 
 impl clap::ValueEnum for AlgorithmOption {
@@ -244,17 +235,4 @@ pub fn image_size(scene: &Scene, width: u32, height: Option<u32>) -> (u32, u32) 
         ((width as f32 / aspect).round() as u32).max(1)
     });
     (width, height)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn gpu_shading_renders_path_tracing_for_auto_and_every_algorithm_as_itself() {
-        assert_eq!(AlgorithmOption::Auto.shaded_on_gpu(), Algorithm::Pt);
-        for algorithm in Algorithm::ALL {
-            assert_eq!(AlgorithmOption::Fixed(algorithm).shaded_on_gpu(), algorithm);
-        }
-    }
 }

@@ -30,7 +30,8 @@
 //!
 //! The choice is a pure function of the scene, the options and the seed — counts, not clock
 //! times, measure the cost — so shards of one render made on different machines choose the
-//! same algorithm. An image of fewer than [`MIN_PILOTED_PIXELS`] is not piloted: at 16
+//! same algorithm. With GPU shading the pilots are shaded on the GPU too ([`Pilots::Gpu`]),
+//! by the kernels that render the image, and weighed with the same costs. An image of fewer than [`MIN_PILOTED_PIXELS`] is not piloted: at 16
 //! samples per pixel its render would be smaller than its pilots, and path tracing, the
 //! cheapest per sample, renders it. Where only merging finds all of the scene's light
 //! ([`only_merging_finds_all_light`]), VCM renders without pilots.
@@ -41,10 +42,13 @@ use std::time::{Duration, Instant};
 use glam::{DVec3, Vec3};
 use vcm::metrics::RELMSE_EPSILON;
 use vcm::{Film, FrameStats, RenderError, Schedule, StopFlag};
+use vcm_gpu::GpuRenderError;
 use vcm_scene::Scene;
 use vcm_traversal::Traversal;
+use vcm_traversal_wgpu::GpuBvh;
 
-use super::{Algorithm, IntegratorOptions, MergeRadius, build};
+use super::{Algorithm, IntegratorOptions, MergeRadius, build, build_on_gpu};
+use crate::{BuiltTraversal, Shading};
 
 /// Frames (one sample per pixel each) every candidate renders: two halves of 4, each a
 /// stratified set of the sequence's points.
@@ -217,15 +221,57 @@ pub fn only_merging_finds_all_light(scene: &Scene) -> bool {
     delta_lights > 0 && scene.features.materials.specular
 }
 
+/// Where the pilots' paths are shaded: where the render's are.
+#[derive(Clone, Copy)]
+pub enum Pilots<'a> {
+    /// On the CPU, tracing rays with this backend.
+    Cpu(&'a Arc<dyn Traversal>),
+    /// In the GPU kernels ([`build_on_gpu`]), on the GPU backend's hierarchy.
+    Gpu(&'a GpuBvh),
+}
+
+impl<'a> Pilots<'a> {
+    /// The pilots of a render shaded as `shading` says on `built`: GPU shading needs the GPU
+    /// backend's hierarchy.
+    pub fn of(built: &'a BuiltTraversal, shading: Shading) -> Result<Pilots<'a>, RenderError> {
+        match (shading, &built.gpu) {
+            (Shading::Cpu, _) => Ok(Pilots::Cpu(&built.traversal)),
+            (Shading::Gpu, Some(bvh)) => Ok(Pilots::Gpu(bvh)),
+            (Shading::Gpu, None) => Err(RenderError::InvalidSetting(
+                "shading on the GPU needs the gpu backend, whose hierarchy it traces".into(),
+            )),
+        }
+    }
+
+    /// An integrator of `algorithm` for `scene` at `size` with `options`, shaded here.
+    fn build(
+        self,
+        algorithm: Algorithm,
+        scene: &Arc<Scene>,
+        size: (u32, u32),
+        options: &IntegratorOptions,
+    ) -> Result<Box<dyn vcm::Integrator>, RenderError> {
+        match self {
+            Pilots::Cpu(traversal) => build(algorithm, scene, Arc::clone(traversal), size, options),
+            Pilots::Gpu(bvh) => {
+                build_on_gpu(algorithm, scene, bvh, size, options).map_err(|error| match error {
+                    GpuRenderError::Render(error) => error,
+                    other => RenderError::DeviceFailed(other.to_string()),
+                })
+            }
+        }
+    }
+}
+
 /// Chooses the algorithm to render `scene` with at `size` with `options` by piloting the
-/// candidates (see the [module](self)). Where only merging finds all of the scene's light
+/// candidates, shaded where `shading` says (see the [module](self)). Where only merging finds all of the scene's light
 /// ([`only_merging_finds_all_light`]) VCM is chosen without pilots; an image of fewer than
 /// [`MIN_PILOTED_PIXELS`] is not piloted either: path tracing renders it ([`Unpiloted`]).
 /// Once `stop` is raised the pilot in progress is dropped, and those finished before it
 /// choose.
 pub fn choose(
     scene: &Arc<Scene>,
-    traversal: &Arc<dyn Traversal>,
+    shading: Pilots,
     size: (u32, u32),
     options: &IntegratorOptions,
     stop: &StopFlag,
@@ -258,7 +304,7 @@ pub fn choose(
     for &algorithm in &algorithms {
         // A sample may cost at most COMPARED_AT_SPP samples of the cheapest so far.
         let run = (algorithm, pilot_size, &options);
-        match pilot(run, (scene, traversal), cheapest * COMPARED_AT_SPP, stop)? {
+        match pilot(run, (scene, shading), cheapest * COMPARED_AT_SPP, stop)? {
             Outcome::Done(pilot) => {
                 cheapest = cheapest.min(pilot.cost);
                 pilots.push(pilot);
@@ -368,18 +414,12 @@ struct Pilot {
 /// `stop` cuts a frame short; an error if the device it traces or shades on failed.
 fn pilot(
     (algorithm, (width, height), options): (Algorithm, (u32, u32), &IntegratorOptions),
-    (scene, traversal): (&Arc<Scene>, &Arc<dyn Traversal>),
+    (scene, pilots): (&Arc<Scene>, Pilots),
     limit: f64,
     stop: &StopFlag,
 ) -> Result<Outcome, RenderError> {
     let start = Instant::now();
-    let mut integrator = build(
-        algorithm,
-        scene,
-        Arc::clone(traversal),
-        (width, height),
-        options,
-    )?;
+    let mut integrator = pilots.build(algorithm, scene, (width, height), options)?;
     integrator.set_schedule(Schedule::default())?;
     integrator.set_stop(stop.clone());
     let mut stats = FrameStats::default();

@@ -6,7 +6,7 @@ use std::ops::Range;
 use std::path::Path;
 use std::sync::Arc;
 
-use vcm_rs::integrators::choice::{self, Choice, Unpiloted};
+use vcm_rs::integrators::choice::{self, Choice, Pilots, Unpiloted};
 use vcm_rs::integrators::{self, Algorithm, IntegratorOptions, image_size};
 use vcm_rs::scene::Scene;
 use vcm_rs::traversal::Traversal;
@@ -26,7 +26,14 @@ fn choose(name: &str, seed: u64) -> Choice {
         ..IntegratorOptions::default()
     };
     let size = image_size(&scene, 512, None);
-    choice::choose(&scene, &traversal, size, &options, &StopFlag::new()).unwrap()
+    choice::choose(
+        &scene,
+        Pilots::Cpu(&traversal),
+        size,
+        &options,
+        &StopFlag::new(),
+    )
+    .unwrap()
 }
 
 fn algorithms(choice: &Choice) -> Vec<Algorithm> {
@@ -88,7 +95,8 @@ fn a_candidate_too_costly_to_compare_is_left_out_after_one_frame() {
         ..IntegratorOptions::default()
     };
     let stop = StopFlag::new();
-    let choice = choice::choose(&scene, &traversal, (64, 64), &options, &stop).unwrap();
+    let choice =
+        choice::choose(&scene, Pilots::Cpu(&traversal), (64, 64), &options, &stop).unwrap();
     assert_eq!(algorithms(&choice), [Algorithm::Pt]);
     assert_eq!(choice.algorithm, Algorithm::Pt);
     let [left_out] = &choice.too_costly[..] else {
@@ -100,7 +108,7 @@ fn a_candidate_too_costly_to_compare_is_left_out_after_one_frame() {
     // With the default connection, BPT is compared as usual.
     let usual = choice::choose(
         &scene,
-        &traversal,
+        Pilots::Cpu(&traversal),
         (64, 64),
         &IntegratorOptions::default(),
         &stop,
@@ -240,7 +248,8 @@ fn a_stop_before_the_pilots_leaves_path_tracing() {
     let stop = StopFlag::new();
     stop.raise();
     let options = IntegratorOptions::default();
-    let choice = choice::choose(&scene, &traversal, (64, 64), &options, &stop).unwrap();
+    let choice =
+        choice::choose(&scene, Pilots::Cpu(&traversal), (64, 64), &options, &stop).unwrap();
     assert_eq!(choice.algorithm, Algorithm::Pt);
     assert!(choice.candidates.is_empty());
 }

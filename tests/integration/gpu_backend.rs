@@ -234,10 +234,42 @@ fn assert_masks_agree(scene: &Arc<vcm_rs::scene::Scene>) -> Vec<u32> {
 }
 
 /// `--shading gpu`: the GPU path tracer renders the CPU path tracer's image up to rounding
-/// (`--algo auto` becomes pt, with no pilots), `--explain` says where paths are shaded, the
+/// (`--algo auto` renders pt: an image this small is not piloted), `--explain` says where
+/// paths are shaded, the
 /// bidirectional algorithms render on the GPU too (with their parts), GPU shading without the
 /// GPU backend fails with the reason before anything is written, and a scene with an
 /// environment map renders.
+/// `--algo auto` with `--shading gpu` pilots the candidates on the GPU, and chooses what
+/// pilots on the CPU choose: VCM for the water's caustics, path tracing for the plain box.
+#[test]
+fn gpu_shading_pilots_auto_on_the_gpu() {
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("auto.exr");
+    let chosen = |scene: &str, shading: &[&str]| {
+        let scene = format!("scenes/{scene}.gltf");
+        let common = [
+            "render", &scene, "--spp", "1", "--width", "64", "--height", "64",
+        ];
+        let out = ["-o", out.to_str().unwrap()];
+        let args: Vec<&str> = common.iter().chain(shading).chain(&out).copied().collect();
+        let output = vcm(&args, &[]);
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert!(output.status.success(), "{stderr}");
+        let line = stderr.lines().find(|l| l.starts_with("algorithm: "));
+        let line = line.unwrap_or_else(|| panic!("no choice told: {stderr}"));
+        assert!(line.contains("pilots of"), "{line}");
+        line.split_whitespace().nth(1).unwrap().to_owned()
+    };
+    let on_gpu = ["--backend", "gpu", "--shading", "gpu"];
+    for (scene, expected) in [("cornell-water", "vcm"), ("cornell-box", "pt")] {
+        assert_eq!(chosen(scene, &[]), expected, "{scene} on the CPU");
+        assert_eq!(chosen(scene, &on_gpu), expected, "{scene} on the GPU");
+    }
+}
+
 #[test]
 fn gpu_shading_renders_the_cpu_path_tracers_image() {
     if !have_gpu() {
@@ -269,7 +301,10 @@ fn gpu_shading_renders_the_cpu_path_tracers_image() {
     run(&["--algo", "pt"], &cpu);
     let (stdout, stderr) = run(&["--backend", "gpu", "--shading", "gpu", "--explain"], &gpu);
     assert!(stdout.contains("shading on the GPU: runs"), "{stdout}");
-    assert!(!stderr.contains("pilot"), "auto ran pilots: {stderr}");
+    assert!(
+        stderr.contains("algorithm: pt (an image of fewer"),
+        "{stderr}"
+    );
     let read = |path: &str| RgbImage::read_exr(std::path::Path::new(path)).unwrap();
     let (a, b) = (read(&cpu), read(&gpu));
     let close = a

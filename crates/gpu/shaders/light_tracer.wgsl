@@ -264,6 +264,10 @@ fn trace_light_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let rays = trace_light_path(path, index, iteration);
-    atomicAdd(&ray_counts[1], rays.x);
-    atomicAdd(&ray_counts[2], rays.y);
+    // A light path's rays count once, as on the CPU: not again where it is traced again to
+    // store its later vertices.
+    if params.light_pass != LATER_VERTICES {
+        atomicAdd(&ray_counts[1], rays.x);
+        atomicAdd(&ray_counts[2], rays.y);
+    }
 }

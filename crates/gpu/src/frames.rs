@@ -90,6 +90,17 @@ pub(crate) struct GpuFrames {
     failure: Option<String>,
 }
 
+/// A frame rendered on the device.
+struct RenderedFrame {
+    film: Film,
+    /// The rays traced, by the kernels' kinds.
+    rays: [u64; 3],
+    /// The invocations of a pass.
+    invocations: u64,
+    /// The light vertices cached.
+    light_vertices: u64,
+}
+
 /// The buffers of bind group 0 in binding order — the dispatches' parameters, the film's
 /// sums per channel, the dropped samples, the ray counts, the light vertex cache's index,
 /// the cache, the iterations, the hash grids' bucket starts and entries, the wavefront's
@@ -207,12 +218,13 @@ impl GpuFrames {
         );
         let start = std::time::Instant::now();
         match self.render_frame(first_sample, sampling) {
-            Ok(Some((frame, rays, invocations))) => {
+            Ok(Some(frame)) => {
                 // Exact sums: the same film as adding each sample and splat to `film`.
-                film.merge(&frame);
+                film.merge(&frame.film);
                 FrameStats {
                     shading_time: start.elapsed(),
-                    ..stats(rays, invocations)
+                    light_vertices: frame.light_vertices,
+                    ..stats(frame.rays, frame.invocations)
                 }
             }
             Ok(None) => FrameStats::INTERRUPTED,
@@ -223,17 +235,18 @@ impl GpuFrames {
         }
     }
 
-    /// The frame's film, rays and invocations per pass; `None` where it was stopped.
+    /// The frame; `None` where it was stopped.
     fn render_frame(
         &mut self,
         first_sample: u32,
         sampling: &Sampling,
-    ) -> Result<Option<(Film, [u64; 3], u64)>, String> {
+    ) -> Result<Option<RenderedFrame>, String> {
         let (width, height) = self.size;
         let samples = self.samples_per_frame;
         let invocations = u64::from(width) * u64::from(height) * u64::from(samples);
         let frame = (first_sample, samples);
         let pass = |light_pass| (sampling, light_pass);
+        let mut cached = 0;
         let done = match self.plan {
             FramePlan::PathTracing => {
                 self.run_pass(0, pass(LightPass::LightTracing), frame, true)?
@@ -248,19 +261,27 @@ impl GpuFrames {
                     let kept = self.prepare_kept_vertices(invocations);
                     self.write_iterations(&iterations);
                     let later = LightPass::LaterVertices { kept };
-                    self.run_pass(0, pass(LightPass::FirstVertices { kept }), frame, true)?
-                        && self.index_vertices(&mut iterations)?
-                        && self.run_pass(0, pass(later), frame, false)?
-                        && (!bidir.plan.merges || self.build_grids(&mut iterations)?)
-                        && self.run_pass(1, pass(LightPass::LightTracing), frame, false)?
+                    let done =
+                        self.run_pass(0, pass(LightPass::FirstVertices { kept }), frame, true)?
+                            && self.index_vertices(&mut iterations)?
+                            && self.run_pass(0, pass(later), frame, false)?
+                            && (!bidir.plan.merges || self.build_grids(&mut iterations)?)
+                            && self.run_pass(1, pass(LightPass::LightTracing), frame, false)?;
+                    cached = iterations.iter().map(|it| u64::from(it.cache_count)).sum();
+                    done
                 }
             }
         };
         if !done {
             return Ok(None);
         }
-        self.read_film(samples)
-            .map(|(film, rays)| Some((film, rays, invocations)))
+        let (film, rays) = self.read_film(samples)?;
+        Ok(Some(RenderedFrame {
+            film,
+            rays,
+            invocations,
+            light_vertices: cached,
+        }))
     }
 
     /// Runs kernel `kernel` with `sampling` and `light_pass` over every invocation of

@@ -10,7 +10,8 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use vcm_rs::gpu::GpuRenderError;
-use vcm_rs::integrators::{Algorithm, choice};
+use vcm_rs::integrators::Algorithm;
+use vcm_rs::integrators::choice::{self, Pilots};
 use vcm_rs::render_loop::{self, Budget, Frames};
 use vcm_rs::state::RenderState as State;
 use vcm_rs::vcm::{Film, StopFlag};
@@ -147,7 +148,6 @@ fn run(
     let built = py
         .detach(|| scene.traversal(request.backend))
         .map_err(vcm_error)?;
-    let traversal = &built.traversal;
     let started = Instant::now();
     let stop = StopFlag::new();
     let algorithm = match request.algorithm.fixed() {
@@ -155,7 +155,8 @@ fn run(
         // Pilots, stopped by Ctrl-C as a render is.
         None => {
             let options = &request.options;
-            let choose = || choice::choose(&scene.data, traversal, size, options, &stop);
+            let pilots = Pilots::of(&built, request.shading).map_err(vcm_error)?;
+            let choose = || choice::choose(&scene.data, pilots, size, options, &stop);
             run_released(py, &stop, |_| Ok(()), choose)?
                 .map_err(vcm_error)?
                 .algorithm

@@ -113,14 +113,10 @@ impl Request {
                 "give spp (samples per pixel) or time (seconds), not both",
             ));
         }
-        if shading == Shading::Gpu {
-            if backend != Backend::Gpu {
-                return Err(PyValueError::new_err(
-                    "shading: \"gpu\" shades on the GPU backend's device: give backend=\"gpu\" too",
-                ));
-            }
-            // "auto" means path tracing there: the GPU runs no pilots.
-            algorithm = AlgorithmOption::Fixed(algorithm.shaded_on_gpu());
+        if shading == Shading::Gpu && backend != Backend::Gpu {
+            return Err(PyValueError::new_err(
+                "shading: \"gpu\" shades on the GPU backend's device: give backend=\"gpu\" too",
+            ));
         }
         Ok(Request {
             algorithm,

@@ -183,7 +183,7 @@ fn radius_row(radius: &mut MergeRadius, ui: &mut egui::Ui) {
 }
 
 /// Where paths are shaded: on the GPU only on the GPU backend (else back to the CPU; `auto`
-/// renders path tracing there, as `vcm render` does).
+/// pilots there on the GPU, as `vcm render` does).
 fn shading_row(settings: &mut RenderSettings, ui: &mut egui::Ui) {
     let possible = settings.backend == Backend::Gpu;
     if !possible {

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use vcm::image_io::RgbImage;
 use vcm::{Film, FrameStats, Integrator, StopFlag};
-use vcm_rs::integrators::choice::{self, Choice, Unpiloted};
+use vcm_rs::integrators::choice::{self, Choice, Pilots, Unpiloted};
 use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions};
 use vcm_rs::render_loop::{Frames, Remaining};
 use vcm_rs::state::SampleRanges;
@@ -209,6 +209,7 @@ const KEPT_CHOICES: usize = 8;
 struct ChoiceKey {
     scene: u64,
     backend: Backend,
+    shading: Shading,
     options: IntegratorOptions,
     size: (u32, u32),
 }
@@ -274,14 +275,9 @@ impl Worker {
                 ..Scene::clone(&job.scene)
             })
         };
-        let (algorithm, chosen) = match (settings.algorithm, settings.shading) {
-            (AlgorithmOption::Fixed(algorithm), _) => (algorithm, None),
-            (AlgorithmOption::Auto, Shading::Gpu) => {
-                // What GPU shading renders for `auto`: no pilots there.
-                let algorithm = settings.algorithm.shaded_on_gpu();
-                (algorithm, Some("auto: path tracing on the GPU".into()))
-            }
-            (AlgorithmOption::Auto, Shading::Cpu) => {
+        let (algorithm, chosen) = match settings.algorithm {
+            AlgorithmOption::Fixed(algorithm) => (algorithm, None),
+            AlgorithmOption::Auto => {
                 let (algorithm, how) = self.choose(job, &scene, &built)?;
                 (algorithm, Some(how))
             }
@@ -318,15 +314,18 @@ impl Worker {
         let key = ChoiceKey {
             scene: job.view.scene,
             backend: settings.backend,
+            shading: settings.shading,
             options: settings.integrator.clone(),
             size: job.view.size,
         };
         if let Some((_, algorithm, how)) = self.choices.iter().find(|(kept, ..)| *kept == key) {
             return Ok((*algorithm, format!("{how} (kept)")));
         }
+        let pilots = Pilots::of(built, settings.shading)
+            .map_err(|e| format!("cannot choose the algorithm: {e}"))?;
         let choice = choice::choose(
             scene,
-            &built.traversal,
+            pilots,
             job.view.size,
             &settings.integrator,
             &StopFlag::default(),
@@ -652,7 +651,8 @@ pub(crate) mod tests {
         let shown = wait_for(&renderer, &woken, |u| frames(u, 1, 1));
         let traversal = Backend::Cpu.traversal(&scene).unwrap();
         let stop = StopFlag::default();
-        let expected = choice::choose(&scene, &traversal, size, &options, &stop).unwrap();
+        let pilots = Pilots::Cpu(&traversal);
+        let expected = choice::choose(&scene, pilots, size, &options, &stop).unwrap();
         assert_eq!(shown.algorithm, expected.algorithm);
         let chosen = shown.chosen.expect("auto says how it chose");
         assert!(chosen.starts_with("auto: pilots at 64×64"), "{chosen}");

@@ -13,7 +13,7 @@ pub struct RenderSettings {
     pub algorithm: AlgorithmOption,
     /// The ray traversal backend.
     pub backend: Backend,
-    /// Where paths are shaded (on the GPU: path tracing on the GPU backend only).
+    /// Where paths are shaded (on the GPU: with the GPU backend only).
     pub shading: Shading,
     /// Seed, maximum path length, connections, merge radius and its reduction.
     pub integrator: IntegratorOptions,

@@ -16,6 +16,7 @@ use serde::Deserialize;
 use vcm::Film;
 use vcm::image_io::{RgbImage, write_error_png};
 use vcm::metrics::relative_error_per_pixel;
+use vcm_rs::integrators::choice::Pilots;
 use vcm_rs::integrators::{AlgorithmOption, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
@@ -469,16 +470,13 @@ fn render(
         .built(options.backend, tell_traversal)
         .context("building the ray traversal backend")?;
     let started = std::time::Instant::now();
-    let algorithm = match options.shading {
-        Shading::Cpu => crate::render::settle_algorithm(
-            options.algo,
-            (scene, &built.traversal),
-            size,
-            &options.integrator,
-            (stop, false),
-        )?,
-        Shading::Gpu => options.algo.shaded_on_gpu(),
-    };
+    let algorithm = crate::render::settle_algorithm(
+        options.algo,
+        (scene, Pilots::of(built, options.shading)?),
+        size,
+        &options.integrator,
+        (stop, false),
+    )?;
     let frames = Frames::new(options.schedule, options.backend);
     let samples_left = budget.remaining(0, std::time::Duration::ZERO).samples;
     let mut integrator = frames.shaded_integrator(

@@ -22,7 +22,7 @@ use vcm_rs::traversal::Traversal;
 use vcm_rs::{Backend, BuiltTraversal, Shading};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic, Watch};
-use vcm_rs::integrators::choice::{self, Unpiloted};
+use vcm_rs::integrators::choice::{self, Pilots, Unpiloted};
 use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
@@ -370,7 +370,6 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
         None => None,
     };
     let built = build_backend(args.setup.backend, &scene)?;
-    let traversal = Arc::clone(&built.traversal);
     let started = Instant::now();
     let stop = stop_flag()?;
     // A resumed render keeps the algorithm its state records.
@@ -380,16 +379,9 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     };
     let options = &plan.settings.options;
     let how = (&stop, args.explain);
-    plan.settings.algorithm = match args.shading {
-        Shading::Cpu => settle_algorithm(
-            algorithm,
-            (&scene, &traversal),
-            (width, height),
-            options,
-            how,
-        )?,
-        Shading::Gpu => algorithm.shaded_on_gpu(),
-    };
+    let pilots = Pilots::of(&built, args.shading)?;
+    plan.settings.algorithm =
+        settle_algorithm(algorithm, (&scene, pilots), (width, height), options, how)?;
     let mut state = prepare_state(&mut plan, &scene, args)?;
     let samples_left = plan.budget.remaining(0, Duration::ZERO).samples;
     let mut integrator = args.setup.shaded_integrator(
@@ -541,11 +533,11 @@ fn prepare_state(
 }
 
 /// The algorithm `algorithm` names, or for `auto` the one that renders `scene` at `size`
-/// with `options` ([`choice::choose`]), told in one line, or with `explain` in a table of
-/// the candidates.
+/// with `options` ([`choice::choose`], its pilots shaded where `pilots` says), told in one
+/// line, or with `explain` in a table of the candidates.
 pub fn settle_algorithm(
     algorithm: AlgorithmOption,
-    (scene, traversal): (&Arc<Scene>, &Arc<dyn Traversal>),
+    (scene, pilots): (&Arc<Scene>, Pilots),
     size: (u32, u32),
     options: &IntegratorOptions,
     (stop, explain): (&StopFlag, bool),
@@ -554,7 +546,7 @@ pub fn settle_algorithm(
         return Ok(algorithm);
     }
     let choice =
-        choice::choose(scene, traversal, size, options, stop).context("choosing the algorithm")?;
+        choice::choose(scene, pilots, size, options, stop).context("choosing the algorithm")?;
     let (width, height) = choice.pilot_size;
     match choice.unpiloted {
         Some(Unpiloted::SmallImage) => tell!(
