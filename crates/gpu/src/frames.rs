@@ -79,6 +79,8 @@ pub(crate) struct GpuFrames {
     /// The image size.
     pub size: (u32, u32),
     paths_per_dispatch: u64,
+    /// The most vertices of each light path the light pass's first run keeps.
+    kept_vertices: u64,
     buffers: FrameBuffers,
     /// The kernels that build the light vertex index, once a frame caches.
     index: Option<IndexBuilder>,
@@ -189,6 +191,7 @@ impl GpuFrames {
             plan,
             size,
             paths_per_dispatch,
+            kept_vertices: KEPT_VERTICES,
             buffers,
             index: None,
             grids: None,
@@ -406,7 +409,7 @@ impl GpuFrames {
     fn prepare_kept_vertices(&mut self, paths: u64) -> u32 {
         let vertex = size_of::<LightVertex>() as u64;
         let fitting = self.kernels[0].gpu.max_binding_bytes() / (paths * vertex).max(1);
-        let kept = KEPT_VERTICES.min(fitting);
+        let kept = self.kept_vertices.min(fitting);
         self.buffers
             .fit(&self.kernels, SCRATCH, (paths * kept * vertex).max(vertex));
         kept as u32
@@ -561,6 +564,12 @@ impl GpuFrames {
     #[cfg(test)]
     pub fn set_paths_per_dispatch(&mut self, paths: u64) {
         self.paths_per_dispatch = paths;
+    }
+
+    /// At most `kept` vertices of each light path kept by the light pass's first run.
+    #[cfg(test)]
+    pub fn set_kept_vertices(&mut self, kept: u64) {
+        self.kept_vertices = kept;
     }
 }
 
@@ -872,8 +881,13 @@ mod tests {
     }
 
     /// The film of two frames of 3 samples per pixel of `algorithm` on `scene` at 24 × 18,
-    /// rendered in dispatches of at most `paths` invocations.
-    fn film_of(algorithm: Algorithm, (scene, bvh): &(Arc<Scene>, GpuBvh), paths: u64) -> Film {
+    /// rendered in dispatches of at most `paths` invocations, keeping at most `kept`
+    /// vertices of each light path in the light pass's first run.
+    fn film_of(
+        algorithm: Algorithm,
+        (scene, bvh): &(Arc<Scene>, GpuBvh),
+        (paths, kept): (u64, u64),
+    ) -> Film {
         let size = (24, 18);
         let (plan, sampling) = match algorithm {
             Algorithm::Pt => (
@@ -895,6 +909,7 @@ mod tests {
         };
         let mut frames = GpuFrames::new(plan, Arc::clone(scene), bvh, size).unwrap();
         frames.set_paths_per_dispatch(paths);
+        frames.set_kept_vertices(kept);
         let schedule = Schedule {
             samples_per_frame: 3,
             ..Schedule::ONE_BATCH
@@ -911,7 +926,8 @@ mod tests {
     }
 
     /// Each algorithm's film is the same bit for bit whether a frame's passes are one
-    /// dispatch each or many (the device's sums are exact), and not black.
+    /// dispatch each or many (the device's sums are exact), and whether the light pass keeps
+    /// a light path's first vertices or traces it again for all of them; and not black.
     #[test]
     fn the_film_does_not_depend_on_the_dispatches() {
         let Some(gpu) = device_or_skip().map(Arc::new) else {
@@ -919,8 +935,11 @@ mod tests {
         };
         let scene = scene_on(&gpu, "cornell-box");
         for algorithm in Algorithm::ALL {
-            let whole = film_of(algorithm, &scene, 1 << 20);
-            assert_eq!(film_of(algorithm, &scene, 97), whole, "{algorithm:?}");
+            let whole = film_of(algorithm, &scene, (1 << 20, KEPT_VERTICES));
+            for (paths, kept) in [(97, KEPT_VERTICES), (1 << 20, 0), (1 << 20, 1)] {
+                let film = film_of(algorithm, &scene, (paths, kept));
+                assert_eq!(film, whole, "{algorithm:?}, {paths} paths, {kept} kept");
+            }
             assert!(whole.mean().iter().any(|p| p.max_element() > 0.0));
         }
     }
