@@ -55,8 +55,9 @@ pub(crate) enum FramePlan {
     /// The path tracer: its wavefront, started over each dispatch's paths.
     PathTracing,
     /// A bidirectional algorithm: light tracing in one pass of the light kernel; the others
-    /// count their light vertices, store them, build the iterations' hash grids where they
-    /// merge, then run the camera pass.
+    /// trace their light paths (counting their vertices, keeping the first few), store the
+    /// vertices in the cache (tracing the longer paths again), build the iterations' hash
+    /// grids where they merge, then run the camera pass.
     Bidirectional(BidirFrames),
 }
 
@@ -107,8 +108,8 @@ struct RenderedFrame {
 /// sums per channel, the dropped samples, the ray counts, the light vertex cache's index,
 /// the cache, the iterations, the hash grids' bucket starts and entries, the wavefront's
 /// path states, queues and queue counts, the light paths' kept vertices — the film's and
-/// the queue counts' read-back
-/// copies, the wavefront's dispatch arguments, and each kernel's bind group.
+/// the queue counts' read-back copies, the wavefront's dispatch arguments, and each
+/// kernel's bind group.
 struct FrameBuffers {
     bindings: [wgpu::Buffer; 15],
     readback: wgpu::Buffer,
@@ -157,17 +158,11 @@ impl GpuFrames {
                 gpu.max_binding_bytes()
             )));
         }
-        let mut paths_per_dispatch = if gpu.is_software() {
+        let paths_per_dispatch = if gpu.is_software() {
             PATHS_PER_SOFTWARE_DISPATCH
         } else {
             PATHS_PER_DISPATCH
         };
-        if let FramePlan::PathTracing = plan {
-            // The paths' states fit one binding.
-            let fitting = gpu.max_binding_bytes() / PATH_STATE_BYTES;
-            paths_per_dispatch =
-                paths_per_dispatch.min(fitting / WORKGROUP_SIZE as u64 * WORKGROUP_SIZE as u64);
-        }
         let kernels = match plan {
             FramePlan::PathTracing => vec![SceneKernel::new(Kernel::PathTracer, scene, bvh)?],
             FramePlan::Bidirectional(bidir) => {
@@ -180,13 +175,8 @@ impl GpuFrames {
                 }
             }
         };
-        let mut buffers = FrameBuffers::new(&kernels, channel_bytes);
-        if let FramePlan::PathTracing = plan {
-            buffers.fit(&kernels, PATH_STATES, paths_per_dispatch * PATH_STATE_BYTES);
-            // Two round queues and the shadow queue.
-            buffers.fit(&kernels, QUEUES, 3 * 4 * paths_per_dispatch);
-        }
-        Ok(GpuFrames {
+        let buffers = FrameBuffers::new(&kernels, channel_bytes);
+        let mut frames = GpuFrames {
             kernels,
             plan,
             size,
@@ -198,7 +188,24 @@ impl GpuFrames {
             samples_per_frame: 1,
             stop: StopFlag::new(),
             failure: None,
-        })
+        };
+        frames.fit_wavefront();
+        Ok(frames)
+    }
+
+    /// Makes room for the path tracer's wavefront over a dispatch's paths — their states,
+    /// the two round queues and the shadow queue — with fewer paths a dispatch where their
+    /// states would not fit one binding.
+    fn fit_wavefront(&mut self) {
+        if let FramePlan::PathTracing = self.plan {
+            let fitting = self.kernels[0].gpu.max_binding_bytes() / PATH_STATE_BYTES;
+            let workgroup = u64::from(WORKGROUP_SIZE);
+            let paths = self.paths_per_dispatch.min(fitting / workgroup * workgroup);
+            self.paths_per_dispatch = paths;
+            let b = &mut self.buffers;
+            b.fit(&self.kernels, PATH_STATES, paths * PATH_STATE_BYTES);
+            b.fit(&self.kernels, QUEUES, 3 * 4 * paths);
+        }
     }
 
     /// Renders the frame starting at sample `first_sample` with `sampling`: each pass an
@@ -564,6 +571,7 @@ impl GpuFrames {
     #[cfg(test)]
     pub fn set_paths_per_dispatch(&mut self, paths: u64) {
         self.paths_per_dispatch = paths;
+        self.fit_wavefront();
     }
 
     /// At most `kept` vertices of each light path kept by the light pass's first run.
