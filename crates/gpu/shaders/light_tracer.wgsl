@@ -3,10 +3,9 @@
 // finds the lights seen directly (camera_pass.rs); for the bidirectional algorithms run
 // twice, first counting each path's cacheable vertices (keeping the first few), then storing
 // them where the index says (bidir.wgsl). Invocation k of a frame's dispatches takes index
-// i = k / samples
-// of iteration first_sample + k % samples: pixel i's camera sample and the iteration's light
-// path i, each drawing the CPU's numbers for it, so that both backends follow the same
-// paths. A light path's vertices that scatter toward the camera and see it make splats.
+// i = k / samples of iteration first_sample + k % samples: pixel i's camera sample and the
+// iteration's light path i, each drawing the CPU's numbers for it, so that both backends
+// follow the same paths. A light path's vertices that scatter toward the camera and see it make splats.
 // Camera samples and splats go to the film (film.wgsl). Outputs (group 0): 1–4 the film, 5
 // the rays traced (camera, light, shadow).
 
@@ -109,7 +108,8 @@ fn seen_directly(pixel: u32, iteration: u32) -> vec3<f32> {
 }
 
 // The cacheable vertices of light path `path` (`index` of its iteration), from the index
-// the device built: where the next path's start, or the iteration's end, after its own.
+// the device built: from where its vertices start to where the next path's do (or its
+// iteration's end).
 fn indexed_count(path: u32, index: u32) -> u32 {
     let sample = path % params.samples;
     var end = iterations[sample].cache_count;

@@ -8,10 +8,10 @@
 // shadow ray; `trace_shadows` traces those (rays that all test occlusion only); and
 // `advance_paths` (one invocation) makes the next queue the one taken and sizes the next
 // round's dispatches (indirect dispatches: the host copies their workgroups from `wave`).
-// Once few paths are left, `finish_paths` takes each to its end in one invocation. A path adds its radiance to its pixel in the film (film.wgsl) once it has
-// ended and its last shadow ray is traced. Each path adds its radiance in the order of the
-// CPU's path, so the queues' order (atomic appends) changes nothing: the film's sums are
-// exact. Paths are numbered pixel · samples + sample, the CPU's key: path k draws the CPU's
+// Once few paths are left, `finish_paths` takes each to its end in one invocation. A path
+// adds its radiance to its pixel in the film (film.wgsl) once it has ended and its last
+// shadow ray is traced. Each path sums its radiance in the order of the CPU's path, so the
+// queues' order (atomic appends) changes nothing: the film's sums are exact. Paths are numbered pixel · samples + sample, the CPU's key: path k draws the CPU's
 // numbers for that pixel and sample.
 //
 // Bindings (group 0): 1–4 the film, 5 the closest-hit and shadow rays traced, 11 the paths'

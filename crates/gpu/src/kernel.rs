@@ -157,7 +157,7 @@ pub(crate) struct SceneKernel {
     pub gpu: Arc<GpuDevice>,
     pub scene: Arc<Scene>,
     pub pipeline: wgpu::ComputePipeline,
-    /// The pipelines of its stages ([`Kernel::stages`]), on the entry point's layout.
+    /// The pipelines of its stages ([`Kernel::stages`]), which share its bind groups.
     stages: Vec<wgpu::ComputePipeline>,
     /// The scene's buffers by bind group: 1 the hierarchy, 2 the alpha masks where there are
     /// any, then the shading data ([`shading_group`]).

@@ -51,8 +51,8 @@ impl Kernel {
     /// Every kernel.
     pub const ALL: [Kernel; 3] = [Kernel::PathTracer, Kernel::LightTracer, Kernel::BidirCamera];
 
-    /// Its entry point whose bindings every stage's are among: the one its bind groups are
-    /// laid out for.
+    /// Its main entry point, whose pipeline its bind groups are made for (the stages of a
+    /// kernel of several share one layout).
     pub fn entry(self) -> &'static str {
         match self {
             Kernel::PathTracer => "extend_paths",
