@@ -5,7 +5,8 @@
 # (`--shading gpu`: whole paths in kernels) and with the CPU backend, on the same machine, as a
 # Markdown table of
 # samples/s, rays/s and where the time went (traversal, which on the GPU backend is the whole
-# `Traversal` call with its transfers, and shading; with GPU shading all of it is "shading").
+# `Traversal` call with its transfers, and shading; with GPU shading all of it is "shading",
+# and the GPU's time in the kernels, from timestamps, is its own column).
 #
 #   tools/gpu-bench.sh                        # builds `vcm` with cargo, then measures
 #   VCM_BIN=path/to/vcm tools/gpu-bench.sh    # measures a binary built elsewhere
@@ -36,8 +37,8 @@ if command -v nvidia-smi > /dev/null; then
 fi
 echo "vcm: $bin, images in $out, ${size}², $(date -u +%Y-%m-%dT%H:%MZ)"
 echo
-echo "| scene | algo | backend | shading | spp | M samples/s | M rays/s | time split |"
-echo "| --- | --- | --- | --- | --- | --- | --- | --- |"
+echo "| scene | algo | backend | shading | spp | M samples/s | M rays/s | time split | GPU kernels |"
+echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
 adapter=""
 for scene in $scenes; do
     # algorithm, backend, shading, samples per pixel
@@ -53,16 +54,17 @@ for scene in $scenes; do
         image="$out/$scene-$algo-$backend-$shading.exr"
         if ! log=$("$bin" render "scenes/$scene.gltf" --algo "$algo" --backend "$backend" \
             --shading "$shading" --width "$size" --height "$size" --spp "$spp" -o "$image" 2>&1); then
-            echo "| $scene | $algo | $backend | $shading | $spp | failed: $(tail -n1 <<< "$log") | | |"
+            echo "| $scene | $algo | $backend | $shading | $spp | failed: $(tail -n1 <<< "$log") | | | |"
             continue
         fi
         samples=$(grep -o '[0-9.]* M samples/s' <<< "$log" | head -n1 | cut -d' ' -f1)
         rays=$(grep '^rays:' <<< "$log" | grep -o '[0-9.]* M/s' | head -n1 | cut -d' ' -f1)
         split=$(grep '^time:' <<< "$log" | sed 's/^time: //')
+        kernels=$(grep '^GPU kernels:' <<< "$log" | sed 's/^GPU kernels: //' || true)
         if [ "$backend" = gpu ] && [ -z "$adapter" ]; then
             adapter=$(grep -m1 '^traversal:' <<< "$log" || true)
         fi
-        echo "| $scene | $algo | $backend | $shading | $spp | $samples | $rays | $split |"
+        echo "| $scene | $algo | $backend | $shading | $spp | $samples | $rays | $split | $kernels |"
     done
 done
 echo

@@ -4,6 +4,7 @@
 //! into the render's once the frame is whole — and the state that goes with it.
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use bytemuck::{Pod, Zeroable};
 use vcm::exact_sum::{ExactSum, WORDS};
@@ -20,6 +21,7 @@ use crate::kernel::{
     INDIRECT_BYTES, LightPass, Params, Sampling, SceneKernel, check_host_estimate, film_estimate,
 };
 use crate::shader::{Kernel, WORKGROUP_SIZE};
+use crate::timing::PassTimer;
 
 /// u32 limbs of one exact sum on the device (`SUM_LIMBS` of `film.wgsl`).
 const SUM_LIMBS: usize = 2 * WORDS;
@@ -87,6 +89,8 @@ pub(crate) struct GpuFrames {
     index: Option<IndexBuilder>,
     /// The kernels that build the hash grids, once a frame merges.
     grids: Option<GridBuilder>,
+    /// Times the scene kernels' passes, where the device writes timestamps.
+    timer: Option<PassTimer>,
     samples_per_frame: u32,
     stop: StopFlag,
     /// What failed on the GPU, once something has: no frame renders after it.
@@ -176,6 +180,7 @@ impl GpuFrames {
             }
         };
         let buffers = FrameBuffers::new(&kernels, channel_bytes);
+        let timer = PassTimer::new(gpu);
         let mut frames = GpuFrames {
             kernels,
             plan,
@@ -185,6 +190,7 @@ impl GpuFrames {
             buffers,
             index: None,
             grids: None,
+            timer,
             samples_per_frame: 1,
             stop: StopFlag::new(),
             failure: None,
@@ -227,12 +233,15 @@ impl GpuFrames {
             "film size differs from the settings"
         );
         let start = std::time::Instant::now();
-        match self.render_frame(first_sample, sampling) {
+        let rendered = self.render_frame(first_sample, sampling);
+        let device_time = self.timer.as_ref().map_or(Duration::ZERO, PassTimer::take);
+        match rendered {
             Ok(Some(frame)) => {
                 // Exact sums: the same film as adding each sample and splat to `film`.
                 film.merge(&frame.film);
                 FrameStats {
                     shading_time: start.elapsed(),
+                    device_time,
                     light_vertices: frame.light_vertices,
                     ..stats(frame.rays, frame.invocations)
                 }
@@ -313,13 +322,13 @@ impl GpuFrames {
             Vec::new()
         };
         let scene_kernel = &self.kernels[kernel];
-        let gpu = &scene_kernel.gpu;
         for first in (0..invocations).step_by(self.paths_per_dispatch as usize) {
             if self.stop.is_raised() || self.failure.is_some() {
                 return Ok(false);
             }
             let range = (first, self.paths_per_dispatch.min(invocations - first));
-            let dispatch = (&b.bindings[PARAMS], &b.groups[kernel]);
+            let timer = self.timer.as_ref();
+            let dispatch = (&b.bindings[PARAMS], &b.groups[kernel], timer);
             let pass = (sampling, light_pass);
             let encoder = scene_kernel.encode(dispatch, pass, frame, range, &cleared);
             // The first dispatch clears the outputs; the others add to them.
@@ -327,10 +336,29 @@ impl GpuFrames {
             if let FramePlan::PathTracing = self.plan {
                 self.run_wavefront(encoder, range.1)?;
             } else {
-                gpu.wait(gpu.queue.submit([encoder.finish()]))?;
+                self.submit(encoder)?;
             }
         }
         Ok(true)
+    }
+
+    /// Submits `encoder`, with its passes' timestamps, and waits until the device is done
+    /// with it.
+    fn submit(&self, mut encoder: wgpu::CommandEncoder) -> Result<(), String> {
+        let gpu = &self.kernels[0].gpu;
+        if let Some(timer) = &self.timer {
+            timer.resolve(&mut encoder);
+        }
+        gpu.wait(gpu.queue.submit([encoder.finish()]))?;
+        self.collect_times()
+    }
+
+    /// Adds the times of the passes submitted to the frame's.
+    fn collect_times(&self) -> Result<(), String> {
+        let gpu = &self.kernels[0].gpu;
+        self.timer
+            .as_ref()
+            .map_or(Ok(()), |timer| timer.collect(gpu))
     }
 
     /// Runs the path tracer's wavefront over `paths` paths that `encoder` starts: rounds of
@@ -349,19 +377,28 @@ impl GpuFrames {
             .write_buffer(wave, 0, bytemuck::cast_slice(&start));
         gpu.queue
             .write_buffer(&b.indirect, 0, bytemuck::cast_slice(&start[..3]));
-        let buffers = (&b.groups[0], wave, &b.indirect);
+        let dispatch = (&b.groups[0], self.timer.as_ref());
         loop {
-            kernel.record_rounds(&mut encoder, buffers, ROUNDS_PER_SUBMIT);
+            kernel.record_rounds(
+                &mut encoder,
+                dispatch,
+                (wave, &b.indirect),
+                ROUNDS_PER_SUBMIT,
+            );
             encoder.copy_buffer_to_buffer(wave, 0, &b.wave_readback, 0, WAVE_BYTES);
+            if let Some(timer) = &self.timer {
+                timer.resolve(&mut encoder);
+            }
             let read = |bytes: &[u8]| bytemuck::pod_read_unaligned::<[u32; 8]>(bytes)[3];
             let left = gpu.read_back(encoder, (&b.wave_readback, WAVE_BYTES), read)?;
+            self.collect_times()?;
             if left == 0 {
                 return Ok(());
             }
             encoder = gpu.device.create_command_encoder(&Default::default());
             if left * TAIL_FRACTION <= paths {
-                kernel.record_tail(&mut encoder, (&b.groups[0], &b.indirect));
-                return gpu.wait(gpu.queue.submit([encoder.finish()]));
+                kernel.record_tail(&mut encoder, dispatch, &b.indirect);
+                return self.submit(encoder);
             }
         }
     }
@@ -929,6 +966,10 @@ mod tests {
                 FrameStats::default()
             });
             assert!(!stats.interrupted, "{:?}", frames.failure());
+            // The kernels' time, where the device has timestamps, is part of the frame's.
+            let timed = frames.kernels[0].gpu.has_timestamps();
+            assert_eq!(stats.device_time.is_zero(), !timed, "{stats:?}");
+            assert!(stats.device_time <= stats.shading_time, "{stats:?}");
         }
         film
     }

@@ -15,6 +15,7 @@ use crate::error::GpuRenderError;
 use crate::plan::KernelPlan;
 use crate::scene_data::{SceneData, check_scene};
 use crate::shader::{Kernel, kernel_module, shading_group};
+use crate::timing::PassTimer;
 
 /// `Params` of `scene.wgsl`.
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -314,7 +315,7 @@ impl SceneKernel {
     /// group 0.
     pub fn encode(
         &self,
-        (params, dispatch): (&wgpu::Buffer, &wgpu::BindGroup),
+        (params, dispatch, timer): (&wgpu::Buffer, &wgpu::BindGroup, Option<&PassTimer>),
         (sampling, light_pass): (&Sampling, LightPass),
         frame: (u32, u32),
         range: (u64, u64),
@@ -329,7 +330,7 @@ impl SceneKernel {
             encoder.clear_buffer(output, 0, None);
         }
         {
-            let mut pass = self.pass(&mut encoder, dispatch);
+            let mut pass = self.pass(&mut encoder, dispatch, timer);
             pass.set_pipeline(&self.stages[0]);
             pass.dispatch_workgroups(x, y, 1);
         }
@@ -344,12 +345,13 @@ impl SceneKernel {
     pub fn record_rounds(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (dispatch, wave, indirect): (&wgpu::BindGroup, &wgpu::Buffer, &wgpu::Buffer),
+        (dispatch, timer): (&wgpu::BindGroup, Option<&PassTimer>),
+        (wave, indirect): (&wgpu::Buffer, &wgpu::Buffer),
         rounds: u32,
     ) {
         for _ in 0..rounds {
             {
-                let mut pass = self.pass(encoder, dispatch);
+                let mut pass = self.pass(encoder, dispatch, timer);
                 for stage in ["extend_paths", "trace_shadows"] {
                     pass.set_pipeline(self.stage(stage));
                     pass.dispatch_workgroups_indirect(indirect, 0);
@@ -366,9 +368,10 @@ impl SceneKernel {
     pub fn record_tail(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (dispatch, indirect): (&wgpu::BindGroup, &wgpu::Buffer),
+        (dispatch, timer): (&wgpu::BindGroup, Option<&PassTimer>),
+        indirect: &wgpu::Buffer,
     ) {
-        let mut pass = self.pass(encoder, dispatch);
+        let mut pass = self.pass(encoder, dispatch, timer);
         pass.set_pipeline(self.stage("finish_paths"));
         pass.dispatch_workgroups_indirect(indirect, 0);
     }
@@ -379,15 +382,17 @@ impl SceneKernel {
         &self.stages[index.expect("a stage of the kernel")]
     }
 
-    /// A compute pass on `encoder` with `dispatch` as bind group 0 and the scene's groups.
+    /// A compute pass on `encoder` with `dispatch` as bind group 0 and the scene's groups,
+    /// timed by `timer` where given.
     fn pass<'e>(
         &self,
         encoder: &'e mut wgpu::CommandEncoder,
         dispatch: &wgpu::BindGroup,
+        timer: Option<&PassTimer>,
     ) -> wgpu::ComputePass<'e> {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(self.kind.entry()),
-            timestamp_writes: None,
+            timestamp_writes: timer.and_then(PassTimer::writes),
         });
         pass.set_bind_group(0, dispatch, &[]);
         for (index, group) in &self.scene_groups {

@@ -50,6 +50,7 @@ mod plan;
 mod probe;
 mod scene_data;
 pub mod shader;
+mod timing;
 
 pub use bidirectional::GpuBidirectional;
 pub use error::GpuRenderError;

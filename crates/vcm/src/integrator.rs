@@ -145,6 +145,10 @@ pub struct FrameStats {
     /// Wall-clock time in everything else: ray generation, shading, connections, merging,
     /// queue compaction and accumulation.
     pub shading_time: Duration,
+    /// Time the GPU spent running the frame's shading kernels, from timestamps around their
+    /// passes (with GPU shading on a device that has timestamps; zero elsewhere): part of
+    /// `shading_time`, which also holds the submissions, waits and read-backs.
+    pub device_time: Duration,
     /// High-water mark of the scheduler's queues (paths in flight and their ray buffers) in
     /// bytes, over the frame's passes ([`vcm_scheduler::SchedulerStats::queue_memory`]).
     pub queue_memory: usize,
@@ -164,6 +168,7 @@ impl FrameStats {
         traversal_time: Duration::ZERO,
         grid_build_time: Duration::ZERO,
         shading_time: Duration::ZERO,
+        device_time: Duration::ZERO,
         queue_memory: 0,
         interrupted: true,
     };
@@ -179,6 +184,7 @@ impl FrameStats {
         self.traversal_time += other.traversal_time;
         self.grid_build_time += other.grid_build_time;
         self.shading_time += other.shading_time;
+        self.device_time += other.device_time;
         self.queue_memory = self.queue_memory.max(other.queue_memory);
     }
 

@@ -330,7 +330,7 @@ impl ViewerApp {
         match self.renderer.take_update() {
             Some(Update::Frames(snapshot)) => {
                 self.history.record(&snapshot);
-                self.show(ctx, snapshot);
+                self.show(ctx, *snapshot);
             }
             Some(Update::Failed {
                 generation,

@@ -98,8 +98,8 @@ pub struct Snapshot {
 /// What the worker reports.
 #[derive(Clone, Debug)]
 pub enum Update {
-    /// New frames of a render.
-    Frames(Snapshot),
+    /// New frames of a render (boxed: a snapshot is many times the size of a failure).
+    Frames(Box<Snapshot>),
     /// A render could not start (the BVH or the integrator could not be built).
     Failed {
         /// The job's generation.
@@ -419,7 +419,9 @@ impl Worker {
         };
         if !held.is_empty() {
             // The continued film is on screen before the first new frame.
-            self.publish(Update::Frames(snapshot(&film, &frames, totals, elapsed)));
+            self.publish(Update::Frames(Box::new(snapshot(
+                &film, &frames, totals, elapsed,
+            ))));
         }
         loop {
             let done = job
@@ -461,7 +463,9 @@ impl Worker {
                 }
             }
             elapsed += start.elapsed();
-            self.publish(Update::Frames(snapshot(&film, &frames, totals, elapsed)));
+            self.publish(Update::Frames(Box::new(snapshot(
+                &film, &frames, totals, elapsed,
+            ))));
         }
     }
 
@@ -593,7 +597,7 @@ pub(crate) mod tests {
 
     pub(crate) fn frames(update: Update, generation: u64, spp: u32) -> Option<Snapshot> {
         match update {
-            Update::Frames(s) if s.generation == generation && s.spp >= spp => Some(s),
+            Update::Frames(s) if s.generation == generation && s.spp >= spp => Some(*s),
             _ => None,
         }
     }

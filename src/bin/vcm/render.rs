@@ -855,6 +855,13 @@ fn print_summary(film: &Film, outcome: &Outcome) {
         totals.grid_build_time.as_secs_f64(),
         share(totals.grid_build_time)
     );
+    if !totals.device_time.is_zero() {
+        say!(
+            "GPU kernels: {:.2} s ({:.0}% of the render's time)",
+            totals.device_time.as_secs_f64(),
+            100.0 * totals.device_time.as_secs_f64() / elapsed
+        );
+    }
     if totals.light_vertices + totals.discarded_light_vertices > 0 {
         say!(
             "light vertex cache: {:.0} vertices per iteration, {} discarded for lack of room",
