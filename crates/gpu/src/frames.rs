@@ -3,6 +3,7 @@
 //! (`film.wgsl`: exact sums, the same whatever the order), and the film read back and merged
 //! into the render's once the frame is whole — and the state that goes with it.
 
+use std::cell::Cell;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -12,7 +13,7 @@ use vcm::{
     Algorithm, BidirPlan, Film, FrameStats, PixelSum, RenderError, Schedule, StopFlag, merge_radius,
 };
 use vcm_scene::Scene;
-use vcm_traversal_wgpu::GpuBvh;
+use vcm_traversal_wgpu::{GpuBvh, PassTimer};
 
 use crate::error::GpuRenderError;
 use crate::grid::{GridBuffers, GridBuilder};
@@ -21,7 +22,6 @@ use crate::kernel::{
     INDIRECT_BYTES, LightPass, Params, Sampling, SceneKernel, check_host_estimate, film_estimate,
 };
 use crate::shader::{Kernel, WORKGROUP_SIZE};
-use crate::timing::PassTimer;
 
 /// u32 limbs of one exact sum on the device (`SUM_LIMBS` of `film.wgsl`).
 const SUM_LIMBS: usize = 2 * WORDS;
@@ -44,6 +44,8 @@ const WAVE_BYTES: u64 = 32;
 /// only the paths with more are traced again to store the rest (fewer where the frame's
 /// would not fit one binding): most light paths end within a few vertices.
 const KEPT_VERTICES: u64 = 4;
+/// Passes a submission may time: a wavefront submission has one per round and its start.
+const TIMED_PASSES: u32 = 64;
 /// Rounds of the wavefront recorded between two looks at how many paths are left.
 const ROUNDS_PER_SUBMIT: u32 = 4;
 /// Once at most 1 / TAIL_FRACTION of a dispatch's paths are left, each is taken to its end in
@@ -91,6 +93,8 @@ pub(crate) struct GpuFrames {
     grids: Option<GridBuilder>,
     /// Times the scene kernels' passes, where the device writes timestamps.
     timer: Option<PassTimer>,
+    /// The time of the frame's passes timed so far.
+    device_time: Cell<Duration>,
     samples_per_frame: u32,
     stop: StopFlag,
     /// What failed on the GPU, once something has: no frame renders after it.
@@ -180,7 +184,7 @@ impl GpuFrames {
             }
         };
         let buffers = FrameBuffers::new(&kernels, channel_bytes);
-        let timer = PassTimer::new(gpu);
+        let timer = PassTimer::new(gpu, TIMED_PASSES);
         let mut frames = GpuFrames {
             kernels,
             plan,
@@ -191,6 +195,7 @@ impl GpuFrames {
             index: None,
             grids: None,
             timer,
+            device_time: Cell::new(Duration::ZERO),
             samples_per_frame: 1,
             stop: StopFlag::new(),
             failure: None,
@@ -234,7 +239,7 @@ impl GpuFrames {
         );
         let start = std::time::Instant::now();
         let rendered = self.render_frame(first_sample, sampling);
-        let device_time = self.timer.as_ref().map_or(Duration::ZERO, PassTimer::take);
+        let device_time = self.device_time.take();
         match rendered {
             Ok(Some(frame)) => {
                 // Exact sums: the same film as adding each sample and splat to `film`.
@@ -355,10 +360,12 @@ impl GpuFrames {
 
     /// Adds the times of the passes submitted to the frame's.
     fn collect_times(&self) -> Result<(), String> {
-        let gpu = &self.kernels[0].gpu;
-        self.timer
-            .as_ref()
-            .map_or(Ok(()), |timer| timer.collect(gpu))
+        if let Some(timer) = &self.timer {
+            let times = timer.collect(&self.kernels[0].gpu)?;
+            self.device_time
+                .set(self.device_time.get() + times.iter().sum::<Duration>());
+        }
+        Ok(())
     }
 
     /// Runs the path tracer's wavefront over `paths` paths that `encoder` starts: rounds of

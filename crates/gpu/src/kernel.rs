@@ -9,13 +9,12 @@ use vcm::{Algorithm, BidirPlan, Film, RenderError};
 use vcm_scene::Scene;
 use vcm_scene::sampling::SampleSequence;
 use vcm_traversal_wgpu::shader::buffer_layouts;
-use vcm_traversal_wgpu::{GpuBvh, GpuDevice, GpuError, dispatch_shape};
+use vcm_traversal_wgpu::{GpuBvh, GpuDevice, GpuError, PassTimer, dispatch_shape};
 
 use crate::error::GpuRenderError;
 use crate::plan::KernelPlan;
 use crate::scene_data::{SceneData, check_scene};
 use crate::shader::{Kernel, kernel_module, shading_group};
-use crate::timing::PassTimer;
 
 /// `Params` of `scene.wgsl`.
 #[derive(Clone, Copy, Pod, Zeroable)]

@@ -50,7 +50,6 @@ mod plan;
 mod probe;
 mod scene_data;
 pub mod shader;
-mod timing;
 
 pub use bidirectional::GpuBidirectional;
 pub use error::GpuRenderError;

@@ -13,6 +13,7 @@ use vcm_traversal::{
     BuildPreset, HitBatch, NO_HIT, PendingTraversal, RayBatch, Traversal, TraversalJob,
 };
 
+use crate::PassTimer;
 use crate::alpha::AlphaMasks;
 use crate::device::{GpuDevice, read_mapped};
 use crate::error::GpuError;
@@ -376,59 +377,25 @@ impl Inner {
         let scene_groups = self.scene_groups.as_deref()?;
         let fits = (rays.len() as u64) <= self.max_rays_per_slot;
         let repeats = repeats.min(wgpu::QUERY_SET_MAX_QUERIES / 2);
-        if !self.gpu.has_timestamps() || rays.is_empty() || !fits || repeats == 0 {
+        if rays.is_empty() || !fits {
             return None;
         }
-        let device = &self.gpu.device;
+        // None without timestamps or repeats.
+        let timer = PassTimer::new(&self.gpu, repeats)?;
         let slot = self.take_slot(rays.len() as u64);
         let workgroups = self.upload_batch(&slot, rays, 0..rays.len());
-        let stamps = device.create_query_set(&wgpu::QuerySetDescriptor {
-            label: Some("kernel time"),
-            ty: wgpu::QueryType::Timestamp,
-            count: 2 * repeats,
-        });
-        let bytes = 2 * u64::from(repeats) * size_of::<u64>() as u64;
-        let buffer = |label, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        use wgpu::BufferUsages as U;
-        let resolved = buffer("timestamps", U::QUERY_RESOLVE | U::COPY_SRC);
-        let readback = buffer("timestamp readback", U::MAP_READ | U::COPY_DST);
-        let mut encoder = device.create_command_encoder(&Default::default());
-        for i in 0..repeats {
-            let writes = wgpu::ComputePassTimestampWrites {
-                query_set: &stamps,
-                beginning_of_pass_write_index: Some(2 * i),
-                end_of_pass_write_index: Some(2 * i + 1),
-            };
-            self.record_dispatch(
-                &mut encoder,
-                &slot,
-                query,
-                scene_groups,
-                workgroups,
-                Some(writes),
-            );
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        for _ in 0..repeats {
+            let writes = timer.writes();
+            self.record_dispatch(&mut encoder, &slot, query, scene_groups, workgroups, writes);
         }
-        encoder.resolve_query_set(&stamps, 0..2 * repeats, &resolved, 0);
-        encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, bytes);
-        let ticks: Vec<u64> = self
-            .gpu
-            .read_back(encoder, (&readback, bytes), bytemuck::pod_collect_to_vec)
-            .ok()?;
+        timer.resolve(&mut encoder);
+        let submitted = self.gpu.wait(self.gpu.queue.submit([encoder.finish()]));
+        let times = submitted.and_then(|()| timer.collect(&self.gpu)).ok()?;
         self.slots.lock().expect("slot pool poisoned").push(slot);
-        let period_ns = f64::from(self.gpu.queue.get_timestamp_period());
-        let mut times: Vec<f64> = ticks
-            .chunks_exact(2)
-            .map(|pair| pair[1].saturating_sub(pair[0]) as f64 * period_ns)
-            .collect();
+        let mut times: Vec<f64> = times.iter().map(Duration::as_secs_f64).collect();
         times.sort_by(f64::total_cmp);
-        Some(Duration::from_nanos(times[times.len() / 2] as u64))
+        Some(Duration::from_secs_f64(times[times.len() / 2]))
     }
 
     /// A slot with room for `rays`, from the pool if one is big enough.

@@ -14,6 +14,7 @@ mod error;
 pub mod layout;
 pub mod shader;
 mod slot;
+mod timing;
 
 pub use alpha::{AlphaMasks, AlphaTexture, Filter, MaskedTriangle, Wrap};
 pub use backend::{GpuBvh, GpuBvhOptions};
@@ -21,3 +22,4 @@ pub use device::{GpuDevice, REQUIRE_GPU, device_or_skip};
 pub use error::{GpuError, NO_ADAPTER_HELP};
 pub use layout::NodeLayout;
 pub use slot::dispatch_shape;
+pub use timing::PassTimer;

@@ -4,40 +4,37 @@
 use std::cell::Cell;
 use std::time::Duration;
 
-use vcm_traversal_wgpu::GpuDevice;
+use crate::GpuDevice;
 
-/// Passes timed between two collections (a query set of twice as many timestamps).
-const PASSES: u32 = 64;
-
-/// Timestamps around the compute passes of the submissions between two [`collect`]s, and
-/// the time of the passes collected so far.
-///
-/// [`collect`]: PassTimer::collect
-pub(crate) struct PassTimer {
+/// Timestamps around the compute passes of the submissions between two
+/// [`collect`](PassTimer::collect)s.
+pub struct PassTimer {
     stamps: wgpu::QuerySet,
     resolved: wgpu::Buffer,
     readback: wgpu::Buffer,
+    /// Passes the query set has room for.
+    capacity: u32,
     /// Passes given timestamps since the last resolve.
     passes: Cell<u32>,
     /// Passes resolved into `resolved` and copied to `readback`, not collected yet.
     resolved_passes: Cell<u32>,
-    /// The time of the passes collected.
-    total: Cell<Duration>,
 }
 
 impl PassTimer {
-    /// A timer on `gpu`, `None` where the device writes no timestamps.
-    pub fn new(gpu: &GpuDevice) -> Option<PassTimer> {
-        if !gpu.has_timestamps() {
+    /// A timer of up to `passes` passes between collections on `gpu` (at most half of
+    /// [`wgpu::QUERY_SET_MAX_QUERIES`]), `None` where the device writes no timestamps.
+    pub fn new(gpu: &GpuDevice, passes: u32) -> Option<PassTimer> {
+        if !gpu.has_timestamps() || passes == 0 {
             return None;
         }
+        let capacity = passes.min(wgpu::QUERY_SET_MAX_QUERIES / 2);
         let device = &gpu.device;
         let stamps = device.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some("pass timestamps"),
             ty: wgpu::QueryType::Timestamp,
-            count: 2 * PASSES,
+            count: 2 * capacity,
         });
-        let bytes = u64::from(2 * PASSES) * size_of::<u64>() as u64;
+        let bytes = u64::from(2 * capacity) * size_of::<u64>() as u64;
         let buffer = |label, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -51,9 +48,9 @@ impl PassTimer {
             stamps,
             resolved: buffer("resolved timestamps", U::QUERY_RESOLVE | U::COPY_SRC),
             readback: buffer("timestamp read-back", U::MAP_READ | U::COPY_DST),
+            capacity,
             passes: Cell::new(0),
             resolved_passes: Cell::new(0),
-            total: Cell::new(Duration::ZERO),
         })
     }
 
@@ -61,7 +58,7 @@ impl PassTimer {
     /// goes untimed).
     pub fn writes(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
         let pass = self.passes.get();
-        if pass == PASSES {
+        if pass == self.capacity {
             return None;
         }
         self.passes.set(pass + 1);
@@ -85,12 +82,12 @@ impl PassTimer {
         self.resolved_passes.set(passes);
     }
 
-    /// Adds the time of the passes resolved by a submitted encoder to the total, once the
-    /// device is done with them.
-    pub fn collect(&self, gpu: &GpuDevice) -> Result<(), String> {
+    /// The time of each pass resolved by a submitted encoder, once the device is done with
+    /// them.
+    pub fn collect(&self, gpu: &GpuDevice) -> Result<Vec<Duration>, String> {
         let passes = self.resolved_passes.replace(0);
         if passes == 0 {
-            return Ok(());
+            return Ok(Vec::new());
         }
         let bytes = u64::from(2 * passes) * size_of::<u64>() as u64;
         let encoder = gpu.device.create_command_encoder(&Default::default());
@@ -100,17 +97,10 @@ impl PassTimer {
             bytemuck::pod_collect_to_vec,
         )?;
         let period_ns = f64::from(gpu.queue.get_timestamp_period());
-        let ns: f64 = ticks
+        let time = |pair: &[u64]| pair[1].saturating_sub(pair[0]) as f64 * period_ns;
+        Ok(ticks
             .chunks_exact(2)
-            .map(|pair| pair[1].saturating_sub(pair[0]) as f64 * period_ns)
-            .sum();
-        self.total
-            .set(self.total.get() + Duration::from_nanos(ns as u64));
-        Ok(())
-    }
-
-    /// The time of the passes collected since the last call.
-    pub fn take(&self) -> Duration {
-        self.total.replace(Duration::ZERO)
+            .map(|pair| Duration::from_nanos(time(pair) as u64))
+            .collect())
     }
 }
