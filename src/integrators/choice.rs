@@ -31,9 +31,10 @@
 //! The choice is a pure function of the scene, the options and the seed — counts, not clock
 //! times, measure the cost — so shards of one render made on different machines choose the
 //! same algorithm. With GPU shading the pilots are shaded on the GPU too ([`Pilots::Gpu`]),
-//! by the kernels that render the image, and weighed with the same costs. An image of fewer than [`MIN_PILOTED_PIXELS`] is not piloted: at 16
-//! samples per pixel its render would be smaller than its pilots, and path tracing, the
-//! cheapest per sample, renders it. Where only merging finds all of the scene's light
+//! by the kernels that render the image, and weighed with the same costs (the GPU's
+//! variances are the CPU's up to rounding, which a near tie could tip). An image of fewer
+//! than [`MIN_PILOTED_PIXELS`] is not piloted: at 16 samples per pixel its render would be
+//! smaller than its pilots, and path tracing, the cheapest per sample, renders it. Where only merging finds all of the scene's light
 //! ([`only_merging_finds_all_light`]), VCM renders without pilots.
 
 use std::sync::Arc;
@@ -264,9 +265,10 @@ impl<'a> Pilots<'a> {
 }
 
 /// Chooses the algorithm to render `scene` with at `size` with `options` by piloting the
-/// candidates, shaded where `shading` says (see the [module](self)). Where only merging finds all of the scene's light
-/// ([`only_merging_finds_all_light`]) VCM is chosen without pilots; an image of fewer than
-/// [`MIN_PILOTED_PIXELS`] is not piloted either: path tracing renders it ([`Unpiloted`]).
+/// candidates, shaded where `shading` says (see the [module](self)). Where only merging
+/// finds all of the scene's light ([`only_merging_finds_all_light`]) VCM is chosen without
+/// pilots; an image of fewer than [`MIN_PILOTED_PIXELS`] is not piloted either: path
+/// tracing renders it ([`Unpiloted`]).
 /// Once `stop` is raised the pilot in progress is dropped, and those finished before it
 /// choose.
 pub fn choose(

@@ -5,9 +5,9 @@
 // them where the index says (bidir.wgsl). Invocation k of a frame's dispatches takes index
 // i = k / samples of iteration first_sample + k % samples: pixel i's camera sample and the
 // iteration's light path i, each drawing the CPU's numbers for it, so that both backends
-// follow the same paths. A light path's vertices that scatter toward the camera and see it make splats.
-// Camera samples and splats go to the film (film.wgsl). Outputs (group 0): 1–4 the film, 5
-// the rays traced (camera, light, shadow).
+// follow the same paths. A light path's vertices that scatter toward the camera and see it
+// make splats. Camera samples and splats go to the film (film.wgsl). Outputs (group 0): 1–4
+// the film, 5 the rays traced (camera, light, shadow).
 
 // The light paths' random stream (`LIGHT_STREAM` of light_pass.rs).
 const LIGHT_STREAM: u32 = 1u;

@@ -11,8 +11,9 @@
 // Once few paths are left, `finish_paths` takes each to its end in one invocation. A path
 // adds its radiance to its pixel in the film (film.wgsl) once it has ended and its last
 // shadow ray is traced. Each path sums its radiance in the order of the CPU's path, so the
-// queues' order (atomic appends) changes nothing: the film's sums are exact. Paths are numbered pixel · samples + sample, the CPU's key: path k draws the CPU's
-// numbers for that pixel and sample.
+// queues' order (atomic appends) changes nothing: the film's sums are exact. Paths are
+// numbered pixel · samples + sample, the CPU's key: path k draws the CPU's numbers for that
+// pixel and sample.
 //
 // Bindings (group 0): 1–4 the film, 5 the closest-hit and shadow rays traced, 11 the paths'
 // states, 12 the queues (three parts of `params.path_count` entries: the two round queues,
