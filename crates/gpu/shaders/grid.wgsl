@@ -36,10 +36,15 @@ fn invocation(id: vec3<u32>, groups: vec3<u32>) -> u32 {
     return id.x + id.y * groups.x * GRID_WORKGROUP;
 }
 
-// The iteration vertex `v` of the frame belongs to.
-fn iteration_of(v: u32) -> u32 {
+// The last iteration whose part starts at or before `x`: of the cache (`in_cache`; the
+// iteration vertex `x` of the frame belongs to), or of the bucket starts.
+fn iteration_at(x: u32, in_cache: bool) -> u32 {
     var s = 0u;
-    while s + 1u < grid.iterations && v >= iterations[s + 1u].cache_start {
+    while s + 1u < grid.iterations {
+        let next = iterations[s + 1u];
+        if x < select(next.grid_starts, next.cache_start, in_cache) {
+            break;
+        }
         s += 1u;
     }
     return s;
@@ -62,7 +67,7 @@ fn grid_bounds(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgr
         return;
     }
     let p = cache[v].position;
-    let at = 6u * iteration_of(v);
+    let at = 6u * iteration_at(v, true);
     for (var k = 0u; k < 3u; k++) {
         atomicMin(&bounds[at + k], ordered(p[k]));
         atomicMax(&bounds[at + 3u + k], ordered(p[k]));
@@ -93,7 +98,7 @@ fn grid_count(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     if v >= grid.vertices {
         return;
     }
-    let it = iterations[iteration_of(v)];
+    let it = iterations[iteration_at(v, true)];
     let bucket = grid_bucket(it, cell_of(it, cache[v].position));
     bucket_of[v] = bucket;
     atomicAdd(&starts[it.grid_starts + bucket], 1u);
@@ -130,7 +135,7 @@ fn grid_scatter(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workg
     if v >= grid.vertices {
         return;
     }
-    let it = iterations[iteration_of(v)];
+    let it = iterations[iteration_at(v, true)];
     let slot = atomicAdd(&cursors[it.grid_starts + bucket_of[v]], 1u);
     entries[it.grid_entries + slot] = GridEntry(cache[v].position, v - it.cache_start);
 }
@@ -143,11 +148,7 @@ fn grid_sort(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     if g >= grid.starts {
         return;
     }
-    var s = 0u;
-    while s + 1u < grid.iterations && g >= iterations[s + 1u].grid_starts {
-        s += 1u;
-    }
-    let it = iterations[s];
+    let it = iterations[iteration_at(g, false)];
     // The slot after the last bucket holds the total, not a bucket.
     if g - it.grid_starts > it.bucket_mask {
         return;
