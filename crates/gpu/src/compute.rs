@@ -1,48 +1,55 @@
-//! [`Kernels`]: a module of helper kernels (no scene) over one explicit bind group of buffers,
-//! for what the frames build on the device (the light vertex index, the hash grids).
+//! [`Kernels`]: a module of helper kernels (no scene) over one bind group of buffers, for
+//! what the frames build on the device (the light vertex index, the hash grids); and
+//! [`DeclaredLayout`], the pipeline layout of every buffer a module declares, which lets the
+//! kernels of one module share bind groups.
 
 use vcm_traversal_wgpu::GpuDevice;
-use vcm_traversal_wgpu::shader::buffer_layout;
+use vcm_traversal_wgpu::shader::buffer_layouts;
 
 use crate::kernel::bind_entries;
 
-/// Compute pipelines of one module, sharing bind group 0's layout: storage buffers (read-only
-/// where asked) and a uniform buffer last.
+/// The bind group layouts of every buffer a WGSL module declares, group by group
+/// ([`buffer_layouts`]: storage buffers read-only unless declared `read_write`), and the
+/// pipeline layout of them: pipelines made with it share bind groups (the layouts wgpu
+/// derives belong to one pipeline each).
+pub(crate) struct DeclaredLayout {
+    pub groups: Vec<wgpu::BindGroupLayout>,
+    pub pipeline: wgpu::PipelineLayout,
+}
+
+impl DeclaredLayout {
+    /// The layout of `source`, which must parse (the crate's sources are validated by tests).
+    pub fn new(device: &wgpu::Device, label: &str, source: &str) -> DeclaredLayout {
+        let entries = buffer_layouts(source).expect("the crate's WGSL modules parse");
+        let groups: Vec<wgpu::BindGroupLayout> = entries
+            .iter()
+            .map(|entries| {
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(label),
+                    entries,
+                })
+            })
+            .collect();
+        let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &groups.iter().map(Some).collect::<Vec<_>>(),
+            immediate_size: 0,
+        });
+        DeclaredLayout { groups, pipeline }
+    }
+}
+
+/// Compute pipelines of one module, sharing bind group 0 of every buffer it declares.
 pub(crate) struct Kernels {
-    layout: wgpu::BindGroupLayout,
+    layout: DeclaredLayout,
     pub pipelines: Vec<wgpu::ComputePipeline>,
 }
 
 impl Kernels {
-    /// The kernels `entries` of `source`, whose group 0 binds one storage buffer per entry of
-    /// `read_only` (read-only where true), then a uniform buffer.
-    pub fn new(
-        gpu: &GpuDevice,
-        label: &str,
-        source: String,
-        entries: &[&str],
-        read_only: &[bool],
-    ) -> Kernels {
+    /// The kernels `entries` of `source`, whose buffers are all in bind group 0.
+    pub fn new(gpu: &GpuDevice, label: &str, source: String, entries: &[&str]) -> Kernels {
         let device = &gpu.device;
-        let mut bindings: Vec<_> = (0u32..)
-            .zip(read_only)
-            .map(|(binding, &read_only)| {
-                buffer_layout(binding, wgpu::BufferBindingType::Storage { read_only })
-            })
-            .collect();
-        bindings.push(buffer_layout(
-            read_only.len() as u32,
-            wgpu::BufferBindingType::Uniform,
-        ));
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(label),
-            entries: &bindings,
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(label),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let layout = DeclaredLayout::new(device, label, &source);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
             source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -52,7 +59,7 @@ impl Kernels {
             .map(|entry| {
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(entry),
-                    layout: Some(&pipeline_layout),
+                    layout: Some(&layout.pipeline),
                     module: &module,
                     entry_point: Some(entry),
                     compilation_options: Default::default(),
@@ -66,7 +73,7 @@ impl Kernels {
     /// Bind group 0 of `buffers`, in binding order (the uniform last).
     pub fn group(&self, gpu: &GpuDevice, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
         let buffers = (0u32..).zip(buffers.iter().copied());
-        bind_entries(&gpu.device, &self.layout, buffers)
+        bind_entries(&gpu.device, &self.layout.groups[0], buffers)
     }
 }
 

@@ -3,7 +3,7 @@
 //! device.
 
 use bytemuck::{Pod, Zeroable};
-use vcm_traversal_wgpu::GpuDevice;
+use vcm_traversal_wgpu::{GpuDevice, dispatch_shape};
 
 use crate::compute::{Kernels, record};
 use crate::shader::{CACHE_WGSL, GRID_WGSL};
@@ -38,14 +38,11 @@ enum Over {
     Starts,
 }
 
-/// Invocations per workgroup (`GRID_WORKGROUP` of `grid.wgsl`).
-const WORKGROUP: u64 = 64;
-
-/// Workgroups (x, y) for `count` invocations in rows of at most `max_groups` workgroups.
-fn spread(count: u32, max_groups: u64) -> (u32, u32) {
-    let groups = u64::from(count).div_ceil(WORKGROUP).max(1);
-    let x = groups.min(max_groups);
-    (x as u32, groups.div_ceil(x) as u32)
+/// Workgroups (x, y) for `count` invocations in rows of at most `max_groups` workgroups of
+/// `GRID_WORKGROUP` (`grid.wgsl`, the traversal kernels' workgroup size: tested below).
+fn spread(count: u32, max_groups: u32) -> (u32, u32) {
+    let (x, y, _) = dispatch_shape(u64::from(count), max_groups);
+    (x, y)
 }
 
 /// The grid-building kernels and their scratch buffers.
@@ -69,10 +66,8 @@ impl GridBuilder {
     /// The kernels compiled on `gpu`.
     pub fn new(gpu: &GpuDevice) -> GridBuilder {
         let entries: Vec<&str> = KERNELS.iter().map(|(entry, _)| *entry).collect();
-        // The cache is read; the iterations, starts, entries and scratch buffers written.
-        let read_only = [true, false, false, false, false, false, false];
         let source = format!("{CACHE_WGSL}\n{GRID_WGSL}");
-        let kernels = Kernels::new(gpu, "grid build", source, &entries, &read_only);
+        let kernels = Kernels::new(gpu, "grid build", source, &entries);
         let buffer = |label, size, usage| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -151,7 +146,7 @@ impl GridBuilder {
         let group = self.kernels.group(gpu, &bound);
         let mut encoder = device.create_command_encoder(&Default::default());
         encoder.clear_buffer(buffers.starts, 0, Some(4 * u64::from(starts)));
-        let max_groups = u64::from(device.limits().max_compute_workgroups_per_dimension);
+        let max_groups = device.limits().max_compute_workgroups_per_dimension;
         for ((entry, over), pipeline) in KERNELS.iter().zip(&self.kernels.pipelines) {
             if *entry == "grid_scatter" {
                 // The cursors start where the buckets do.
@@ -180,6 +175,12 @@ mod tests {
 
     use super::*;
     use crate::frames::{GridEntry, IterationRecord, LightVertex};
+
+    #[test]
+    fn the_grid_kernels_workgroups_are_the_ones_dispatch_shape_counts() {
+        let size = vcm_traversal_wgpu::shader::WORKGROUP_SIZE;
+        assert!(GRID_WGSL.contains(&format!("const GRID_WORKGROUP: u32 = {size}u;")));
+    }
 
     /// The device builds the CPU's grids bit for bit: bounds, bucket starts and entries in
     /// the same order, for iterations of several sizes (one empty) in one frame's cache.

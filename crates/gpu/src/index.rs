@@ -28,7 +28,7 @@ impl IndexBuilder {
     pub fn new(gpu: &GpuDevice) -> IndexBuilder {
         let source = format!("{CACHE_WGSL}\n{INDEX_WGSL}");
         let entries = ["index_scan", "index_starts"];
-        let kernels = Kernels::new(gpu, "light vertex index", source, &entries, &[false, false]);
+        let kernels = Kernels::new(gpu, "light vertex index", source, &entries);
         let params = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("index parameters"),
             size: size_of::<IndexParams>() as u64,

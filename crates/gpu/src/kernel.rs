@@ -8,9 +8,9 @@ use vcm::memory::{AvailableMemory, MemoryEstimate, check_budget};
 use vcm::{Algorithm, BidirPlan, Film, RenderError};
 use vcm_scene::Scene;
 use vcm_scene::sampling::SampleSequence;
-use vcm_traversal_wgpu::shader::buffer_layouts;
 use vcm_traversal_wgpu::{GpuBvh, GpuDevice, GpuError, PassTimer, dispatch_shape};
 
+use crate::compute::DeclaredLayout;
 use crate::error::GpuRenderError;
 use crate::plan::KernelPlan;
 use crate::scene_data::{SceneData, check_scene};
@@ -432,23 +432,8 @@ fn compile(
     plan: &KernelPlan,
 ) -> (wgpu::ComputePipeline, Vec<wgpu::ComputePipeline>) {
     let source = kernel_module(kernel, traversal, *alpha_masks);
-    let shared_layout = (kernel.stages().len() > 1).then(|| {
-        let groups = buffer_layouts(&source).expect("the kernels' sources validate");
-        let groups: Vec<wgpu::BindGroupLayout> = groups
-            .iter()
-            .map(|entries| {
-                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some(kernel.entry()),
-                    entries,
-                })
-            })
-            .collect();
-        device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(kernel.entry()),
-            bind_group_layouts: &groups.iter().map(Some).collect::<Vec<_>>(),
-            immediate_size: 0,
-        })
-    });
+    let shared_layout = (kernel.stages().len() > 1)
+        .then(|| DeclaredLayout::new(device, kernel.entry(), &source).pipeline);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(kernel.entry()),
         source: wgpu::ShaderSource::Wgsl(source.into()),

@@ -30,8 +30,9 @@ pub const LIGHT_TRACER_WGSL: &str = include_str!("../shaders/light_tracer.wgsl")
 /// The camera pass of bidirectional path tracing.
 pub const BIDIR_CAMERA_WGSL: &str = include_str!("../shaders/bidir_camera.wgsl");
 
-/// Invocations per workgroup (`WORKGROUP` in `scene.wgsl`).
-pub const WORKGROUP_SIZE: u32 = 64;
+/// Invocations per workgroup (`WORKGROUP` in `scene.wgsl`): the traversal backend's, whose
+/// [`dispatch_shape`](vcm_traversal_wgpu::dispatch_shape) sizes the dispatches.
+pub const WORKGROUP_SIZE: u32 = vcm_traversal_wgpu::shader::WORKGROUP_SIZE;
 
 /// A kernel of this crate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
