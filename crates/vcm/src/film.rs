@@ -5,6 +5,10 @@ use rayon::prelude::*;
 
 use crate::exact_sum::ExactSum;
 use crate::image_io::RgbImage;
+use crate::prefetch::prefetch_all;
+
+/// Additions [`FilmBand::add_each`] loads a pixel's sums ahead of.
+const LOOK_AHEAD: usize = 8;
 
 /// The exact sums of a pixel's red, green and blue samples.
 pub type PixelSum = [ExactSum; 3];
@@ -215,6 +219,38 @@ impl FilmBand<'_> {
         }
     }
 
+    /// Adds each of `items` at the pixel and radiance `addition` gives it: as a sample
+    /// ([`FilmBand::add`]) where `counted`, else as a splat ([`FilmBand::add_splat`]), in
+    /// the order of `items`. Loads the sums of the pixel [`LOOK_AHEAD`] items ahead while it
+    /// adds to the current one: a film is larger than the caches, and one sum's cache misses
+    /// would otherwise each wait alone.
+    #[inline]
+    pub fn add_each<T>(
+        &mut self,
+        (items, counted): (&[T], bool),
+        addition: impl Fn(&T) -> (usize, Vec3),
+    ) {
+        for (k, item) in items.iter().enumerate() {
+            if let Some(ahead) = items.get(k + LOOK_AHEAD) {
+                self.prefetch(addition(ahead).0);
+            }
+            let (pixel, rgb) = addition(item);
+            if counted {
+                self.add(pixel, rgb);
+            } else {
+                self.add_splat(pixel, rgb);
+            }
+        }
+    }
+
+    /// Starts loading `pixel`'s sums if it lies in the band (a hint: changes nothing).
+    #[inline]
+    fn prefetch(&self, pixel: usize) {
+        if let Some(sum) = pixel.checked_sub(self.first).and_then(|i| self.sum.get(i)) {
+            prefetch_all(sum);
+        }
+    }
+
     /// `pixel`'s index in the band, if it lies there.
     #[inline]
     fn index(&self, pixel: usize) -> Option<usize> {
@@ -312,6 +348,32 @@ mod tests {
             assert_eq!(banded, serial, "{threads} threads");
         }
         assert!(serial.dropped() > 0);
+    }
+
+    #[test]
+    fn lists_added_with_look_ahead_give_what_single_additions_give() {
+        let mut offered = Vec::new();
+        offer(|splat, pixel, rgb| offered.push((splat, pixel, rgb)));
+        let mut single = Film::new(7, 5);
+        single.add_in_bands(|band| {
+            for &(splat, pixel, rgb) in &offered {
+                match splat {
+                    true => band.add_splat(pixel, rgb),
+                    false => band.add(pixel, rgb),
+                }
+            }
+        });
+        // The splats as one list, then the samples as another (each list is added in its
+        // order; a pixel's sums do not depend on the order of its additions).
+        let mut listed = Film::new(7, 5);
+        listed.add_in_bands(|band| {
+            for counted in [false, true] {
+                let list: Vec<_> = offered.iter().filter(|o| o.0 != counted).collect();
+                band.add_each((&list, counted), |&&(_, pixel, rgb)| (pixel, rgb));
+            }
+        });
+        assert_eq!(listed, single);
+        assert!(single.samples(0) > 0 && single.dropped() > 0);
     }
 
     #[test]

@@ -192,8 +192,10 @@ impl Integrator for PathTracer {
             outputs
         };
         film.add_in_bands(|band| {
-            for &(key, radiance) in finished.iter().flatten() {
-                band.add((key / u64::from(samples)) as usize, radiance);
+            for list in &finished {
+                band.add_each((list, true), |&(key, radiance)| {
+                    ((key / u64::from(samples)) as usize, radiance)
+                });
             }
         });
         let camera_rays = u64::from(width) * u64::from(height) * u64::from(samples);

@@ -408,13 +408,13 @@ impl Integrator for Vcm {
         film.add_in_bands(|band| {
             for (sample, radiance) in camera.iter().enumerate() {
                 if let Some(results) = light.get(sample).filter(|_| plan.splats) {
-                    for &(_, pixel, contribution) in &results.splats {
-                        band.add_splat(pixel as usize, contribution);
-                    }
+                    band.add_each((&results.splats, false), |&(_, pixel, contribution)| {
+                        (pixel as usize, contribution)
+                    });
                 }
-                for &(pixel, radiance) in radiance {
-                    band.add(pixel as usize, radiance);
-                }
+                band.add_each((radiance, true), |&(pixel, radiance)| {
+                    (pixel as usize, radiance)
+                });
             }
         });
         self.light_buffers.recycle(light);
