@@ -1,10 +1,11 @@
 //! Light samples from eight vertices at once: a light picked by power, a point on it, the
 //! BSDF toward it, and the shadow ray that carries its MIS-weighted contribution
-//! (`LightSample::shadow_ray`). Points on constant, uncut area lights are sampled in the
-//! lanes (`AreaLight::illuminate`, operation for operation); a lane that picked any other
-//! light (point, spot, directional, environment, a textured or cut-out emitter) takes that
-//! light's own [`Light::illuminate`](vcm_scene::light::Light::illuminate), and the lanes go on
-//! from its sample.
+//! (`LightSample::shadow_ray`). Constant, uncut area lights, point, spot and directional
+//! lights are sampled in the lanes (their `illuminate`, operation for operation; a group's
+//! lanes that picked lights of different kinds take each kind's result); a lane that picked
+//! any other light (the environment, a textured or cut-out emitter) takes that light's own
+//! [`Light::illuminate`](vcm_scene::light::Light::illuminate), and the lanes go on from its
+//! sample.
 
 use std::f32::consts::FRAC_1_PI;
 
@@ -12,9 +13,9 @@ use glam::Vec2;
 use vcm_scene::Scene;
 use vcm_scene::bsdf::TransportMode;
 
-use super::LambertLanes;
 use super::shadow_rays::ShadowLanes;
 use super::surface::{Evaluation, Vertex};
+use super::{LambertLanes, LaneLight};
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::ray_offset::offset_ray_origins;
 use crate::shadow::shadow_target;
@@ -24,13 +25,30 @@ use crate::shadow::shadow_target;
 pub(crate) struct LightInputs {
     /// The picked light's selection probability.
     pub pick_pmf: F32s,
+    /// Where the light is a constant, uncut area light: its triangle, normal, 1/area,
+    /// emitted radiance (in `value`) and the error bound of points on it.
     corners: [Vec3s; 3],
     normal: Vec3s,
     inv_area: F32s,
-    emission: Vec3s,
     error: Vec3s,
-    /// The picked light's index in the lanes that sample it one lane at a time (it is not a
-    /// constant, uncut area light).
+    /// Lanes whose light is a point or spot light: its position, intensity (in `value`) and
+    /// emission pdf; where `spot`, the spot's axis, cos(outer angle) and falloff slope.
+    punctual: [bool; LANES],
+    position: Vec3s,
+    spot: [bool; LANES],
+    axis: Vec3s,
+    cos_outer: F32s,
+    falloff_slope: F32s,
+    /// Lanes whose light is directional: its illumination, the same at every receiver.
+    directional: [bool; LANES],
+    toward: Vec3s,
+    /// Emitted radiance of area lights, intensity of point and spot lights, irradiance of
+    /// directional ones.
+    value: Vec3s,
+    /// The emission pdf of point, spot and directional lights.
+    emission_pdf_w: F32s,
+    /// The picked light's index in the lanes that sample it one lane at a time (the lanes do
+    /// not sample it: [`LaneLight::of`](super::LaneLight::of)).
     general: [Option<u32>; LANES],
 }
 
@@ -43,17 +61,36 @@ impl LightInputs {
             .sample(u_pick)
             .expect("the scene has a light to sample");
         self.pick_pmf.0[lane] = pmf;
-        let Some(light) = &tables.lights[index] else {
-            self.general[lane] = Some(index as u32);
-            return;
-        };
-        for (c, &corner) in light.corners.iter().enumerate() {
-            self.corners[c].set(lane, corner);
+        match &tables.lights[index] {
+            None => self.general[lane] = Some(index as u32),
+            Some(LaneLight::Area(light)) => {
+                for (c, &corner) in light.corners.iter().enumerate() {
+                    self.corners[c].set(lane, corner);
+                }
+                self.normal.set(lane, light.normal);
+                self.inv_area.0[lane] = light.inv_area;
+                self.value.set(lane, light.emission);
+                self.error.set(lane, light.error);
+            }
+            Some(LaneLight::Punctual(light)) => {
+                self.punctual[lane] = true;
+                self.position.set(lane, light.position);
+                self.value.set(lane, light.intensity);
+                self.emission_pdf_w.0[lane] = light.emission_pdf_w;
+                if let Some((axis, cos_outer, slope)) = light.spot {
+                    self.spot[lane] = true;
+                    self.axis.set(lane, axis);
+                    self.cos_outer.0[lane] = cos_outer;
+                    self.falloff_slope.0[lane] = slope;
+                }
+            }
+            Some(LaneLight::Directional(illumination)) => {
+                self.directional[lane] = true;
+                self.toward.set(lane, illumination.direction);
+                self.value.set(lane, illumination.value);
+                self.emission_pdf_w.0[lane] = illumination.emission_pdf_w;
+            }
         }
-        self.normal.set(lane, light.normal);
-        self.inv_area.0[lane] = light.inv_area;
-        self.emission.set(lane, light.emission);
-        self.error.set(lane, light.error);
     }
 }
 
@@ -83,6 +120,25 @@ pub(crate) struct Illumination {
     pub target: Vec3s,
 }
 
+impl Illumination {
+    /// `yes` in the `mask` lanes, `no` in the others.
+    #[inline(always)]
+    fn select(mask: Mask, yes: Illumination, no: Illumination) -> Illumination {
+        let pick = |yes: Mask, no: Mask| (mask & yes) | (!mask & no);
+        Illumination {
+            direction: mask.select3(yes.direction, no.direction),
+            cos_at_light: mask.select(yes.cos_at_light, no.cos_at_light),
+            direct_pdf_w: mask.select(yes.direct_pdf_w, no.direct_pdf_w),
+            lit: pick(yes.lit, no.lit),
+            emission_pdf_w: mask.select(yes.emission_pdf_w, no.emission_pdf_w),
+            value: mask.select3(yes.value, no.value),
+            delta: pick(yes.delta, no.delta),
+            distant: pick(yes.distant, no.distant),
+            target: mask.select3(yes.target, no.target),
+        }
+    }
+}
+
 /// A uniform point of each lane's light triangle with the numbers (`ux`, `uy`), seen from
 /// `vertex` (`AreaLight::illuminate`).
 #[inline(always)]
@@ -107,15 +163,62 @@ fn illuminate_area(light: &LightInputs, vertex: &Vertex, (ux, uy): (F32s, F32s))
         direct_pdf_w: light.inv_area * distance_sq / cos_at_light,
         lit: cos_at_light.gt(zero) & distance.gt(zero),
         emission_pdf_w: light.inv_area * (cos_at_light.max(zero) * F32s::splat(FRAC_1_PI)),
-        value: light.emission,
+        value: light.value,
         delta: Mask::none(),
         distant: Mask::none(),
         target: offset_ray_origins(target, light.error, light.normal, -direction),
     }
 }
 
+/// Each lane's point or spot light seen from `vertex` (`PointLight::illuminate`,
+/// `SpotLight::illuminate`): the "pdf" is the squared distance, so that value / pdf = I / d².
+#[inline(always)]
+fn illuminate_punctual(light: &LightInputs, vertex: &Vertex) -> Illumination {
+    let (zero, one) = (F32s::splat(0.0), F32s::splat(1.0));
+    let to_light = light.position - vertex.position;
+    let distance_sq = to_light.length_squared();
+    let distance = distance_sq.sqrt();
+    let direction = to_light.div(distance);
+    // SpotLight::falloff: t = clamp((cos θ − cos θ_outer) · slope, 0, 1), falloff t².
+    let t = (light.axis.dot(-direction) - light.cos_outer) * light.falloff_slope;
+    let t = t.lt(zero).select(zero, t);
+    let t = t.gt(one).select(one, t);
+    let spot = Mask::from_bools(light.spot);
+    let attenuation = spot.select(t * t, one);
+    Illumination {
+        direction,
+        cos_at_light: one,
+        direct_pdf_w: distance_sq,
+        lit: distance.gt(zero) & distance.is_finite() & attenuation.gt(zero),
+        emission_pdf_w: light.emission_pdf_w,
+        // I · 1 is I, bit for bit, for point lights.
+        value: light.value.scale(attenuation),
+        delta: !Mask::none(),
+        distant: Mask::none(),
+        target: vertex.position + direction.scale(distance),
+    }
+}
+
+/// Each lane's directional light (`DirectionalLight::illuminate`): an unbounded shadow ray
+/// toward it.
+#[inline(always)]
+fn illuminate_directional(light: &LightInputs) -> Illumination {
+    let one = F32s::splat(1.0);
+    Illumination {
+        direction: light.toward,
+        cos_at_light: one,
+        direct_pdf_w: one,
+        lit: !Mask::none(),
+        emission_pdf_w: light.emission_pdf_w,
+        value: light.value,
+        delta: !Mask::none(),
+        distant: !Mask::none(),
+        target: light.toward,
+    }
+}
+
 /// A point on each lane's light with the numbers (`ux`, `uy`), seen from `vertex`: in the
-/// lanes for constant area lights, by the light's own sampling for the others.
+/// lanes for the lights they sample, by the light's own sampling for the others.
 #[inline(always)]
 fn illuminate(
     scene: &Scene,
@@ -123,12 +226,32 @@ fn illuminate(
     vertex: &Vertex,
     (ux, uy): (F32s, F32s),
 ) -> Illumination {
-    let mut illumination = illuminate_area(light, vertex, (ux, uy));
+    let any = |lanes: &[bool; LANES]| lanes.contains(&true);
+    // The area lights' operations run where some lane picked an area light, or where lanes
+    // picked none of the kinds sampled here (their results are overwritten below).
+    let mut illumination = if light.punctual == [true; LANES] {
+        illuminate_punctual(light, vertex)
+    } else {
+        let area = illuminate_area(light, vertex, (ux, uy));
+        match any(&light.punctual) {
+            true => {
+                let punctual = illuminate_punctual(light, vertex);
+                Illumination::select(Mask::from_bools(light.punctual), punctual, area)
+            }
+            false => area,
+        }
+    };
+    if any(&light.directional) {
+        let directional = illuminate_directional(light);
+        let lanes = Mask::from_bools(light.directional);
+        illumination = Illumination::select(lanes, directional, illumination);
+    }
     if light.general.iter().all(Option::is_none) {
         return illumination;
     }
     let mut lit = illumination.lit.bools();
-    let (mut delta, mut distant) = ([false; LANES], [false; LANES]);
+    let mut delta = illumination.delta.bools();
+    let mut distant = illumination.distant.bools();
     for (lane, index) in light.general.iter().enumerate() {
         let Some(index) = *index else {
             continue;

@@ -5,8 +5,8 @@
 //! no volume absorbs, vertices on materials whose lobes are one plain Lambert lobe
 //! ([`Lobes::lambert`](vcm_scene::bsdf::Lobes::lambert)) are shaded in SIMD lanes instead,
 //! eight paths per instruction: the surface point, the BSDF's sides, frame, values and pdfs
-//! ([`surface`]), the light sample ([`light_sample`]: points on constant area lights in the
-//! lanes, every other light by its own `Light::illuminate`), the cosine-weighted
+//! ([`surface`]), the light sample ([`light_sample`]: constant area lights, point, spot and
+//! directional lights in the lanes, every other light by its own `Light::illuminate`), the cosine-weighted
 //! continuation and the ray offsets. The integrators build their vertices from these parts
 //! ([`path_tracing`] here, the camera and light passes of the VCM family in
 //! [`crate::bidir`]).
@@ -21,10 +21,11 @@ pub(crate) mod path_tracing;
 pub(crate) mod shadow_rays;
 pub(crate) mod surface;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use vcm_scene::Scene;
-use vcm_scene::light::Light;
+use vcm_scene::light::{Illumination, Light};
 use vcm_scene::sampling::SobolSampler;
+use vcm_scene::sampling::{uniform_cone_pdf, uniform_sphere_pdf};
 
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::ray_offset::barycentric_error;
@@ -34,6 +35,8 @@ use crate::vertex_numbers::{Draw, LaneDraws};
 use crate::walk::Walk;
 use crate::walk::Walker;
 use surface::{SurfaceInputs, Vertex};
+#[cfg(doc)]
+use vcm_scene::light::SpotLight;
 
 /// A material whose lobes are one plain Lambert lobe.
 #[derive(Clone, Copy, Debug)]
@@ -46,7 +49,7 @@ pub(crate) struct LambertMaterial {
 
 /// A constant, uncut area light as light sampling in lanes reads it.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct LaneLight {
+pub(crate) struct LaneAreaLight {
     pub corners: [Vec3; 3],
     /// Unit front-face normal.
     pub normal: Vec3,
@@ -58,13 +61,73 @@ pub(crate) struct LaneLight {
     pub error: Vec3,
 }
 
+/// A point or spot light as light sampling in lanes reads it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LanePunctualLight {
+    pub position: Vec3,
+    /// Radiant intensity (on the axis, for a spot).
+    pub intensity: Vec3,
+    /// The pdf of emitting any one direction (uniform over the sphere or the spot's cone).
+    pub emission_pdf_w: f32,
+    /// A spot's falloff ([`SpotLight::falloff`]): its axis, cos(outer angle) and the
+    /// falloff's slope 1 / max(cos(inner) − cos(outer), 10⁻³). None for a point light.
+    pub spot: Option<(Vec3, f32, f32)>,
+}
+
+/// A light that light sampling in lanes samples itself.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum LaneLight {
+    Area(LaneAreaLight),
+    Punctual(LanePunctualLight),
+    /// A directional light, by its illumination (the same at every receiver).
+    Directional(Illumination),
+}
+
+impl LaneLight {
+    /// `light` as the lanes sample it, if they do: a constant, uncut area light, a point or
+    /// spot light or a directional light.
+    fn of(light: &Light) -> Option<LaneLight> {
+        Some(match light {
+            Light::Area(area) if area.texture.is_none() && area.cut_out.is_none() => {
+                LaneLight::Area(LaneAreaLight {
+                    corners: area.corners,
+                    normal: area.normal,
+                    inv_area: 1.0 / area.area,
+                    emission: area.emission,
+                    error: barycentric_error(&area.corners, Vec3::ONE),
+                })
+            }
+            Light::Point(point) => LaneLight::Punctual(LanePunctualLight {
+                position: point.position,
+                intensity: point.intensity,
+                emission_pdf_w: uniform_sphere_pdf(),
+                spot: None,
+            }),
+            Light::Spot(spot) => LaneLight::Punctual(LanePunctualLight {
+                position: spot.position,
+                intensity: spot.intensity,
+                emission_pdf_w: uniform_cone_pdf(spot.cos_outer),
+                spot: Some((
+                    spot.direction,
+                    spot.cos_outer,
+                    1.0 / (spot.cos_inner - spot.cos_outer).max(1e-3),
+                )),
+            }),
+            Light::Directional(_) => {
+                LaneLight::Directional(light.illuminate(&[], Vec3::ZERO, Vec2::ZERO)?)
+            }
+            _ => return None,
+        })
+    }
+}
+
 /// What shading in lanes needs of a scene that allows it ([`LambertLanes::for_scene`]).
 #[derive(Clone, Debug)]
 pub(crate) struct LambertLanes {
     /// Per material, where it is plain Lambert.
     pub materials: Vec<Option<LambertMaterial>>,
-    /// Per light, where it is a constant, uncut area light (its points are sampled in the
-    /// lanes; other lights sample their own, one lane at a time).
+    /// Per light, where the lanes sample it ([`LaneLight::of`]; other lights sample their
+    /// own, one lane at a time).
     pub lights: Vec<Option<LaneLight>>,
     /// Per triangle, whether vertices on it are shaded in lanes: a plain Lambert surface
     /// that does not emit. One load per vertex where the two tests behind it take three,
@@ -85,22 +148,7 @@ impl LambertLanes {
         if scene.light_sampler.sample(0.5).is_none() {
             return Err("no light to sample");
         }
-        let lights = scene
-            .lights
-            .iter()
-            .map(|light| match light {
-                Light::Area(area) if area.texture.is_none() && area.cut_out.is_none() => {
-                    Some(LaneLight {
-                        corners: area.corners,
-                        normal: area.normal,
-                        inv_area: 1.0 / area.area,
-                        emission: area.emission,
-                        error: barycentric_error(&area.corners, Vec3::ONE),
-                    })
-                }
-                _ => None,
-            })
-            .collect();
+        let lights = scene.lights.iter().map(LaneLight::of).collect();
         let materials: Vec<_> = scene
             .materials
             .iter()

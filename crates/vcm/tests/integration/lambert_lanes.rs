@@ -274,9 +274,9 @@ fn cornell_box_lit_by(lights: Vec<Light>, area: bool) -> Scene {
     common::rebuilt(scene, mesh, lights)
 }
 
-/// Lanes that pick a point, spot, directional or environment light sample it by the light's
-/// own code and go on in the lanes; lanes of the same group that pick the area light sample
-/// it in the lanes.
+/// Lanes sample point, spot, directional and constant area lights themselves, lights of
+/// different kinds in one group, and the environment by its own code, going on in the lanes
+/// from its sample.
 #[test]
 fn every_kind_of_light_renders_the_same_in_lanes() {
     let mesh = common::scene_file("cornell-box.gltf").mesh;
