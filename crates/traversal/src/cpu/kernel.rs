@@ -43,7 +43,7 @@ pub(crate) struct Walk {
     only_child: Option<(u32, f32)>,
     /// Nodes still to visit after it, with the same bounds; in decreasing order of the bound
     /// within each node's children, so the nearest is on top.
-    stack: Vec<(u32, f32)>,
+    stack: NodeStack,
     /// Leaf triangles still to test (none: an empty mask).
     leaves: LeafGroup,
 }
@@ -51,10 +51,9 @@ pub(crate) struct Walk {
 impl Walk {
     /// A walk able to traverse `geometry`.
     pub fn new(geometry: &LeafGeometry) -> Self {
-        // Each level pops one node and pushes at most eight children.
         Self {
             only_child: None,
-            stack: Vec::with_capacity(7 * geometry.levels + 1),
+            stack: NodeStack::new(geometry.levels),
             leaves: LeafGroup::default(),
         }
     }
@@ -102,20 +101,53 @@ impl Walk {
             self.only_child = (inner != 0).then(|| (node.children[slot], hits.entry[slot]));
             return;
         }
-        let base = self.stack.len();
+        let base = self.stack.len;
         while inner != 0 {
             let slot = inner.trailing_zeros() as usize;
             inner &= inner - 1;
-            let child = (node.children[slot], hits.entry[slot]);
-            // Insertion sort: the children pushed so far stay in decreasing entry order.
-            let mut at = self.stack.len();
-            self.stack.push(child);
-            while at > base && self.stack[at - 1].1 < child.1 {
-                self.stack[at] = self.stack[at - 1];
-                at -= 1;
-            }
-            self.stack[at] = child;
+            self.stack
+                .insert_above(base, (node.children[slot], hits.entry[slot]));
         }
+    }
+}
+
+/// A stack of nodes to visit with their entry bounds, as deep as a hierarchy of `levels`
+/// needs: each level pops one node and pushes at most eight children.
+struct NodeStack {
+    entries: Box<[(u32, f32)]>,
+    len: usize,
+}
+
+impl NodeStack {
+    fn new(levels: usize) -> Self {
+        Self {
+            entries: vec![(0, 0.0); 7 * levels + 1].into_boxed_slice(),
+            len: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, f32)> {
+        self.len = self.len.checked_sub(1)?;
+        Some(self.entries[self.len])
+    }
+
+    /// Pushes `entry` among the entries from `base` up, which stay in decreasing order of
+    /// their bounds (an insertion sort).
+    #[inline(always)]
+    fn insert_above(&mut self, base: usize, entry: (u32, f32)) {
+        let mut at = self.len;
+        self.len += 1;
+        while at > base && self.entries[at - 1].1 < entry.1 {
+            self.entries[at] = self.entries[at - 1];
+            at -= 1;
+        }
+        self.entries[at] = entry;
     }
 }
 
