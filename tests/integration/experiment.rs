@@ -96,6 +96,30 @@ fn an_experiment_writes_its_results_and_resumes_finished_runs() {
     assert!(!scene.join("reference.exr").exists());
 }
 
+/// The mean of the red, green and blue means of `exr`.
+fn mean_radiance(exr: &Path) -> f32 {
+    let image = vcm::image_io::RgbImage::read_exr(exr).unwrap();
+    let sum: f32 = image.pixels.iter().map(|p| p.element_sum()).sum();
+    sum / (3 * image.pixels.len()) as f32
+}
+
+/// `lights = "bulb-and-sky"` adds a point light and a sky to the box (its ceiling light
+/// stays, being part of the mesh): the reference, rendered with the same seed, is brighter.
+#[test]
+fn an_experiment_may_light_a_scene_by_a_bulb_and_a_sky() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference_mean = |name: &str, text: String| {
+        let file = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&file, text).unwrap();
+        vcm_ok(&["experiment", arg(&file)]);
+        mean_radiance(&dir.path().join(name).join("cornell-box/reference.exr"))
+    };
+    let plain = reference_mean("plain", experiment("spp = 1"));
+    let lit = experiment("spp = 1").replace(".gltf\"\n", ".gltf\"\nlights = \"bulb-and-sky\"\n");
+    let lit = reference_mean("lit", lit);
+    assert!(lit > 1.2 * plain, "lit {lit}, plain {plain}");
+}
+
 #[test]
 fn bad_experiment_files_are_named_with_the_problem() {
     let dir = tempfile::tempdir().unwrap();
@@ -120,6 +144,10 @@ fn bad_experiment_files_are_named_with_the_problem() {
         (
             experiment("spp = 2").replace(".gltf\"\n", ".gltf\"\ncrop = [20, 0, 8]\n"),
             "the crop [20, 0, 8] does not lie inside the 24×24 image",
+        ),
+        (
+            experiment("spp = 2").replace(".gltf\"\n", ".gltf\"\nlights = \"candles\"\n"),
+            "unknown variant `candles`",
         ),
     ];
     for (text, expected) in cases {

@@ -424,7 +424,7 @@ fn gpu_shading_tests_alpha_masks_as_the_cpu_does() {
     use vcm::{Algorithm, Film, Integrator, Schedule};
     use vcm_rs::integrators::{IntegratorOptions, build, build_on_gpu};
     use vcm_rs::scene::Scene;
-    use vcm_rs::scene::testing::lit_by_bulb_and_sky;
+    use vcm_rs::scene::relight::lit_by_bulb_and_sky;
 
     if !have_gpu() {
         return;

@@ -34,6 +34,7 @@ pub mod loader;
 pub mod material;
 pub mod mesh;
 pub mod real;
+pub mod relight;
 pub mod sampling;
 pub mod scene;
 pub mod shading_plan;

@@ -21,6 +21,7 @@ use vcm_rs::integrators::{AlgorithmOption, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
 use vcm_rs::scene::Scene;
+use vcm_rs::scene::relight::lit_by_bulb_and_sky;
 use vcm_rs::{Backend, Shading, Traversals};
 
 use crate::crops::Crop;
@@ -88,6 +89,17 @@ struct SceneEntry {
     /// The square the report shows enlarged, `[x, y, size]` in pixels (default: where the
     /// runs' errors sum to the most).
     crop: Option<[usize; 3]>,
+    /// Lights that replace the file's (default: the file's own).
+    lights: Option<SceneLights>,
+}
+
+/// Lights an experiment gives a scene in place of its file's.
+#[derive(Clone, Copy, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+enum SceneLights {
+    /// A point light above the model's front right and a dim constant sky
+    /// ([`lit_by_bulb_and_sky`]), for models that come without lights.
+    BulbAndSky,
 }
 
 /// A run configuration: a name and `vcm render` options.
@@ -175,6 +187,12 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     for entry in &experiment.scenes {
         let path = base.join(&entry.path);
         let scene = load_scene(&path, entry.camera.as_deref(), &args.limits)?;
+        let scene = match entry.lights {
+            Some(SceneLights::BulbAndSky) => {
+                Arc::new(lit_by_bulb_and_sky(Arc::unwrap_or_clone(scene)))
+            }
+            None => scene,
+        };
         let size = image_size(&scene, experiment.width, None);
         let chosen_crop = entry
             .crop

@@ -30,7 +30,7 @@ pub fn lit_khronos_model(file: &str) -> Arc<Scene> {
         .join("../../../shared/scenes/khronos-samples")
         .join(file);
     let loaded = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    Arc::new(vcm_scene::testing::lit_by_bulb_and_sky(loaded))
+    Arc::new(vcm_scene::relight::lit_by_bulb_and_sky(loaded))
 }
 
 /// A scene of `scenes/` with its glTF changed by `edit` (written to a temporary folder).

@@ -12,7 +12,6 @@
 //!   size (for size limits).
 //! * [`triangle_positions`], [`data_uri`], [`glb`], [`doubling_chain`], [`deep_chain`]: pieces
 //!   of glTF files for loader tests.
-//! * [`lit_by_bulb_and_sky`]: a third-party model lit for rendering tests.
 //!
 //! Compiled into every build (not behind a feature), so that the tests of every crate and
 //! the library and binaries share one build of `vcm-scene`.
@@ -23,7 +22,6 @@ mod estimate;
 mod gltf_files;
 mod image_headers;
 mod integrate;
-mod lit_models;
 
 pub use bsdf::{bsdf_chi2_test, estimate_albedo};
 pub use chi2::{Chi2Config, Chi2Result, chi2_test, sidak_significance};
@@ -31,4 +29,3 @@ pub use estimate::{Estimate, estimate_mean};
 pub use gltf_files::{data_uri, deep_chain, doubling_chain, glb, triangle_positions};
 pub use image_headers::{exr_claiming, png_claiming};
 pub use integrate::{integrate_cell, integrate_sphere, spherical_direction};
-pub use lit_models::lit_by_bulb_and_sky;

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use vcm::{Algorithm, Integrator, MergeRadius, PtSettings, VcmSettings};
 use vcm_scene::Scene;
-use vcm_scene::testing::lit_by_bulb_and_sky;
+use vcm_scene::relight::lit_by_bulb_and_sky;
 
 use crate::common::{self, RegionSeries};
 

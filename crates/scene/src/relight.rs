@@ -1,4 +1,5 @@
-//! Third-party models, which come without lights, lit for tests.
+//! Lights for models that come without them (third-party models such as the Khronos
+//! samples), for tests and experiments.
 
 use glam::Vec3;
 
