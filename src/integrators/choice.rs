@@ -34,8 +34,16 @@
 //! by the kernels that render the image, and weighed with the same costs (the GPU's
 //! variances are the CPU's up to rounding, which a near tie could tip). An image of fewer
 //! than [`MIN_PILOTED_PIXELS`] is not piloted: at 16 samples per pixel its render would be
-//! smaller than its pilots, and path tracing, the cheapest per sample, renders it. Where only merging finds all of the scene's light
-//! ([`only_merging_finds_all_light`]), VCM renders without pilots.
+//! smaller than its pilots, and path tracing, the cheapest per sample, renders it.
+//!
+//! Where only merging finds all of the scene's light ([`only_merging_finds_all_light`]),
+//! path tracing and BPT converge to an image without some of it, which no variance shows.
+//! There VCM's pilot also measures what they miss: over blocks of 8 × 8 pixels, the squared
+//! mean difference of their frames and VCM's, less the part the frames' noise gives it,
+//! relative as v is ([`missed_light`]); its mean over the blocks, b², is a relMSE that no
+//! number of samples lowers. A render's relMSE after N
+//! samples is then v(N) / N + b², and they are compared as (v(N) + N · b²) · cost (b² as
+//! estimated: [`Candidate::inefficiency`]). A small image of such a scene renders VCM.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -111,17 +119,24 @@ pub struct Candidate {
     pub relative_variance: Estimate,
     /// Cost of one sample per pixel, in closest-hit rays ([`COST_WEIGHTS`]).
     pub cost: f64,
+    /// The relMSE its image keeps however long it renders, b², where only merging finds all
+    /// of the light and the candidate does not merge (see the [module](self)); else zero.
+    pub missed_light: Estimate,
     /// Wall-clock time of the pilot (reported; the choice does not depend on it).
     pub time: Duration,
 }
 
 impl Candidate {
-    /// v(N) · cost, with v two standard errors above its estimate: a render's relMSE after a
-    /// given time, up to a factor common to every candidate, as high as the pilot leaves
-    /// likely. The smaller, the better: a candidate whose low variance rests on a few pixels
-    /// of a short pilot is not trusted with the render.
+    /// (v(N) + N · b²) · cost, with v two standard errors above its estimate: a render's
+    /// relMSE after a given time, up to a factor common to every candidate, as high as the
+    /// pilot leaves likely. The smaller, the better: a candidate whose low variance rests on
+    /// a few pixels of a short pilot is not trusted with the render. b² is taken as
+    /// estimated (at least 0): its standard error grows with VCM's own noise, and where
+    /// VCM's pilot is noisy (fireflies on glossy models) a bound above it would charge the
+    /// other candidates for that noise rather than for light they miss.
     pub fn inefficiency(&self) -> f64 {
-        self.relative_variance.upper() * self.cost
+        let missed = self.missed_light.value.max(0.0);
+        (self.relative_variance.upper() + self.samples * missed) * self.cost
     }
 }
 
@@ -154,6 +169,12 @@ pub struct Estimate {
 }
 
 impl Estimate {
+    /// Nothing, exactly.
+    pub const ZERO: Estimate = Estimate {
+        value: 0.0,
+        standard_error: 0.0,
+    };
+
     /// The value plus two standard errors.
     pub fn upper(&self) -> f64 {
         self.value + 2.0 * self.standard_error
@@ -174,7 +195,8 @@ pub struct Choice {
     pub too_costly: Vec<TooCostly>,
     /// (width, height) of the pilot renders.
     pub pilot_size: (u32, u32),
-    /// Why nothing was piloted, where nothing was (a stop before the first pilot aside).
+    /// Why the pilots did not choose, where they did not (a stop before the first pilot
+    /// aside).
     pub unpiloted: Option<Unpiloted>,
 }
 
@@ -195,8 +217,10 @@ pub enum Unpiloted {
     /// The image has fewer than [`MIN_PILOTED_PIXELS`]: its pilots would take longer than
     /// its render. Path tracing renders it, the cheapest per sample.
     SmallImage,
-    /// Only merging finds all of the scene's light ([`only_merging_finds_all_light`]): VCM
-    /// renders it, the one candidate that converges to the whole image.
+    /// Only merging finds all of the scene's light ([`only_merging_finds_all_light`]) and
+    /// the image is too small for pilots, or VCM's pilot did not finish (so nothing measures
+    /// what the others miss): VCM renders it, the one candidate that converges to the whole
+    /// image.
     OnlyMergingFindsAllLight,
 }
 
@@ -215,7 +239,7 @@ impl Choice {
 /// it; BPT's light paths find the caustics seen directly, but not those seen through a delta
 /// lobe in turn (a connection needs a non-delta vertex on each side). Both converge to an
 /// image without that light, however long they render, and their pilots' variance says
-/// nothing of it; VCM's merging finds it.
+/// nothing of it; VCM's merging finds it, and its pilot measures how much they miss.
 pub fn only_merging_finds_all_light(scene: &Scene) -> bool {
     let lights = &scene.features.lights;
     let delta_lights = lights.point + lights.spot + lights.directional;
@@ -265,10 +289,9 @@ impl<'a> Pilots<'a> {
 }
 
 /// Chooses the algorithm to render `scene` with at `size` with `options` by piloting the
-/// candidates, shaded where `shading` says (see the [module](self)). Where only merging
-/// finds all of the scene's light ([`only_merging_finds_all_light`]) VCM is chosen without
-/// pilots; an image of fewer than [`MIN_PILOTED_PIXELS`] is not piloted either: path
-/// tracing renders it ([`Unpiloted`]).
+/// candidates, shaded where `shading` says (see the [module](self)). An image of fewer than
+/// [`MIN_PILOTED_PIXELS`] is not piloted: path tracing renders it, or VCM where only merging
+/// finds all of the scene's light ([`only_merging_finds_all_light`], [`Unpiloted`]).
 /// Once `stop` is raised the pilot in progress is dropped, and those finished before it
 /// choose.
 pub fn choose(
@@ -289,11 +312,12 @@ pub fn choose(
         pilot_size,
         unpiloted: why,
     };
-    if only_merging_finds_all_light(scene) {
-        return Ok(unpiloted(Some(Unpiloted::OnlyMergingFindsAllLight)));
-    }
+    let merging_needed = only_merging_finds_all_light(scene);
     if u64::from(size.0) * u64::from(size.1) < u64::from(MIN_PILOTED_PIXELS) {
-        return Ok(unpiloted(Some(Unpiloted::SmallImage)));
+        return Ok(unpiloted(Some(match merging_needed {
+            true => Unpiloted::OnlyMergingFindsAllLight,
+            false => Unpiloted::SmallImage,
+        })));
     }
     let options = pilot_options(options, size.0, pilot_size.0);
     let mut algorithms = vec![Algorithm::Pt, Algorithm::Bpt];
@@ -321,6 +345,12 @@ pub fn choose(
             ..unpiloted(None)
         });
     };
+    if merging_needed && !robust.algorithm.merges() {
+        return Ok(Choice {
+            too_costly,
+            ..unpiloted(Some(Unpiloted::OnlyMergingFindsAllLight))
+        });
+    }
     let mean = smoothed(&robust.mean, pilot_size);
     let candidates: Vec<_> = pilots
         .iter()
@@ -331,6 +361,10 @@ pub fn choose(
                 .map(|v| relative_variance(v, &mean));
             let gamma = stratification(measured[0].value, measured[1].value);
             let samples = COMPARED_AT_SPP * cheapest / pilot.cost;
+            let missed_light = match merging_needed && !pilot.algorithm.merges() {
+                true => missed_light(pilot, robust, &mean, pilot_size),
+                false => Estimate::ZERO,
+            };
             Candidate {
                 algorithm: pilot.algorithm,
                 measured,
@@ -338,6 +372,7 @@ pub fn choose(
                 samples,
                 relative_variance: variance_after(measured[1], gamma, samples),
                 cost: pilot.cost,
+                missed_light,
                 time: pilot.time,
             }
         })
@@ -400,6 +435,8 @@ enum Outcome {
 struct Pilot {
     /// The algorithm piloted.
     algorithm: Algorithm,
+    /// Each frame's image.
+    frames: Vec<Vec<Vec3>>,
     /// The mean of the frames.
     mean: Vec<DVec3>,
     /// The variance per sample from single frames, s² = Σ (x − x̄)² / (n − 1), the unbiased
@@ -465,6 +502,7 @@ fn pilot(
     }
     Ok(Outcome::Done(Pilot {
         algorithm,
+        frames,
         mean,
         variance,
         cost: cost_per_sample,
@@ -492,11 +530,69 @@ fn smoothed(image: &[DVec3], (width, height): (u32, u32)) -> Vec<DVec3> {
 
 /// v = mean over pixels and channels of s² / (μ² + ε), with its standard error.
 fn relative_variance(variance: &[DVec3], mean: &[DVec3]) -> Estimate {
-    let terms: Vec<f64> = variance
-        .iter()
-        .zip(mean)
-        .map(|(&s2, &mu)| (s2 / (mu * mu + RELMSE_EPSILON)).element_sum() / 3.0)
-        .collect();
+    let terms = variance.iter().zip(mean).map(|(&s2, &mu)| relative(s2, mu));
+    mean_of(terms.collect())
+}
+
+/// Side in pixels of the blocks over which [`missed_light`] averages the differences.
+const MISSED_LIGHT_BLOCK: usize = 8;
+
+/// b² = mean over blocks of [`MISSED_LIGHT_BLOCK`]² pixels and channels of (d̄² − σ²) /
+/// (μ² + ε): d̄ the mean over the block's pixels and the n frames of the difference of
+/// `pilot`'s value and the `robust` pilot's, σ² the variance of that mean as the frames'
+/// spread gives it (Σ over the block's pixels of s²_d / n, over the pixels squared), μ the
+/// block's mean of the smoothed robust mean; relative as v is (see the [module](self)).
+/// Averaging over a block before squaring leaves the missed light (which spreads over
+/// regions: caustics, their reflections) and divides the noise by the block's pixels, so
+/// that what s²_d / n overstates of it, the frames being a stratified set, stays small.
+fn missed_light(
+    pilot: &Pilot,
+    robust: &Pilot,
+    mean: &[DVec3],
+    (width, height): (u32, u32),
+) -> Estimate {
+    let n = f64::from(PILOT_FRAMES);
+    let (width, height) = (width as usize, height as usize);
+    // Per pixel: the mean difference and the variance of that mean.
+    let pixel = |p: usize| {
+        let differences = pilot.frames.iter().zip(&robust.frames);
+        let d: Vec<DVec3> = differences.map(|(a, b)| (a[p] - b[p]).as_dvec3()).collect();
+        let d_mean = d.iter().sum::<DVec3>() / n;
+        let s2 = d
+            .iter()
+            .map(|&x| (x - d_mean) * (x - d_mean))
+            .sum::<DVec3>()
+            / (n - 1.0);
+        (d_mean, s2 / n)
+    };
+    let block = MISSED_LIGHT_BLOCK;
+    let mut terms = Vec::new();
+    for y0 in (0..height).step_by(block) {
+        for x0 in (0..width).step_by(block) {
+            let pixels: Vec<usize> = (y0..(y0 + block).min(height))
+                .flat_map(|y| (x0..(x0 + block).min(width)).map(move |x| y * width + x))
+                .collect();
+            let count = pixels.len() as f64;
+            let (mut d, mut variance, mut mu) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+            for &p in &pixels {
+                let (d_p, variance_p) = pixel(p);
+                d += d_p / count;
+                variance += variance_p / (count * count);
+                mu += mean[p] / count;
+            }
+            terms.push(relative(d * d - variance, mu));
+        }
+    }
+    mean_of(terms)
+}
+
+/// x / (μ² + ε), averaged over the channels.
+fn relative(x: DVec3, mu: DVec3) -> f64 {
+    (x / (mu * mu + RELMSE_EPSILON)).element_sum() / 3.0
+}
+
+/// The mean of `terms`, with its standard error.
+fn mean_of(terms: Vec<f64>) -> Estimate {
     let n = terms.len() as f64;
     let value = terms.iter().sum::<f64>() / n;
     // The terms' sample variance Σ (t − v)² / (n − 1), over n for the mean's.

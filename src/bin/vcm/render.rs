@@ -22,7 +22,7 @@ use vcm_rs::traversal::Traversal;
 use vcm_rs::{Backend, BuiltTraversal, Shading};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic, Watch};
-use vcm_rs::integrators::choice::{self, Pilots, Unpiloted};
+use vcm_rs::integrators::choice::{self, Estimate, Pilots, Unpiloted};
 use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
@@ -558,8 +558,12 @@ pub fn settle_algorithm(
         Some(Unpiloted::OnlyMergingFindsAllLight) => tell!(
             "algorithm: {} (not piloted: a point, spot or directional light shines through \
              mirrors or smooth glass, light that path tracing misses and BPT misses where it \
-             is seen through them again; only merging finds all of it)",
-            choice.algorithm.name()
+             is seen through them again; only merging finds all of it, and {})",
+            choice.algorithm.name(),
+            match choice.candidates.is_empty() {
+                true => "the image is too small for pilots to measure how much",
+                false => "VCM's pilot did not finish to measure how much",
+            }
         ),
         None => {}
     }
@@ -586,25 +590,48 @@ pub fn settle_algorithm(
             .candidates
             .iter()
             .map(|c| format!("{} {:.3}", c.algorithm.name(), c.inefficiency()));
+        let missed = choice
+            .candidates
+            .iter()
+            .filter(|c| c.missed_light != Estimate::ZERO)
+            .map(|c| format!("{} {:.2e}", c.algorithm.name(), c.missed_light.value));
+        let missed = missed.collect::<Vec<_>>();
+        let (measure, missed) = match missed.is_empty() {
+            true => ("variance × cost", String::new()),
+            false => (
+                "(variance + spp × b²) × cost",
+                format!(
+                    "; b², the relMSE of the light missed: {}",
+                    missed.join(", ")
+                ),
+            ),
+        };
         tell!(
-            "algorithm: {} ({pilots}; variance × cost: {})",
+            "algorithm: {} ({pilots}; {measure}: {}{missed})",
             choice.algorithm.name(),
-            each.collect::<Vec<_>>().join(", ")
+            each.collect::<Vec<_>>().join(", "),
         );
         return Ok(choice.algorithm);
     }
     say!(
-        "algorithm: {}, the least relative variance (+ 2 standard errors) × cost of its \
-         {pilots}:",
+        "algorithm: {}, the least relative variance (+ 2 standard errors; where a candidate \
+         misses light, + spp × its relMSE b², + 2 standard errors) × cost of its {pilots}:",
         choice.algorithm.name()
     );
     for candidate in &choice.candidates {
         let [v1, v4] = candidate.measured;
-        let v = candidate.relative_variance;
+        let (v, b2) = (candidate.relative_variance, candidate.missed_light);
         let chosen = candidate.algorithm == choice.algorithm;
+        let missed = match b2 == Estimate::ZERO {
+            true => String::new(),
+            false => format!(
+                " + {:.0} spp × missed light b² {:.2e} ± {:.2e}",
+                candidate.samples, b2.value, b2.standard_error
+            ),
+        };
         say!(
             "  {:<4} variance per sample {:.4} (frames), {:.4} (halves): γ {:.2}; at {:.0} spp \
-             {:.4} ± {:.4} × cost {:.2} rays = {:.4}{}",
+             ({:.4} ± {:.4}{missed}) × cost {:.2} rays = {:.4}{}",
             candidate.algorithm.name(),
             v1.value,
             v4.value,
