@@ -40,10 +40,10 @@
 //! path tracing and BPT converge to an image without some of it, which no variance shows.
 //! There VCM's pilot also measures what they miss: over blocks of 8 × 8 pixels, the squared
 //! mean difference of their frames and VCM's, less the part the frames' noise gives it,
-//! relative as v is ([`missed_light`]); its mean over the blocks, b², is a relMSE that no
-//! number of samples lowers. A render's relMSE after N
-//! samples is then v(N) / N + b², and they are compared as (v(N) + N · b²) · cost (b² as
-//! estimated: [`Candidate::inefficiency`]). A small image of such a scene renders VCM.
+//! relative as v is; its mean over the blocks, b², is a relMSE that no number of samples
+//! lowers. A render's relMSE after N samples is then v(N) / N + b², and they are compared
+//! as (v(N) + N · b²) · cost (b² as estimated: [`Candidate::inefficiency`]). A small image
+//! of such a scene renders VCM.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};

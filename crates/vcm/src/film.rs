@@ -221,7 +221,7 @@ impl FilmBand<'_> {
 
     /// Adds each of `items` at the pixel and radiance `addition` gives it: as a sample
     /// ([`FilmBand::add`]) where `counted`, else as a splat ([`FilmBand::add_splat`]), in
-    /// the order of `items`. Loads the sums of the pixel [`LOOK_AHEAD`] items ahead while it
+    /// the order of `items`. Loads the sums of the pixel 8 items ahead (`LOOK_AHEAD`) while it
     /// adds to the current one: a film is larger than the caches, and one sum's cache misses
     /// would otherwise each wait alone.
     #[inline]
