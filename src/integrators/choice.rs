@@ -658,6 +658,67 @@ mod tests {
         assert_eq!(v.upper(), v.value + 2.0 * v.standard_error);
     }
 
+    /// A pilot of `algorithm` rendering `frames`, its means and variances left empty.
+    fn pilot_of(algorithm: Algorithm, frames: Vec<Vec<Vec3>>) -> Pilot {
+        Pilot {
+            algorithm,
+            frames,
+            mean: Vec::new(),
+            variance: [Vec::new(), Vec::new()],
+            cost: 1.0,
+            time: Duration::ZERO,
+        }
+    }
+
+    #[test]
+    fn missed_light_is_the_squared_relative_difference_of_the_means_less_their_noise() {
+        let side = 128;
+        // Independent uniform noise in [−0.5, 0.5) per frame and pixel (an LCG).
+        let mut state = 12345u64;
+        let mut noise = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        let mut frames = |offset: &dyn Fn(usize) -> f32, noisy: bool| -> Vec<Vec<Vec3>> {
+            (0..PILOT_FRAMES)
+                .map(|_| {
+                    (0..side * side)
+                        .map(|p| Vec3::splat(1.0 + offset(p) + if noisy { noise() } else { 0.0 }))
+                        .collect()
+                })
+                .collect()
+        };
+        let robust = pilot_of(Algorithm::Vcm, frames(&|_| 0.0, true));
+        let mean = vec![DVec3::ONE; side * side];
+        // The robust frames less 0.5 on the left half: b² = ½ · 0.5² / (1 + ε) exactly.
+        let left = |p: usize| if p % side < side / 2 { -0.5 } else { 0.0 };
+        let shifted: Vec<Vec<Vec3>> = robust
+            .frames
+            .iter()
+            .map(|frame| {
+                frame
+                    .iter()
+                    .enumerate()
+                    .map(|(p, &x)| x + left(p))
+                    .collect()
+            })
+            .collect();
+        let missing = pilot_of(Algorithm::Pt, shifted);
+        let b2 = missed_light(&missing, &robust, &mean, (side as u32, side as u32));
+        let expected = 0.5 * 0.25 / (1.0 + RELMSE_EPSILON);
+        assert!((b2.value - expected).abs() < 1e-6, "{b2:?}");
+        // The same light with noise of its own: nothing missed, within the noise (4
+        // standard errors: the blocks' terms are skewed, as squares of normal variables
+        // less their mean). Without the noise term each block would add Var(d̄) = (1/6) / 8
+        // / 64 ≈ 3.3·10⁻⁴.
+        let unbiased = pilot_of(Algorithm::Pt, frames(&|_| 0.0, true));
+        let b2 = missed_light(&unbiased, &robust, &mean, (side as u32, side as u32));
+        assert!(b2.value.abs() < 4.0 * b2.standard_error, "{b2:?}");
+        assert!(b2.value.abs() < 3.3e-5, "{b2:?}");
+    }
+
     #[test]
     fn stratification_is_the_fall_of_the_variance_per_sample_from_one_frame_to_four() {
         // v₄ = v₁ / 2: γ = ln 2 / ln 4 = 1/2, and v(16) = v₄ · 4^−½ = v₄ / 2.
