@@ -39,12 +39,17 @@ fn illuminate_delta(
 }
 
 impl PointLight {
+    /// The pdf of emitting any one direction: uniform over the sphere.
+    pub fn emission_pdf_w(&self) -> f32 {
+        uniform_sphere_pdf()
+    }
+
     pub(super) fn illuminate(&self, receiver: Vec3) -> Option<Illumination> {
         illuminate_delta(
             self.position,
             receiver,
             self.intensity,
-            uniform_sphere_pdf(),
+            self.emission_pdf_w(),
         )
     }
 
@@ -53,7 +58,7 @@ impl PointLight {
             value: self.intensity,
             position: self.position,
             direction: sample_uniform_sphere(u_dir),
-            emission_pdf_w: uniform_sphere_pdf(),
+            emission_pdf_w: self.emission_pdf_w(),
             direct_pdf_a: 1.0,
             cos_at_light: 1.0,
         }
@@ -82,15 +87,25 @@ pub struct SpotLight {
 }
 
 impl SpotLight {
-    /// Angular attenuation for a direction at cos θ from the axis (glTF recommended falloff).
+    /// Angular attenuation for a direction at cos θ from the axis (glTF recommended falloff):
+    /// t², t = clamp((cos θ − cos θ_outer) · [`falloff_slope`](Self::falloff_slope), 0, 1).
     pub fn falloff(&self, cos_theta: f32) -> f32 {
-        let scale = 1.0 / (self.cos_inner - self.cos_outer).max(1e-3);
-        let t = ((cos_theta - self.cos_outer) * scale).clamp(0.0, 1.0);
+        let t = ((cos_theta - self.cos_outer) * self.falloff_slope()).clamp(0.0, 1.0);
         t * t
     }
 
+    /// The slope of the falloff's ramp in cos θ: 1 / max(cos θ_inner − cos θ_outer, 10⁻³).
+    pub fn falloff_slope(&self) -> f32 {
+        1.0 / (self.cos_inner - self.cos_outer).max(1e-3)
+    }
+
+    /// The pdf of emitting any one direction: uniform over the outer cone.
+    pub fn emission_pdf_w(&self) -> f32 {
+        uniform_cone_pdf(self.cos_outer)
+    }
+
     pub(super) fn illuminate(&self, receiver: Vec3) -> Option<Illumination> {
-        let emission_pdf_w = uniform_cone_pdf(self.cos_outer);
+        let emission_pdf_w = self.emission_pdf_w();
         let sample = illuminate_delta(self.position, receiver, self.intensity, emission_pdf_w)?;
         let attenuation = self.falloff(self.direction.dot(-sample.direction));
         (attenuation > 0.0).then(|| Illumination {
@@ -105,7 +120,7 @@ impl SpotLight {
             value: self.intensity * self.falloff(local.z),
             position: self.position,
             direction: Frame::from_z(self.direction).to_world(local),
-            emission_pdf_w: uniform_cone_pdf(self.cos_outer),
+            emission_pdf_w: self.emission_pdf_w(),
             direct_pdf_a: 1.0,
             cos_at_light: 1.0,
         }

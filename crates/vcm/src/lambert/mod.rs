@@ -6,9 +6,9 @@
 //! ([`Lobes::lambert`](vcm_scene::bsdf::Lobes::lambert)) are shaded in SIMD lanes instead,
 //! eight paths per instruction: the surface point, the BSDF's sides, frame, values and pdfs
 //! ([`surface`]), the light sample ([`light_sample`]: constant area lights, point, spot and
-//! directional lights in the lanes, every other light by its own `Light::illuminate`), the cosine-weighted
-//! continuation and the ray offsets. The integrators build their vertices from these parts
-//! ([`path_tracing`] here, the camera and light passes of the VCM family in
+//! directional lights in the lanes, every other light by its own `Light::illuminate`), the
+//! cosine-weighted continuation and the ray offsets. The integrators build their vertices
+//! from these parts ([`path_tracing`] here, the camera and light passes of the VCM family in
 //! [`crate::bidir`]).
 //!
 //! Each lane performs the operations the general vertex performs for such a surface, in the
@@ -25,7 +25,6 @@ use glam::{Vec2, Vec3};
 use vcm_scene::Scene;
 use vcm_scene::light::{Illumination, Light};
 use vcm_scene::sampling::SobolSampler;
-use vcm_scene::sampling::{uniform_cone_pdf, uniform_sphere_pdf};
 
 use crate::lanes::{F32s, LANES, Mask, Vec3s};
 use crate::ray_offset::barycentric_error;
@@ -69,8 +68,8 @@ pub(crate) struct LanePunctualLight {
     pub intensity: Vec3,
     /// The pdf of emitting any one direction (uniform over the sphere or the spot's cone).
     pub emission_pdf_w: f32,
-    /// A spot's falloff ([`SpotLight::falloff`]): its axis, cos(outer angle) and the
-    /// falloff's slope 1 / max(cos(inner) − cos(outer), 10⁻³). None for a point light.
+    /// A spot's falloff ([`SpotLight::falloff`]): its axis, cos(outer angle) and
+    /// [`SpotLight::falloff_slope`]. None for a point light.
     pub spot: Option<(Vec3, f32, f32)>,
 }
 
@@ -100,18 +99,14 @@ impl LaneLight {
             Light::Point(point) => LaneLight::Punctual(LanePunctualLight {
                 position: point.position,
                 intensity: point.intensity,
-                emission_pdf_w: uniform_sphere_pdf(),
+                emission_pdf_w: point.emission_pdf_w(),
                 spot: None,
             }),
             Light::Spot(spot) => LaneLight::Punctual(LanePunctualLight {
                 position: spot.position,
                 intensity: spot.intensity,
-                emission_pdf_w: uniform_cone_pdf(spot.cos_outer),
-                spot: Some((
-                    spot.direction,
-                    spot.cos_outer,
-                    1.0 / (spot.cos_inner - spot.cos_outer).max(1e-3),
-                )),
+                emission_pdf_w: spot.emission_pdf_w(),
+                spot: Some((spot.direction, spot.cos_outer, spot.falloff_slope())),
             }),
             Light::Directional(_) => {
                 LaneLight::Directional(light.illuminate(&[], Vec3::ZERO, Vec2::ZERO)?)
