@@ -120,8 +120,8 @@ pub struct Candidate {
     /// Cost of one sample per pixel, in closest-hit rays ([`COST_WEIGHTS`]).
     pub cost: f64,
     /// The relMSE its image keeps however long it renders, b², where only merging finds all
-    /// of the light and the candidate does not merge (see the [module](self)); else zero.
-    pub missed_light: Estimate,
+    /// of the light and the candidate does not merge (see the [module](self)).
+    pub missed_light: Option<Estimate>,
     /// Wall-clock time of the pilot (reported; the choice does not depend on it).
     pub time: Duration,
 }
@@ -135,7 +135,7 @@ impl Candidate {
     /// VCM's pilot is noisy (fireflies on glossy models) a bound above it would charge the
     /// other candidates for that noise rather than for light they miss.
     pub fn inefficiency(&self) -> f64 {
-        let missed = self.missed_light.value.max(0.0);
+        let missed = self.missed_light.map_or(0.0, |b2| b2.value.max(0.0));
         (self.relative_variance.upper() + self.samples * missed) * self.cost
     }
 }
@@ -169,12 +169,6 @@ pub struct Estimate {
 }
 
 impl Estimate {
-    /// Nothing, exactly.
-    pub const ZERO: Estimate = Estimate {
-        value: 0.0,
-        standard_error: 0.0,
-    };
-
     /// The value plus two standard errors.
     pub fn upper(&self) -> f64 {
         self.value + 2.0 * self.standard_error
@@ -361,10 +355,8 @@ pub fn choose(
                 .map(|v| relative_variance(v, &mean));
             let gamma = stratification(measured[0].value, measured[1].value);
             let samples = COMPARED_AT_SPP * cheapest / pilot.cost;
-            let missed_light = match merging_needed && !pilot.algorithm.merges() {
-                true => missed_light(pilot, robust, &mean, pilot_size),
-                false => Estimate::ZERO,
-            };
+            let missed_light = (merging_needed && !pilot.algorithm.merges())
+                .then(|| missed_light(pilot, robust, &mean, pilot_size));
             Candidate {
                 algorithm: pilot.algorithm,
                 measured,
@@ -485,19 +477,17 @@ fn pilot(
             }));
         }
     }
-    let n = f64::from(PILOT_FRAMES);
     let mut mean = Vec::new();
     let mut variance = [Vec::new(), Vec::new()];
     let pixel = |p: usize| -> [DVec3; PILOT_FRAMES as usize] {
         std::array::from_fn(|k| frames[k][p].as_dvec3())
     };
     for values in (0..frames[0].len()).map(pixel) {
-        let m = values.iter().sum::<DVec3>() / n;
-        let squares = values.iter().map(|&x| (x - m) * (x - m)).sum::<DVec3>();
+        let (m, s2) = mean_and_variance(&values);
         let half = |k: usize| values[k * HALF..(k + 1) * HALF].iter().sum::<DVec3>() / HALF as f64;
         let difference = half(0) - half(1);
         mean.push(m);
-        variance[0].push(squares / (n - 1.0));
+        variance[0].push(s2);
         variance[1].push(HALF as f64 * difference * difference / 2.0);
     }
     Ok(Outcome::Done(Pilot {
@@ -555,14 +545,9 @@ fn missed_light(
     let (width, height) = (width as usize, height as usize);
     // Per pixel: the mean difference and the variance of that mean.
     let pixel = |p: usize| {
-        let differences = pilot.frames.iter().zip(&robust.frames);
-        let d: Vec<DVec3> = differences.map(|(a, b)| (a[p] - b[p]).as_dvec3()).collect();
-        let d_mean = d.iter().sum::<DVec3>() / n;
-        let s2 = d
-            .iter()
-            .map(|&x| (x - d_mean) * (x - d_mean))
-            .sum::<DVec3>()
-            / (n - 1.0);
+        let d: [DVec3; PILOT_FRAMES as usize] =
+            std::array::from_fn(|k| (pilot.frames[k][p] - robust.frames[k][p]).as_dvec3());
+        let (d_mean, s2) = mean_and_variance(&d);
         (d_mean, s2 / n)
     };
     let block = MISSED_LIGHT_BLOCK;
@@ -584,6 +569,18 @@ fn missed_light(
         }
     }
     mean_of(terms)
+}
+
+/// The mean of a pixel's frame values and their unbiased sample variance,
+/// s² = Σ (x − x̄)² / (n − 1).
+fn mean_and_variance(values: &[DVec3]) -> (DVec3, DVec3) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<DVec3>() / n;
+    let squares = values
+        .iter()
+        .map(|&x| (x - mean) * (x - mean))
+        .sum::<DVec3>();
+    (mean, squares / (n - 1.0))
 }
 
 /// x / (μ² + ε), averaged over the channels.

@@ -22,7 +22,7 @@ use vcm_rs::traversal::Traversal;
 use vcm_rs::{Backend, BuiltTraversal, Shading};
 
 use crate::progressive::{self, Budget, Checkpoint, Outcome, Periodic, Watch};
-use vcm_rs::integrators::choice::{self, Estimate, Pilots, Unpiloted};
+use vcm_rs::integrators::choice::{self, Pilots, Unpiloted};
 use vcm_rs::integrators::{Algorithm, AlgorithmOption, IntegratorOptions, image_size};
 use vcm_rs::plot::{Series, plot_relmse, plot_utilization};
 use vcm_rs::render_loop::{Frames, ScheduleOptions};
@@ -593,8 +593,8 @@ pub fn settle_algorithm(
         let missed = choice
             .candidates
             .iter()
-            .filter(|c| c.missed_light != Estimate::ZERO)
-            .map(|c| format!("{} {:.2e}", c.algorithm.name(), c.missed_light.value));
+            .filter_map(|c| Some((c.algorithm.name(), c.missed_light?)))
+            .map(|(name, b2)| format!("{name} {:.2e}", b2.value));
         let missed = missed.collect::<Vec<_>>();
         let (measure, missed) = match missed.is_empty() {
             true => ("variance × cost", String::new()),
@@ -615,20 +615,19 @@ pub fn settle_algorithm(
     }
     say!(
         "algorithm: {}, the least relative variance (+ 2 standard errors; where a candidate \
-         misses light, + spp × its relMSE b², + 2 standard errors) × cost of its {pilots}:",
+         misses light, + spp × its relMSE b² as estimated) × cost of its {pilots}:",
         choice.algorithm.name()
     );
     for candidate in &choice.candidates {
         let [v1, v4] = candidate.measured;
-        let (v, b2) = (candidate.relative_variance, candidate.missed_light);
+        let v = candidate.relative_variance;
         let chosen = candidate.algorithm == choice.algorithm;
-        let missed = match b2 == Estimate::ZERO {
-            true => String::new(),
-            false => format!(
+        let missed = candidate.missed_light.map_or(String::new(), |b2| {
+            format!(
                 " + {:.0} spp × missed light b² {:.2e} ± {:.2e}",
                 candidate.samples, b2.value, b2.standard_error
-            ),
-        };
+            )
+        });
         say!(
             "  {:<4} variance per sample {:.4} (frames), {:.4} (halves): γ {:.2}; at {:.0} spp \
              ({:.4} ± {:.4}{missed}) × cost {:.2} rays = {:.4}{}",
