@@ -212,7 +212,8 @@ fn merge(s: Surface, b: Bsdf, out: Outgoing, mis: SubpathMis, it: Iteration, seg
                 continue;
             }
             let eval = bsdf_eval(b, out, vertex.wo, false, true);
-            if all(eval.f_cos == vec3(0.0)) {
+            let cos_light = abs(dot3(geometric_normal(vertex.triangle), vertex.wo));
+            if all(eval.f_cos == vec3(0.0)) || cos_light == 0.0 {
                 continue;
             }
             var weight = 1.0;
@@ -220,9 +221,9 @@ fn merge(s: Surface, b: Bsdf, out: Outgoing, mis: SubpathMis, it: Iteration, seg
                 let light = SubpathMis(vertex.mis.x, vertex.mis.y, vertex.mis.z);
                 weight = merge_weight(mis, light, eval.pdf_fwd, eval.pdf_rev);
             }
-            // The light vertices' density is over the surface's area: the photon's flux
-            // weighs f·|ωi·n_s| / |ωi·n_g|.
-            sum += vertex.throughput * eval.f_cos * (weight / abs(dot3(s.n_g, vertex.wo)));
+            // The light vertices' density is over the area of the surfaces they lie on: the
+            // photon's flux weighs f·|ωi·n_s| / |ωi·n_g|, n_g its own triangle's.
+            sum += vertex.throughput * eval.f_cos * (weight / cos_light);
         }
     }
     return sum / (PI * it.radius * it.radius * params.light_paths);

@@ -204,6 +204,12 @@ fn barycentric_error(c0: vec3<f32>, c1: vec3<f32>, c2: vec3<f32>, b: vec3<f32>) 
     return vec3(max_element(sum) * GAMMA_7);
 }
 
+// The unit geometric normal of triangle `index` (counter-clockwise winding faces it).
+fn geometric_normal(index: u32) -> vec3<f32> {
+    let t = triangles[index];
+    return normalized_or(cross3(t.p1.xyz - t.p0.xyz, t.p2.xyz - t.p0.xyz), vec3(0.0));
+}
+
 fn surface_at(index: u32, u: f32, v: f32) -> Surface {
     let t = triangles[index];
     let c0 = t.p0.xyz;
@@ -211,7 +217,7 @@ fn surface_at(index: u32, u: f32, v: f32) -> Surface {
     let c2 = t.p2.xyz;
     let w = 1.0 - u - v;
     let material = bitcast<u32>(t.p0.w);
-    let n_g = normalized_or(cross3(c1 - c0, c2 - c0), vec3(0.0));
+    let n_g = geometric_normal(index);
     var n_s = normalized_or(t.n0.xyz * w + t.n1.xyz * u + t.n2.xyz * v, n_g);
     var uv = vec2(0.0);
     var color = vec3(1.0);

@@ -7,6 +7,8 @@ use std::num::NonZeroU32;
 use glam::Vec3;
 use rayon::prelude::*;
 
+use vcm_scene::mesh::Mesh;
+
 use crate::bidir::mis::SubpathMis;
 use crate::huge_pages::advise_huge_pages;
 
@@ -38,6 +40,22 @@ pub struct LightVertex {
     /// `Option<LightVertex>` (a light path's latest vertex, carried between waves) takes no
     /// more room than a vertex: with a tag of its own it took two cache lines.
     pub path_length: NonZeroU32,
+}
+
+impl LightVertex {
+    /// |ωo·n_g| on arrival: the cosine between `wo` and the geometric normal of the triangle
+    /// the vertex lies on, which converts the light path's density per solid angle into its
+    /// density over that surface's area. `known` is a triangle whose unit geometric normal is
+    /// at hand (a camera vertex's); the mesh is read only for another triangle.
+    pub fn cos_on_arrival(&self, mesh: &Mesh, known: (u32, Vec3)) -> f32 {
+        let (triangle, normal) = known;
+        let normal = if self.triangle == triangle {
+            normal
+        } else {
+            mesh.geometric_normal(self.triangle as usize)
+        };
+        normal.dot(self.wo).abs()
+    }
 }
 
 /// The light vertices of one frame, path by path, each path's from the light on. Vertices
@@ -135,6 +153,34 @@ mod tests {
     fn a_vertex_and_a_vertex_in_flight_take_one_cache_line() {
         assert_eq!(size_of::<LightVertex>(), 64);
         assert_eq!(size_of::<Option<LightVertex>>(), 64);
+    }
+
+    #[test]
+    fn the_cosine_on_arrival_is_the_vertex_s_own_triangle_s() {
+        // A floor (triangle 0, facing +z) meeting a wall (triangle 1, facing +x) at a corner.
+        let mesh = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::Y, Vec3::X, Vec3::Z],
+            triangles: vec![[0, 2, 1], [0, 1, 3]],
+            ..Mesh::default()
+        };
+        let (floor, wall) = (mesh.geometric_normal(0), mesh.geometric_normal(1));
+        assert_eq!((floor, wall), (Vec3::Z, Vec3::X));
+        // Light reaching the wall along the floor's plane: grazing for the floor, head-on
+        // for the wall it lies on.
+        let on_wall = LightVertex {
+            wo: Vec3::X,
+            triangle: 1,
+            ..vertex(0)
+        };
+        assert_eq!(on_wall.cos_on_arrival(&mesh, (0, floor)), 1.0);
+        // On the known triangle the known normal is taken, whatever the mesh holds.
+        let on_floor = LightVertex {
+            wo: Vec3::new(0.6, 0.0, 0.8),
+            triangle: 0,
+            ..vertex(0)
+        };
+        assert_eq!(on_floor.cos_on_arrival(&mesh, (0, floor)), 0.8);
+        assert_eq!(on_floor.cos_on_arrival(&mesh, (0, Vec3::X)), 0.6);
     }
 
     #[test]

@@ -607,7 +607,10 @@ fn merge(
             return;
         }
         let eval = seen.eval(vertex.wo, TransportMode::Radiance, Pdfs::Both);
-        if eval.f_cos == Vec3::ZERO {
+        let point = &surface.point;
+        let cos_light =
+            vertex.cos_on_arrival(&ctx.scene.mesh, (point.triangle, point.geometric_normal));
+        if eval.f_cos == Vec3::ZERO || cos_light == 0.0 {
             return;
         }
         let weight = if ppm {
@@ -621,11 +624,15 @@ fn merge(
                 &ctx.factors,
             )
         };
-        // The light vertices' density is over the surface's area, so the photon's flux
-        // weighs f·|ωi·n_s| / |ωi·n_g|: f_cos (= f·|ωi·n_s| in radiance mode) over the
-        // geometric cosine. With shading normals the two cosines differ; f alone would
-        // reflect the light as if the shading normal were the geometric one.
-        sum += vertex.throughput * eval.f_cos * (weight / surface.cos_geometric(vertex.wo));
+        // The light vertices' density is over the area of the surfaces they lie on, so the
+        // photon's flux weighs f·|ωi·n_s| / |ωi·n_g|: f_cos (= f·|ωi·n_s| in radiance mode)
+        // over the geometric cosine. With shading normals the two cosines differ; f alone
+        // would reflect the light as if the shading normal were the geometric one. n_g is
+        // the photon's own surface's: the light path's pdf, and so the weight, holds that
+        // cosine (the weight falls with it), while a photon on another triangle within the
+        // radius (an edge, a curved mesh) may arrive along the camera vertex's plane, where
+        // 1/|ωi·n_g| of the camera vertex's normal is unbounded.
+        sum += vertex.throughput * eval.f_cos * (weight / cos_light);
     });
     sum / (PI * ctx.radius * ctx.radius * ctx.factors.light_paths)
 }

@@ -78,14 +78,15 @@ fn photon_mapping_approaches_path_tracing_as_the_radius_shrinks() {
             }
         }
     }
-    // At 10% it is not: the comparison above sees a bias of that size (the ceiling around the
-    // light is darkened by merging across the corner).
+    // At 20% it is not: the comparison above sees a bias of that size (z of -5 to -9 in the
+    // lower half, where the disks of merging reach past the edges of the floor and of the
+    // boxes' faces).
     let reference = reference("cornell-box.gltf");
-    let mut blurred = vcm_family("cornell-box.gltf", Algorithm::Ppm, 0.1);
+    let mut blurred = vcm_family("cornell-box.gltf", Algorithm::Ppm, 0.2);
     let z = z_scores(&reference, blurred.as_mut(), FRAMES);
     assert!(
         z.iter().any(|z| z.abs() > Z_LIMIT),
-        "no bias seen at 10%: {z:.2?}"
+        "no bias seen at 20%: {z:.2?}"
     );
 }
 

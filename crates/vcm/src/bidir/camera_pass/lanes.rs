@@ -171,7 +171,12 @@ fn shade<'f>(
         .collect();
     let merged = found.map(|found| {
         let segments = std::array::from_fn(|lane| paths[at(lane).0].walk.segments);
-        merges((&ctx, segments), (&vertex, &mis, &factors), found)
+        let triangles = std::array::from_fn(|lane| at(lane).1.triangle);
+        merges(
+            (&ctx, segments, triangles),
+            (&vertex, &mis, &factors),
+            found,
+        )
     });
     let continuations = Continuations::sample(
         &vertex,
@@ -200,12 +205,16 @@ fn shade<'f>(
 }
 
 /// Merging at each lane's vertex ([`super::merge`]) with the light vertices `found(lane)`
-/// within the radius, for camera paths of `segments` segments with MIS quantities `mis`: the
-/// MIS-weighted density estimate per unit throughput. Each lane adds its vertices' terms in
-/// their order, the k-th of every lane at once.
+/// within the radius, for camera paths of `segments` segments with MIS quantities `mis`, at
+/// vertices on `triangles`: the MIS-weighted density estimate per unit throughput. Each lane
+/// adds its vertices' terms in their order, the k-th of every lane at once.
 #[inline(always)]
 fn merges<'c, 'f>(
-    (ctx, segments): (&impl Fn(usize) -> &'c CameraContext<'c>, [u32; LANES]),
+    (ctx, segments, triangles): (
+        &impl Fn(usize) -> &'c CameraContext<'c>,
+        [u32; LANES],
+        [u32; LANES],
+    ),
     (vertex, mis, factors): (&Vertex, &SubpathMis<F32s>, &MisFactors<F32s>),
     found: &dyn Fn(usize) -> &'f Neighbours,
 ) -> Vec3s {
@@ -214,6 +223,7 @@ fn merges<'c, 'f>(
     for k in 0..most {
         let (mut wo, mut light_throughput) = (Vec3s::default(), Vec3s::default());
         let mut light_mis = SubpathMis::<F32s>::default();
+        let mut cos_light = F32s::splat(1.0);
         let mut merging = [false; LANES];
         for (lane, merges) in merging.iter_mut().enumerate() {
             let ctx = ctx(lane);
@@ -224,17 +234,17 @@ fn merges<'c, 'f>(
             if segments[lane].saturating_add(light.path_length.get()) > ctx.max_segments() {
                 continue;
             }
-            *merges = true;
+            let known = (triangles[lane], vertex.n_g.lane(lane));
+            cos_light.0[lane] = light.cos_on_arrival(&ctx.scene.mesh, known);
+            *merges = cos_light.0[lane] != 0.0;
             wo.set(lane, light.wo);
             light_throughput.set(lane, light.throughput);
             light_mis.set(lane, &light.mis);
         }
         let eval = vertex.eval(wo, TransportMode::Radiance, true);
         let weight = merge_weight(mis, &light_mis, eval.pdf, eval.pdf_rev, factors);
-        // The photon's flux weighs f·|ωi·n_s| / |ωi·n_g| (see `merge`).
-        let term = light_throughput
-            .mul(eval.f_cos)
-            .scale(weight / vertex.cos_geometric(wo));
+        // The photon's flux weighs f·|ωi·n_s| / |ωi·n_g|, n_g its own surface's (see `merge`).
+        let term = light_throughput.mul(eval.f_cos).scale(weight / cos_light);
         let adds = Mask::from_bools(merging) & eval.valid & eval.f_cos.is_nonzero();
         sum = adds.select3(sum + term, sum);
     }
