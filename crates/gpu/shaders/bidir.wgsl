@@ -81,13 +81,21 @@ fn mis_arrive(mis: ptr<function, SubpathMis>, distance_sq: f32, cos_in: f32) {
     (*mis).d_vm = (*mis).d_vm * inv_cos;
 }
 
-// Scattering from a vertex at cosine `cos_out` with the sample's pdfs (`SubpathMis::scatter`).
+// 1 where merging is a technique at a vertex, 0 beside a light where connections run
+// (`MisFactors::beside_light`).
+fn merges_at(beside_light: bool) -> f32 {
+    return select(1.0, 1.0 - factors.connections, beside_light);
+}
+
+// Scattering from a vertex at cosine `cos_out` with the sample's pdfs (`SubpathMis::scatter`);
+// `beside_light` where the vertex lies next to the light (`MisFactors::beside_light`).
 fn mis_scatter(
     mis: ptr<function, SubpathMis>,
     cos_out: f32,
     pdf_fwd: f32,
     pdf_rev: f32,
     specular: bool,
+    beside_light: bool,
 ) {
     let ratio = abs(cos_out) / pdf_fwd;
     let m = *mis;
@@ -96,8 +104,9 @@ fn mis_scatter(
         (*mis).d_vc = m.d_vc * (ratio * pdf_rev);
         (*mis).d_vm = m.d_vm * (ratio * pdf_rev);
     } else {
-        let d_vc = ratio * (m.d_vc * pdf_rev + m.d_vcm * factors.connections + factors.merge);
-        let d_vm = ratio * (m.d_vm * pdf_rev + m.d_vcm * factors.connect + 1.0);
+        let merges = merges_at(beside_light);
+        let d_vc = ratio * (m.d_vc * pdf_rev + m.d_vcm * factors.connections + factors.merge * merges);
+        let d_vm = ratio * (m.d_vm * pdf_rev + m.d_vcm * factors.connect + merges);
         *mis = SubpathMis(1.0 / pdf_fwd, d_vc, d_vm);
     }
 }
@@ -119,19 +128,28 @@ fn light_sample_weight(
     bsdf_rev_pdf_w: f32,
 ) -> f32 {
     let w_light = bsdf_fwd_pdf_w / direct_pdf_w;
+    let merge = factors.merge * merges_at(true);
     let w_camera = (emission_pdf_w * cos_at_receiver / (direct_pdf_w * cos_at_light))
-        * (factors.merge + camera.d_vcm + camera.d_vc * bsdf_rev_pdf_w);
+        * (merge + camera.d_vcm + camera.d_vc * bsdf_rev_pdf_w);
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 
-// Weight of a light vertex's connection to the camera (`camera_connection_weight`).
-fn camera_connection_weight(light: SubpathMis, camera_pdf_a: f32, bsdf_rev_pdf_w: f32) -> f32 {
+// Weight of a light vertex's connection to the camera (`camera_connection_weight`);
+// `beside_light` where the vertex is its path's first.
+fn camera_connection_weight(
+    light: SubpathMis,
+    camera_pdf_a: f32,
+    bsdf_rev_pdf_w: f32,
+    beside_light: bool,
+) -> f32 {
+    let merge = factors.merge * merges_at(beside_light);
     let w_light = (camera_pdf_a / params.light_paths)
-        * (factors.merge + light.d_vcm + light.d_vc * bsdf_rev_pdf_w);
+        * (merge + light.d_vcm + light.d_vc * bsdf_rev_pdf_w);
     return 1.0 / (w_light + 1.0);
 }
 
-// Weight of a connection between a camera vertex and a light vertex (`connection_weight`).
+// Weight of a connection between a camera vertex and a light vertex (`connection_weight`);
+// `light_beside_light` where the light vertex is its path's first.
 fn connection_weight(
     camera: SubpathMis,
     light: SubpathMis,
@@ -139,8 +157,10 @@ fn connection_weight(
     camera_rev_pdf_w: f32,
     light_fwd_pdf_a: f32,
     light_rev_pdf_w: f32,
+    light_beside_light: bool,
 ) -> f32 {
-    let w_light = camera_fwd_pdf_a * (factors.merge + light.d_vcm + light.d_vc * light_rev_pdf_w);
+    let light_merge = factors.merge * merges_at(light_beside_light);
+    let w_light = camera_fwd_pdf_a * (light_merge + light.d_vcm + light.d_vc * light_rev_pdf_w);
     let w_camera = light_fwd_pdf_a
         * (factors.merge + camera.d_vcm + camera.d_vc * camera_rev_pdf_w);
     return 1.0 / (w_light + 1.0 + w_camera);

@@ -138,6 +138,7 @@ fn connect(
         camera_eval.pdf_rev,
         light_eval.pdf_fwd * abs(dot3(s.n_g, direction)) / distance_sq,
         light_eval.pdf_rev,
+        vertex.path_length == 1u,
     );
     let toward_light = transmittance(medium_toward(walk.medium, s, direction), distance);
     let contribution = walk.throughput * toward_light * vertex.throughput * camera_eval.f_cos
@@ -193,6 +194,7 @@ fn grid_cells(it: Iteration, query: vec3<f32>) -> array<u32, 8> {
 // radiance there, per unit throughput.
 fn merge(s: Surface, b: Bsdf, out: Outgoing, mis: SubpathMis, it: Iteration, segments: u32) -> vec3<f32> {
     var sum = vec3(0.0);
+    let shortest = select(2u, 1u, merges_at(true) > 0.0);
     let buckets = grid_cells(it, s.position);
     for (var slot = 0u; slot < 8u; slot++) {
         let bucket = buckets[slot];
@@ -208,7 +210,8 @@ fn merge(s: Surface, b: Bsdf, out: Outgoing, mis: SubpathMis, it: Iteration, seg
                 continue;
             }
             let vertex = cache[it.cache_start + entry.index];
-            if segments + vertex.path_length > params.max_segments {
+            // A light path's first vertex only where merging beside lights is (`merge`).
+            if vertex.path_length < shortest || segments + vertex.path_length > params.max_segments {
                 continue;
             }
             let eval = bsdf_eval(b, out, vertex.wo, false, true);
@@ -249,6 +252,9 @@ fn connect_camera_paths(@builtin(global_invocation_id) id: vec3<u32>) {
     let direction = pixel_direction(&rng, pixel);
     let cos_camera = dot3(params.camera_forward, direction);
     var mis = mis_camera(1.0 / (params.pixel_area * (cos_camera * cos_camera * cos_camera)));
+    // The quantities without the merge at the latest vertex, for the emission the next
+    // segment finds (`CameraMis`).
+    var beside = mis;
     var walk = Walk(params.camera_position, direction, vec3(1.0), vec3(0.0), 1u, 1.0);
     var radiance = vec3(0.0);
     var closest_rays = 0u;
@@ -264,7 +270,7 @@ fn connect_camera_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         if hit.prim == NO_HIT {
             radiance += walk.throughput * transmittance(walk.medium, infinity())
-                * found_escape(walk.direction, mis, segments);
+                * found_escape(walk.direction, beside, segments);
             break;
         }
         // The vertex (`shade` of camera_pass.rs).
@@ -274,7 +280,8 @@ fn connect_camera_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         let s = surface_at(hit.prim, hit.u, hit.v);
         let wo = -walk.direction;
         mis_arrive(&mis, hit.t * hit.t, abs(dot3(s.n_g, wo)));
-        radiance += walk.throughput * found_emission(s, hit, walk.direction, mis, segments);
+        mis_arrive(&beside, hit.t * hit.t, abs(dot3(s.n_g, wo)));
+        radiance += walk.throughput * found_emission(s, hit, walk.direction, beside, segments);
         if segments >= params.max_segments {
             break;
         }
@@ -317,7 +324,9 @@ fn connect_camera_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         let cos_out = abs(dot3(s.n_g, sample.wi));
         let specular = sample.kind == KIND_SPECULAR;
-        mis_scatter(&mis, cos_out, sample.pdf_fwd, sample.pdf_rev, specular);
+        beside = mis;
+        mis_scatter(&beside, cos_out, sample.pdf_fwd, sample.pdf_rev, specular, true);
+        mis_scatter(&mis, cos_out, sample.pdf_fwd, sample.pdf_rev, specular, false);
         if !walk_on(&walk, &rng, s, sample, false) {
             break;
         }

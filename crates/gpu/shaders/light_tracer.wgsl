@@ -75,7 +75,7 @@ fn connect_to_camera(
     if !light_tracing {
         let camera_pdf_a = camera_pdf_w * abs(dot3(s.n_g, direction)) / distance_sq;
         let mis = SubpathMis(vertex.mis.x, vertex.mis.y, vertex.mis.z);
-        weight = camera_connection_weight(mis, camera_pdf_a, eval.pdf_rev);
+        weight = camera_connection_weight(mis, camera_pdf_a, eval.pdf_rev, vertex.path_length == 1u);
     }
     let toward_camera = transmittance(medium_toward(medium, s, direction), distance);
     splat.shadow.contribution = vertex.throughput * toward_camera * eval.f_cos
@@ -227,7 +227,8 @@ fn trace_light_path(path: u32, index: u32, iteration: u32) -> vec2<u32> {
                 if alive {
                     let cos_out = abs(dot3(s.n_g, sample.wi));
                     let specular = sample.kind == KIND_SPECULAR;
-                    mis_scatter(&mis, cos_out, sample.pdf_fwd, sample.pdf_rev, specular);
+                    let beside_light = segments == 1u;
+                    mis_scatter(&mis, cos_out, sample.pdf_fwd, sample.pdf_rev, specular, beside_light);
                     alive = walk_on(&walk, &rng, s, sample, true);
                 }
             }

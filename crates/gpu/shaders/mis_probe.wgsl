@@ -94,7 +94,8 @@ fn camera_mis(j: u32) -> SubpathMis {
     var mis = mis_camera(camera_pdf_w());
     for (var i = 1u; i <= j; i++) {
         if i > 1u {
-            mis_scatter(&mis, cos_toward(i - 1u, i), pdf(i - 1u, i - 2u, i), pdf(i - 1u, i, i - 2u), false);
+            let beside_light = i == probe_paths[current].k;
+            mis_scatter(&mis, cos_toward(i - 1u, i), pdf(i - 1u, i - 2u, i), pdf(i - 1u, i, i - 2u), false, beside_light);
         }
         mis_arrive(&mis, distance_sq(i - 1u, i), cos_toward(i, i - 1u));
     }
@@ -107,7 +108,7 @@ fn light_mis(j: u32) -> SubpathMis {
     var mis = mis_light(direct_pdf(), emission_pdf(), cos_toward(k, k - 1u), false, true);
     for (var i = k - 1u; i >= j; i--) {
         if i + 1u < k {
-            mis_scatter(&mis, cos_toward(i + 1u, i), pdf(i + 1u, i + 2u, i), pdf(i + 1u, i, i + 2u), false);
+            mis_scatter(&mis, cos_toward(i + 1u, i), pdf(i + 1u, i + 2u, i), pdf(i + 1u, i, i + 2u), false, i + 2u == k);
         }
         mis_arrive(&mis, distance_sq(i + 1u, i), cos_toward(i, i + 1u));
     }
@@ -146,15 +147,18 @@ fn probe_mis(@builtin(global_invocation_id) id: vec3<u32>) {
                 pdf(t, t + 1u, t - 1u),
                 pdf(t + 1u, t + 2u, t) * cos_toward(t, t + 1u) / d2,
                 pdf(t + 1u, t, t + 2u),
+                t + 2u == k,
             );
             out.count++;
         }
         let camera_pdf_a = camera_pdf_w() * cos_toward(1u, 0u) / distance_sq(0u, 1u);
-        out.weights[out.count] = camera_connection_weight(light_mis(1u), camera_pdf_a, pdf(1u, 0u, 2u));
+        out.weights[out.count] = camera_connection_weight(light_mis(1u), camera_pdf_a, pdf(1u, 0u, 2u), k == 2u);
         out.count++;
     }
     if factors.merge > 0.0 {
-        for (var j = 1u; j < k; j++) {
+        // Where connections run, nothing merges beside the light.
+        let last = select(k, k - 1u, factors.connections > 0.0);
+        for (var j = 1u; j < last; j++) {
             out.weights[out.count] = merge_weight(
                 camera_mis(j),
                 light_mis(j),

@@ -12,7 +12,7 @@ use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
 use super::mis::{
-    ConnectionPdfs, LightSamplePdfs, SubpathMis, connection_weight, emission_hit_weight,
+    CameraMis, ConnectionPdfs, LightSamplePdfs, connection_weight, emission_hit_weight,
     light_sample_weight, merge_weight,
 };
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
@@ -58,7 +58,7 @@ struct CameraPathState {
     pixel: u32,
     /// The path's sample of the frame: the iteration it belongs to.
     sample: u32,
-    walk: Walk<SubpathMis>,
+    walk: Walk<CameraMis>,
     radiance: Vec3,
     alive: bool,
     /// Occlusion rays queued by the last shading step: the light sample and connections
@@ -71,7 +71,7 @@ struct CameraPathState {
     picks: Option<CachePicks>,
 }
 
-crate::walk::walker!(CameraPathState, SubpathMis);
+crate::walk::walker!(CameraPathState, CameraMis);
 
 /// Bytes a camera path in flight takes with `connections` per vertex: its state, its rays
 /// and hit, and its light sample's and connections' shadow rays (those beyond the inline
@@ -243,7 +243,7 @@ fn start(ctx: &CameraContext, pixel: u32, sample: u32) -> CameraPathState {
             direction,
             throughput: Vec3::ONE,
             medium: Medium::OUTSIDE,
-            mis: SubpathMis::camera(camera_pdf_w, &ctx.factors),
+            mis: CameraMis::camera(camera_pdf_w, &ctx.factors),
             segments: 1,
             roulette: Roulette::UNIT,
         },
@@ -431,7 +431,7 @@ fn found_emission_weight(
     } else {
         let pick_pmf = ctx.scene.light_sampler.pmf(light);
         emission_hit_weight(
-            &path.walk.mis,
+            &path.walk.mis.beside_light(),
             pick_pmf * emitted.direct_pdf_a,
             pick_pmf * emitted.emission_pdf_w,
             &ctx.factors,
@@ -461,7 +461,7 @@ fn light_sample(
         },
         bsdf_rev_pdf_w: eval.pdf_rev,
     };
-    let weight = light_sample_weight(&path.walk.mis, &pdfs, &ctx.factors);
+    let weight = light_sample_weight(&path.walk.mis.subpath, &pdfs, &ctx.factors);
     let transmittance = sample.transmittance(ctx.scene, surface, path.walk.medium);
     let contribution = path.walk.throughput
         * transmittance
@@ -566,7 +566,12 @@ fn connect(
         light_fwd_pdf_a: light_eval.pdf_fwd * surface.cos_geometric(direction) / distance_sq,
         light_rev_pdf_w: light_eval.pdf_rev,
     };
-    let weight = connection_weight(&path.walk.mis, &vertex.mis, &pdfs, &ctx.factors);
+    let light_factors = ctx.factors.at_light_vertex(vertex.path_length.get());
+    let weight = connection_weight(
+        (&path.walk.mis.subpath, &vertex.mis),
+        &pdfs,
+        (&ctx.factors, &light_factors),
+    );
     let transmittance = path
         .walk
         .medium
@@ -600,10 +605,13 @@ fn merge(
     let max_segments = ctx.max_segments();
     let ppm = ctx.settings.algorithm == Algorithm::Ppm;
     let mut sum = Vec3::ZERO;
+    // A light path's first vertex is merged only where merging is a technique beside lights.
+    let shortest = u32::from(ctx.factors.beside_light().merges == 0.0) + 1;
     // The vertices within the radius, found and requested by `look_ahead`.
     found.iter().for_each(|&i| {
         let vertex = &vertices[i as usize];
-        if path.walk.segments.saturating_add(vertex.path_length.get()) > max_segments {
+        let length = vertex.path_length.get();
+        if length < shortest || path.walk.segments.saturating_add(length) > max_segments {
             return;
         }
         let eval = seen.eval(vertex.wo, TransportMode::Radiance, Pdfs::Both);
@@ -617,7 +625,7 @@ fn merge(
             1.0
         } else {
             merge_weight(
-                &path.walk.mis,
+                &path.walk.mis.subpath,
                 &vertex.mis,
                 eval.pdf_fwd,
                 eval.pdf_rev,

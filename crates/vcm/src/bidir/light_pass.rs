@@ -11,7 +11,7 @@ use vcm_scene::sampling::{Sampler, SobolSampler};
 use vcm_scheduler::{Scheduler, Tile, Wavefront};
 use vcm_traversal::{HitBatch, RayBatch};
 
-use super::mis::{SubpathMis, camera_connection_weight};
+use super::mis::{MisFactors, SubpathMis, camera_connection_weight};
 use super::path_order::{in_path_order, path_key};
 use super::{Algorithm, FrameContext, VcmSettings, add_scheduled};
 use crate::integrator::FrameStats;
@@ -452,6 +452,8 @@ fn shade(
     let bsdf = scene.bsdf(&surface.point);
     let seen = bsdf.fix_outgoing(wo);
     let max_segments = ctx.max_segments();
+    // The factors at this vertex (beside the light on the path's first hit).
+    let factors = ctx.factors.at_light_vertex(path.walk.segments);
     if bsdf.has_non_delta() {
         let vertex = LightVertex {
             position: surface.point.position,
@@ -464,9 +466,10 @@ fn shade(
             path_length: path_length(path.walk.segments),
         };
         if splat && path.walk.segments < max_segments {
-            path.splat = seen
-                .as_ref()
-                .and_then(|seen| connect_to_camera(ctx, surface, seen, &vertex, path.walk.medium));
+            path.splat = seen.as_ref().and_then(|seen| {
+                let medium = path.walk.medium;
+                connect_to_camera(ctx, (surface, seen), (&vertex, &factors), medium)
+            });
         }
         path.vertex = Some(vertex);
     }
@@ -476,7 +479,7 @@ fn shade(
             let transport = (TransportMode::Importance, Pdfs::Both);
             path.walk
                 .scatter(scene, surface, &seen, transport, |mis, sample| {
-                    mis.scattered(surface, sample, &ctx.factors)
+                    mis.scattered(surface, sample, &factors)
                 })
                 .is_some()
         });
@@ -488,12 +491,11 @@ fn path_length(segments: u32) -> NonZeroU32 {
 }
 
 /// Connects a light vertex, reached through `medium`, to the camera: its splat, if the vertex
-/// projects into the image and scatters toward the camera.
+/// projects into the image and scatters toward the camera. `factors` are those at the vertex.
 fn connect_to_camera(
     ctx: &FrameContext,
-    surface: &SurfaceHit,
-    seen: &FixedOutgoing,
-    vertex: &LightVertex,
+    (surface, seen): (&SurfaceHit, &FixedOutgoing),
+    (vertex, factors): (&LightVertex, &MisFactors),
     medium: Medium,
 ) -> Option<Splat> {
     let camera = &ctx.scene.camera;
@@ -515,7 +517,7 @@ fn connect_to_camera(
     let weight = if ctx.settings.algorithm == Algorithm::LightTracing {
         1.0
     } else {
-        camera_connection_weight(&vertex.mis, camera_pdf_a, eval.pdf_rev, &ctx.factors)
+        camera_connection_weight(&vertex.mis, camera_pdf_a, eval.pdf_rev, factors)
     };
     let transmittance = medium
         .toward(ctx.scene, &surface.point, direction)

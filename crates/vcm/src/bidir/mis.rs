@@ -25,6 +25,13 @@
 //!   mirror lit by a furnace came out 25% dark after 100 frames). In d_VC and in the light
 //!   subpath's starting d_VM the emission hit is kept while connections are dropped
 //!   ([`MisFactors::hit`], [`MisFactors::connections`]).
+//! * Where connections run (VCM), merging is no technique at a vertex next to a light: light
+//!   samples and emission hits find that light, and merging its direct light only added a
+//!   density estimate's noise (up to 8% of a point light's highlight on a glossy surface came
+//!   through merges, a light vertex in the disk or none). A light path's first vertex is not
+//!   merged and its terms leave the weights ([`MisFactors::beside_light`]); a camera path keeps
+//!   d_VC as it is without its latest vertex's merge for the emission its next segment finds
+//!   ([`CameraMis`]). In BPM merging is the only way such a vertex meets a point light and stays.
 
 use vcm_scene::bsdf::{BsdfSample, LobeKind};
 
@@ -50,6 +57,24 @@ pub(crate) struct MisFactors<T = f32> {
     pub connections: T,
     /// N_p, the number of light paths per frame (the sample count of light tracing splats).
     pub light_paths: T,
+    /// 1 where merging is a technique at the vertex these factors are for, else 0: the
+    /// merge's own term of d_VM.
+    pub merges: T,
+}
+
+impl<T: Real> MisFactors<T> {
+    /// The factors at a vertex next to a light (a light path's first hit; a camera vertex
+    /// that takes a light sample, or whose next segment finds emission): without the merge
+    /// there where connections run (the module's notes).
+    #[inline(always)]
+    pub fn beside_light(&self) -> MisFactors<T> {
+        let kept = T::splat(1.0) - self.connections;
+        MisFactors {
+            merge: self.merge * kept,
+            merges: self.merges * kept,
+            ..*self
+        }
+    }
 }
 
 impl MisFactors<F32s> {
@@ -63,6 +88,7 @@ impl MisFactors<F32s> {
             hit: lanes(|f| f.hit),
             connections: lanes(|f| f.connections),
             light_paths: lanes(|f| f.light_paths),
+            merges: lanes(|f| f.merges),
         }
     }
 }
@@ -82,6 +108,17 @@ impl MisFactors {
             hit: if merging { 1.0 / eta } else { 0.0 },
             connections: if connections { 1.0 } else { 0.0 },
             light_paths,
+            merges: 1.0,
+        }
+    }
+
+    /// The factors at a light vertex `path_length` segments from its light.
+    #[inline(always)]
+    pub fn at_light_vertex(&self, path_length: u32) -> MisFactors {
+        if path_length == 1 {
+            self.beside_light()
+        } else {
+            *self
         }
     }
 }
@@ -163,6 +200,58 @@ impl SubpathMis<F32s> {
     }
 }
 
+/// A camera subpath's quantities: [`SubpathMis`], and d_VC as it is without the merge at the
+/// path's latest vertex, which the emission that the next segment finds weighs: that vertex
+/// lies next to the light there ([`MisFactors::beside_light`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct CameraMis {
+    /// The quantities every other technique weighs.
+    pub subpath: SubpathMis,
+    /// d_VC without the merge at the latest vertex.
+    pub d_vc_beside_light: f32,
+}
+
+impl CameraMis {
+    /// A camera subpath's start ([`SubpathMis::camera`]).
+    pub fn camera(camera_pdf_w: f32, factors: &MisFactors) -> CameraMis {
+        CameraMis::from(SubpathMis::camera(camera_pdf_w, factors))
+    }
+
+    /// The quantities for the emission the latest segment found.
+    pub fn beside_light(&self) -> SubpathMis {
+        SubpathMis {
+            d_vc: self.d_vc_beside_light,
+            ..self.subpath
+        }
+    }
+
+    /// [`SubpathMis::arrive`].
+    pub fn arrive(&mut self, distance_sq: Option<f32>, cos_in: f32) {
+        let mut beside = self.beside_light();
+        beside.arrive(distance_sq, cos_in);
+        self.subpath.arrive(distance_sq, cos_in);
+        self.d_vc_beside_light = beside.d_vc;
+    }
+
+    /// [`SubpathMis::scattered`], and d_VC as it is without the merge at `surface`.
+    pub fn scattered(&mut self, surface: &SurfaceHit, sample: &BsdfSample, factors: &MisFactors) {
+        let mut beside = self.subpath;
+        beside.scattered(surface, sample, &factors.beside_light());
+        self.subpath.scattered(surface, sample, factors);
+        self.d_vc_beside_light = beside.d_vc;
+    }
+}
+
+impl From<SubpathMis> for CameraMis {
+    /// `subpath`, whose latest vertex has no merge.
+    fn from(subpath: SubpathMis) -> CameraMis {
+        CameraMis {
+            subpath,
+            d_vc_beside_light: subpath.d_vc,
+        }
+    }
+}
+
 impl<T: Real> SubpathMis<T> {
     /// Completes the quantities on arriving at the next vertex: the squared segment length
     /// (`None` for the first segment of a light at infinity, whose pdfs are in solid angle)
@@ -196,7 +285,8 @@ impl<T: Real> SubpathMis<T> {
         } else {
             let d_vc =
                 ratio * (self.d_vc * pdf_rev + self.d_vcm * factors.connections + factors.merge);
-            let d_vm = ratio * (self.d_vm * pdf_rev + self.d_vcm * factors.connect + T::splat(1.0));
+            let d_vm =
+                ratio * (self.d_vm * pdf_rev + self.d_vcm * factors.connect + factors.merges);
             *self = SubpathMis {
                 d_vcm: T::splat(1.0) / pdf_fwd,
                 d_vc,
@@ -207,8 +297,9 @@ impl<T: Real> SubpathMis<T> {
 }
 
 /// Weight of emission found by a camera path that hits an area light (eqs. 42–43; the light
-/// sample's term only with connections). `direct_pdf_a` and `emission_pdf_w` include the
-/// light's selection probability.
+/// sample's term only with connections): `camera` holds the quantities without the merge at
+/// the vertex before the light ([`CameraMis::beside_light`]). `direct_pdf_a` and
+/// `emission_pdf_w` include the light's selection probability.
 pub(crate) fn emission_hit_weight(
     camera: &SubpathMis,
     direct_pdf_a: f32,
@@ -236,22 +327,25 @@ pub(crate) struct LightSamplePdfs<T = f32> {
     pub bsdf_rev_pdf_w: T,
 }
 
-/// Weight of a light sample taken at a camera vertex (eqs. 44–45).
+/// Weight of a light sample taken at a camera vertex (eqs. 44–45; the vertex lies next to the
+/// light, [`MisFactors::beside_light`]).
 pub(crate) fn light_sample_weight<T: Real>(
     camera: &SubpathMis<T>,
     pdfs: &LightSamplePdfs<T>,
     factors: &MisFactors<T>,
 ) -> T {
     let w_light = pdfs.bsdf_fwd_pdf_w / pdfs.direct_pdf_w;
+    let merge = factors.beside_light().merge;
     let w_camera = (pdfs.emission_pdf_w * pdfs.cos_at_receiver
         / (pdfs.direct_pdf_w * pdfs.cos_at_light))
-        * (factors.merge + camera.d_vcm + camera.d_vc * pdfs.bsdf_rev_pdf_w);
+        * (merge + camera.d_vcm + camera.d_vc * pdfs.bsdf_rev_pdf_w);
     T::splat(1.0) / (w_light + T::splat(1.0) + w_camera)
 }
 
 /// Weight of a light vertex connected to the camera (a light tracing splat, eqs. 46–47):
 /// `camera_pdf_a` is the area pdf of the camera sampling the light vertex, `bsdf_rev_pdf_w`
-/// the light vertex's BSDF pdf of sampling its incoming direction from the camera direction.
+/// the light vertex's BSDF pdf of sampling its incoming direction from the camera direction;
+/// `factors` those at the light vertex (beside the light on its path's first hit).
 pub(crate) fn camera_connection_weight<T: Real>(
     light: &SubpathMis<T>,
     camera_pdf_a: T,
@@ -276,15 +370,15 @@ pub(crate) struct ConnectionPdfs<T = f32> {
     pub light_rev_pdf_w: T,
 }
 
-/// Weight of a connection between a camera vertex and a light vertex (eqs. 40–41).
+/// Weight of a connection between a camera vertex and a light vertex (eqs. 40–41):
+/// `light_factors` are those at the light vertex (beside the light on its path's first hit).
 pub(crate) fn connection_weight<T: Real>(
-    camera: &SubpathMis<T>,
-    light: &SubpathMis<T>,
+    (camera, light): (&SubpathMis<T>, &SubpathMis<T>),
     pdfs: &ConnectionPdfs<T>,
-    factors: &MisFactors<T>,
+    (factors, light_factors): (&MisFactors<T>, &MisFactors<T>),
 ) -> T {
-    let w_light =
-        pdfs.camera_fwd_pdf_a * (factors.merge + light.d_vcm + light.d_vc * pdfs.light_rev_pdf_w);
+    let w_light = pdfs.camera_fwd_pdf_a
+        * (light_factors.merge + light.d_vcm + light.d_vc * pdfs.light_rev_pdf_w);
     let w_camera =
         pdfs.light_fwd_pdf_a * (factors.merge + camera.d_vcm + camera.d_vc * pdfs.camera_rev_pdf_w);
     T::splat(1.0) / (w_light + T::splat(1.0) + w_camera)

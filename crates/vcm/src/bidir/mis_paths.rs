@@ -140,13 +140,23 @@ impl MisTestPath {
         )
     }
 
+    /// The MIS factors at inner vertex `i`: without the merge beside the light x_k.
+    fn factors_at(&self, i: usize, factors: &MisFactors) -> MisFactors {
+        if i == self.k() - 1 {
+            factors.beside_light()
+        } else {
+            *factors
+        }
+    }
+
     /// The camera subpath's quantities on arriving at vertex `j` (1 ≤ j ≤ k).
     fn camera_mis(&self, j: usize, factors: &MisFactors) -> SubpathMis {
         let mut mis = SubpathMis::camera(self.camera_pdf_w(), factors);
         for i in 1..=j {
             if i > 1 {
                 let (fwd, rev) = (self.pdf(i - 1, i - 2, i), self.pdf(i - 1, i, i - 2));
-                mis.scatter(self.cos(i - 1, i), fwd, rev, false, factors);
+                let here = self.factors_at(i - 1, factors);
+                mis.scatter(self.cos(i - 1, i), fwd, rev, false, &here);
             }
             mis.arrive(Some(self.dist_sq(i - 1, i)), self.cos(i, i - 1));
         }
@@ -162,7 +172,8 @@ impl MisTestPath {
         for i in (j..k).rev() {
             if i < k - 1 {
                 let (fwd, rev) = (self.pdf(i + 1, i + 2, i), self.pdf(i + 1, i, i + 2));
-                mis.scatter(self.cos(i + 1, i), fwd, rev, false, factors);
+                let here = self.factors_at(i + 1, factors);
+                mis.scatter(self.cos(i + 1, i), fwd, rev, false, &here);
             }
             mis.arrive(Some(self.dist_sq(i + 1, i)), self.cos(i, i + 1));
         }
@@ -189,7 +200,7 @@ impl MisTestPath {
     /// compute them, in this order: the camera path hitting the light; where the algorithm
     /// connects, the light sample at x_{k−1}, the connections of camera vertex x_t to light
     /// vertex x_{t+1} for t = 1 … k − 2, the splat of light vertex x₁ through the camera;
-    /// where it merges, the merges at x_j for j = 1 … k − 1.
+    /// where it merges, the merges at x_j for j = 1 … k − 1 (… k − 2 where it connects too).
     pub fn weights(&self, algorithm: Algorithm) -> Vec<f32> {
         let factors = Self::mis_factors(algorithm);
         let k = self.k();
@@ -224,10 +235,12 @@ impl MisTestPath {
                     light_rev_pdf_w: self.pdf(t + 1, t, t + 2),
                 };
                 weights.push(connection_weight(
-                    &self.camera_mis(t, &factors),
-                    &self.light_mis(t + 1, &factors),
+                    (
+                        &self.camera_mis(t, &factors),
+                        &self.light_mis(t + 1, &factors),
+                    ),
                     &pdfs,
-                    &factors,
+                    (&factors, &self.factors_at(t + 1, &factors)),
                 ));
             }
             let camera_pdf_a = self.camera_pdf_w() * self.cos(1, 0) / self.dist_sq(0, 1);
@@ -235,11 +248,13 @@ impl MisTestPath {
                 &self.light_mis(1, &factors),
                 camera_pdf_a,
                 self.pdf(1, 0, 2),
-                &factors,
+                &self.factors_at(1, &factors),
             ));
         }
         if algorithm.merges() {
-            for j in 1..k {
+            // Where connections run, nothing merges beside the light.
+            let last = if algorithm.connects() { k - 1 } else { k };
+            for j in 1..last {
                 weights.push(merge_weight(
                     &self.camera_mis(j, &factors),
                     &self.light_mis(j, &factors),

@@ -15,7 +15,7 @@ use super::{
 };
 use crate::bidir::Algorithm;
 use crate::bidir::mis::{
-    ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight,
+    CameraMis, ConnectionPdfs, LightSamplePdfs, MisFactors, SubpathMis, connection_weight,
     light_sample_weight, merge_weight,
 };
 use crate::lambert::continuation::Continuations;
@@ -125,7 +125,7 @@ fn shade<'f>(
     let mut t = F32s::default();
     let arrivals = Arrivals::gather((tables, scene), (paths, group), |lane, hit, path| {
         light.gather(tables, scene, lane, light_pick.0[lane]);
-        mis.set(lane, &path.walk.mis);
+        mis.set(lane, &path.walk.mis.subpath);
         t.0[lane] = hit.t;
     });
     let Arrivals { vertex, throughput } = arrivals;
@@ -185,6 +185,8 @@ fn shade<'f>(
         (TransportMode::Radiance, true),
     );
     let next_mis = continuations.scattered_mis(&vertex, &mis, &factors);
+    // d_VC without the merge here, for the emission the next segment may find.
+    let next_beside = continuations.scattered_mis(&vertex, &mis, &factors.beside_light());
     for (lane, &(i, _)) in group.iter().enumerate() {
         let path = &mut paths[i];
         path.picks = None;
@@ -200,7 +202,11 @@ fn shade<'f>(
         for ray in rays.filter_map(|shadows| shadows.ray(lane)) {
             path.shadows.push(ray);
         }
-        path.alive = continuations.go_on(lane, &mut path.walk, next_mis.lane(lane));
+        let next = CameraMis {
+            subpath: next_mis.lane(lane),
+            d_vc_beside_light: next_beside.d_vc.0[lane],
+        };
+        path.alive = continuations.go_on(lane, &mut path.walk, next);
     }
 }
 
@@ -231,7 +237,10 @@ fn merges<'c, 'f>(
                 continue;
             };
             let light = &ctx.cache.vertices()[i as usize];
-            if segments[lane].saturating_add(light.path_length.get()) > ctx.max_segments() {
+            // As `merge`: a light path's first vertex only where merging beside lights is.
+            let length = light.path_length.get();
+            let shortest = u32::from(ctx.factors.beside_light().merges == 0.0) + 1;
+            if length < shortest || segments[lane].saturating_add(length) > ctx.max_segments() {
                 continue;
             }
             let known = (triangles[lane], vertex.n_g.lane(lane));
@@ -264,17 +273,14 @@ fn connections(
     picks: &[Pick; LANES],
     (throughput, mis, factors): (Vec3s, &SubpathMis<F32s>, &MisFactors<F32s>),
 ) -> ShadowLanes {
-    let scene = picks
-        .iter()
-        .flatten()
-        .next()
-        .expect("a lane connects")
-        .0
-        .scene;
+    let first = picks.iter().flatten().next().expect("a lane connects").0;
+    let scene = first.scene;
     let (mut position, mut wo) = (Vec3s::default(), Vec3s::default());
     let mut light_throughput = Vec3s::default();
     let (mut light_mis, mut scale) = (SubpathMis::<F32s>::default(), F32s::default());
     let (mut connects, mut lambert) = ([false; LANES], [false; LANES]);
+    // The factors at each lane's light vertex (lanes without one take the first's).
+    let mut light_factors = [first.factors; LANES];
     // Lanes without a Lambert light vertex keep zero inputs: their lane values are replaced
     // or dropped.
     let mut light_surface = SurfaceInputs::default();
@@ -287,6 +293,7 @@ fn connections(
         wo.set(lane, light.wo);
         light_throughput.set(lane, light.throughput);
         light_mis.set(lane, &light.mis);
+        light_factors[lane] = ctx.factors.at_light_vertex(light.path_length.get());
         // c = (1 / N_c) · (N_v / N_p): each pick stands for N_v / N_c vertices of N_p paths.
         let connections = ctx.settings.connections as f32;
         scale.0[lane] = ctx.cache.len() as f32 / (connections * ctx.factors.light_paths);
@@ -332,7 +339,8 @@ fn connections(
         light_fwd_pdf_a: light.pdf * vertex.cos_geometric(direction) / distance_sq,
         light_rev_pdf_w: light.pdf_rev,
     };
-    let weight = connection_weight(mis, &light_mis, &pdfs, factors);
+    let light_factors = MisFactors::lanes(|lane| &light_factors[lane]);
+    let weight = connection_weight((mis, &light_mis), &pdfs, (factors, &light_factors));
     ShadowLanes {
         queued: camera_ok & Mask::from_bools(light_ok) & light.f_cos.is_nonzero(),
         origin: vertex.spawn(direction),

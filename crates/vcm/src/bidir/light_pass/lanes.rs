@@ -64,7 +64,12 @@ fn shade(
         distance_sq.0[lane] = if has_length { hit.t * hit.t } else { 1.0 };
     });
     let Arrivals { vertex, throughput } = arrivals;
-    let factors = MisFactors::lanes(|lane| &ctx(lane).factors);
+    // The factors at each lane's vertex (beside the light on the path's first hit).
+    let here: [MisFactors; LANES] = std::array::from_fn(|lane| {
+        let segments = paths[at(lane).0].walk.segments;
+        ctx(lane).factors.at_light_vertex(segments)
+    });
+    let factors = MisFactors::lanes(|lane| &here[lane]);
     mis.arrive(Some(distance_sq), vertex.cos_geometric_out());
     let splats = lanes
         .splat
