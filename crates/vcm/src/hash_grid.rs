@@ -95,10 +95,25 @@ impl HashGrid {
         points.saturating_mul((per_point + 2 * per_bucket) as u64)
     }
 
-    /// Builds the grid over `points` for queries of radius `radius` (> 0).
+    /// Builds the grid over `points` for queries of radius `radius` (> 0); a query names
+    /// each point by its place in `points`.
     ///
     /// Panics if there are 2³² or more points.
     pub fn build(points: &[Vec3], radius: f32) -> HashGrid {
+        HashGrid::build_named(points, radius, |i| i)
+    }
+
+    /// [`HashGrid::build`], with a query naming `points[i]` by `indices[i]` (increasing, as
+    /// many as the points).
+    ///
+    /// Panics if there are 2³² or more points, or not a name for each.
+    pub fn build_over(points: &[Vec3], indices: &[u32], radius: f32) -> HashGrid {
+        assert_eq!(points.len(), indices.len(), "a name for every point");
+        HashGrid::build_named(points, radius, |i| indices[i as usize])
+    }
+
+    /// The grid over `points`, the point at `i` named `name(i)` (in the order of `i`).
+    fn build_named(points: &[Vec3], radius: f32, name: impl Fn(u32) -> u32 + Sync) -> HashGrid {
         assert!(
             points.len() < u32::MAX as usize,
             "too many points for a hash grid"
@@ -155,7 +170,7 @@ impl HashGrid {
             .par_iter()
             .map(|&i| Entry {
                 position: points[i as usize],
-                index: i,
+                index: name(i),
             })
             .collect();
         grid.starts = starts;
@@ -317,6 +332,26 @@ mod tests {
             for query in random_points(200, &mut rng) {
                 assert_finds_exactly(&grid, &points, radius, query);
             }
+        }
+    }
+
+    #[test]
+    fn a_grid_over_some_points_names_them_as_told() {
+        let mut rng = Rng::new(8, 0);
+        let points = random_points(3000, &mut rng);
+        // Every third point, named by its place among all.
+        let names: Vec<u32> = (0..points.len() as u32).step_by(3).collect();
+        let some: Vec<Vec3> = names.iter().map(|&i| points[i as usize]).collect();
+        let radius = 0.07;
+        let grid = HashGrid::build_over(&some, &names, radius);
+        for query in random_points(200, &mut rng) {
+            let mut found = Vec::new();
+            grid.query(query, |i| found.push(i));
+            found.sort_unstable();
+            let expected: Vec<usize> = (names.iter().map(|&i| i as usize))
+                .filter(|&i| points[i].distance_squared(query) <= radius * radius)
+                .collect();
+            assert_eq!(found, expected, "query {query}");
         }
     }
 

@@ -605,8 +605,9 @@ fn merge(
     let max_segments = ctx.max_segments();
     let ppm = ctx.settings.algorithm == Algorithm::Ppm;
     let mut sum = Vec3::ZERO;
-    // A light path's first vertex is merged only where merging is a technique beside lights.
-    let shortest = u32::from(ctx.factors.beside_light().merges == 0.0) + 1;
+    // A light path's first vertex is merged only where merging is a technique beside lights
+    // (the grid holds it only then).
+    let shortest = ctx.factors.shortest_merged();
     // The vertices within the radius, found and requested by `look_ahead`.
     found.iter().for_each(|&i| {
         let vertex = &vertices[i as usize];

@@ -112,6 +112,16 @@ impl MisFactors {
         }
     }
 
+    /// The fewest segments a light vertex that merges lies from its light: 2 where merging
+    /// beside a light is no technique ([`MisFactors::beside_light`]), else 1.
+    pub fn shortest_merged(&self) -> u32 {
+        if self.beside_light().merges == 0.0 {
+            2
+        } else {
+            1
+        }
+    }
+
     /// The factors at a light vertex `path_length` segments from its light.
     #[inline(always)]
     pub fn at_light_vertex(&self, path_length: u32) -> MisFactors {

@@ -390,8 +390,14 @@ impl Integrator for Vcm {
                 .par_iter()
                 .zip(&iterations)
                 .map(|(cache, ctx)| {
-                    let positions: Vec<_> = cache.vertices().iter().map(|v| v.position).collect();
-                    HashGrid::build(&positions, ctx.radius)
+                    // Only the vertices that merge: in VCM not a light path's first.
+                    let shortest = ctx.factors.shortest_merged();
+                    let (positions, indices): (Vec<_>, Vec<_>) = (cache.vertices().iter())
+                        .zip(0u32..)
+                        .filter(|(vertex, _)| vertex.path_length.get() >= shortest)
+                        .map(|(vertex, i)| (vertex.position, i))
+                        .unzip();
+                    HashGrid::build_over(&positions, &indices, ctx.radius)
                 })
                 .collect();
             stats.grid_build_time = grid_start.elapsed();

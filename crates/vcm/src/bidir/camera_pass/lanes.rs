@@ -239,8 +239,9 @@ fn merges<'c, 'f>(
             let light = &ctx.cache.vertices()[i as usize];
             // As `merge`: a light path's first vertex only where merging beside lights is.
             let length = light.path_length.get();
-            let shortest = u32::from(ctx.factors.beside_light().merges == 0.0) + 1;
-            if length < shortest || segments[lane].saturating_add(length) > ctx.max_segments() {
+            if length < ctx.factors.shortest_merged()
+                || segments[lane].saturating_add(length) > ctx.max_segments()
+            {
                 continue;
             }
             let known = (triangles[lane], vertex.n_g.lane(lane));
