@@ -82,8 +82,9 @@ fn weighted_light_sample(
     let seen = sample.seen;
     let direct_pdf_w = seen.direct_pdf_w * sample.pick_pmf;
     // No BSDF sample hits a delta light.
-    let bsdf_fwd_pdf_w = select(sample.eval.pdf_fwd, 0.0, is_delta_light(light_kind(sample.light)));
-    let weight = light_sample_weight(
+    let delta = is_delta_light(light_kind(sample.light));
+    let bsdf_fwd_pdf_w = select(sample.eval.pdf_fwd, 0.0, delta);
+    var weight = light_sample_weight(
         mis,
         direct_pdf_w,
         seen.emission_pdf_w * sample.pick_pmf,
@@ -92,6 +93,11 @@ fn weighted_light_sample(
         bsdf_fwd_pdf_w,
         sample.eval.pdf_rev,
     );
+    // A delta light at a camera path's first vertex: the only technique of its path
+    // (`MisFactors::splats_first_of_delta`).
+    if delta && walk.segments == 1u && factors.connections > 0.0 {
+        weight = 1.0;
+    }
     let toward_light = transmittance(medium_toward(walk.medium, s, seen.direction), seen.distance);
     let contribution = walk.throughput * toward_light * seen.value * sample.eval.f_cos
         * (weight / direct_pdf_w);

@@ -461,7 +461,14 @@ fn light_sample(
         },
         bsdf_rev_pdf_w: eval.pdf_rev,
     };
-    let weight = light_sample_weight(&path.walk.mis.subpath, &pdfs, &ctx.factors);
+    // A delta light at a camera path's first vertex: the only technique of its path.
+    let only =
+        sample.light.is_delta() && path.walk.segments == 1 && !ctx.factors.splats_first_of_delta();
+    let weight = if only {
+        1.0
+    } else {
+        light_sample_weight(&path.walk.mis.subpath, &pdfs, &ctx.factors)
+    };
     let transmittance = sample.transmittance(ctx.scene, surface, path.walk.medium);
     let contribution = path.walk.throughput
         * transmittance

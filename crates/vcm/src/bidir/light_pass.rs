@@ -52,6 +52,8 @@ struct LightPathState {
     walk: Walk<SubpathMis>,
     /// The path starts at a light at infinity (its first segment has no length).
     from_infinity: bool,
+    /// The path starts at a delta light (a point, spot or directional light).
+    from_delta: bool,
     alive: bool,
     /// The vertex the last shading step produced, if it can be connected or merged.
     vertex: Option<LightVertex>,
@@ -387,6 +389,7 @@ impl LightPathState {
                 roulette: Roulette::UNIT,
             },
             from_infinity: false,
+            from_delta: false,
             alive: false,
             vertex: None,
             splat: None,
@@ -423,6 +426,7 @@ fn emit(ctx: &FrameContext, path: &mut LightPathState) {
     path.walk.origin = offset_off_light(light, emission.position, emission.direction);
     path.walk.direction = emission.direction;
     path.from_infinity = !light.is_finite();
+    path.from_delta = light.is_delta();
     path.alive = path.walk.throughput.max_element() > 0.0 && path.walk.throughput.is_finite();
 }
 
@@ -465,7 +469,7 @@ fn shade(
             v: hit.v,
             path_length: path_length(path.walk.segments),
         };
-        if splat && path.walk.segments < max_segments {
+        if splat && path.walk.segments < max_segments && splats_here(ctx, path) {
             path.splat = seen.as_ref().and_then(|seen| {
                 let medium = path.walk.medium;
                 connect_to_camera(ctx, (surface, seen), (&vertex, &factors), medium)
@@ -483,6 +487,12 @@ fn shade(
                 })
                 .is_some()
         });
+}
+
+/// Whether the vertex `path` has reached is splatted: not a delta light's path's first
+/// where light samples find it ([`MisFactors::splats_first_of_delta`]).
+fn splats_here(ctx: &FrameContext, path: &LightPathState) -> bool {
+    !(path.from_delta && path.walk.segments == 1) || ctx.factors.splats_first_of_delta()
 }
 
 /// The path length of a light vertex `segments` segments from the light.

@@ -131,6 +131,10 @@ fn shade<'f>(
     let Arrivals { vertex, throughput } = arrivals;
     let factors = MisFactors::lanes(|lane| &ctx(lane).factors);
     mis.arrive(Some(t * t), vertex.cos_geometric_out());
+    // Lanes where a delta light's sample is its path's only technique (as `light_sample`).
+    let only_for_delta = Mask::from_bools(std::array::from_fn(|lane| {
+        paths[at(lane).0].walk.segments == 1 && !ctx(lane).factors.splats_first_of_delta()
+    }));
     let sample = light_samples(
         (scene, &vertex, &light),
         throughput,
@@ -145,7 +149,8 @@ fn shade<'f>(
                 bsdf_fwd_pdf_w: illumination.delta.select(F32s::splat(0.0), eval.pdf),
                 bsdf_rev_pdf_w: eval.pdf_rev,
             };
-            light_sample_weight(&mis, &pdfs, &factors)
+            let weight = light_sample_weight(&mis, &pdfs, &factors);
+            (illumination.delta & only_for_delta).select(F32s::splat(1.0), weight)
         },
     );
     let picks: [CachePicks; LANES] = std::array::from_fn(|lane| {

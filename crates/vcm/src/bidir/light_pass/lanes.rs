@@ -84,6 +84,7 @@ fn shade(
     for (lane, &(i, hit)) in group.iter().enumerate() {
         let path = &mut paths[i];
         let max_segments = ctx(lane).max_segments();
+        let splats_here = super::splats_here(ctx(lane), path);
         let walk = &mut path.walk;
         let light_vertex = LightVertex {
             position: vertex.position.lane(lane),
@@ -95,7 +96,7 @@ fn shade(
             v: hit.v,
             path_length: path_length(walk.segments),
         };
-        if walk.segments < max_segments {
+        if walk.segments < max_segments && splats_here {
             path.splat = splats.as_ref().and_then(|s| s.splat(ctx(lane), lane));
         }
         path.vertex = Some(light_vertex);
