@@ -612,14 +612,11 @@ fn merge(
     let max_segments = ctx.max_segments();
     let ppm = ctx.settings.algorithm == Algorithm::Ppm;
     let mut sum = Vec3::ZERO;
-    // A light path's first vertex is merged only where merging is a technique beside lights
-    // (the grid holds it only then).
-    let shortest = ctx.factors.shortest_merged();
-    // The vertices within the radius, found and requested by `look_ahead`.
+    // The vertices within the radius, found and requested by `look_ahead` (the grid holds
+    // only those that merge: in VCM not a light path's first, `MisFactors::shortest_merged`).
     found.iter().for_each(|&i| {
         let vertex = &vertices[i as usize];
-        let length = vertex.path_length.get();
-        if length < shortest || path.walk.segments.saturating_add(length) > max_segments {
+        if path.walk.segments.saturating_add(vertex.path_length.get()) > max_segments {
             return;
         }
         let eval = seen.eval(vertex.wo, TransportMode::Radiance, Pdfs::Both);

@@ -242,11 +242,7 @@ fn merges<'c, 'f>(
                 continue;
             };
             let light = &ctx.cache.vertices()[i as usize];
-            // As `merge`: a light path's first vertex only where merging beside lights is.
-            let length = light.path_length.get();
-            if length < ctx.factors.shortest_merged()
-                || segments[lane].saturating_add(length) > ctx.max_segments()
-            {
+            if segments[lane].saturating_add(light.path_length.get()) > ctx.max_segments() {
                 continue;
             }
             let known = (triangles[lane], vertex.n_g.lane(lane));
