@@ -483,7 +483,7 @@ fn shade(
             let transport = (TransportMode::Importance, Pdfs::Both);
             path.walk
                 .scatter(scene, surface, &seen, transport, |mis, sample| {
-                    mis.scattered(surface, sample, &factors)
+                    mis.scattered(surface, sample, &factors);
                 })
                 .is_some()
         });

@@ -192,11 +192,17 @@ impl SubpathMis {
         }
     }
 
-    /// [`SubpathMis::scatter`] for the BSDF sample `sample` drawn at `surface`.
-    pub fn scattered(&mut self, surface: &SurfaceHit, sample: &BsdfSample, factors: &MisFactors) {
+    /// [`SubpathMis::scatter`] for the BSDF sample `sample` drawn at `surface` (returning
+    /// d_VC without the merge there).
+    pub fn scattered(
+        &mut self,
+        surface: &SurfaceHit,
+        sample: &BsdfSample,
+        factors: &MisFactors,
+    ) -> f32 {
         let specular = sample.lobe == LobeKind::Specular;
         let cos_out = surface.cos_geometric(sample.wi);
-        self.scatter(cos_out, sample.pdf_fwd, sample.pdf_rev, specular, factors);
+        self.scatter(cos_out, sample.pdf_fwd, sample.pdf_rev, specular, factors)
     }
 }
 
@@ -246,18 +252,13 @@ impl CameraMis {
 
     /// [`SubpathMis::arrive`].
     pub fn arrive(&mut self, distance_sq: Option<f32>, cos_in: f32) {
-        let mut beside = self.beside_light();
-        beside.arrive(distance_sq, cos_in);
         self.subpath.arrive(distance_sq, cos_in);
-        self.d_vc_beside_light = beside.d_vc;
+        self.d_vc_beside_light *= 1.0 / cos_in.abs();
     }
 
     /// [`SubpathMis::scattered`], and d_VC as it is without the merge at `surface`.
     pub fn scattered(&mut self, surface: &SurfaceHit, sample: &BsdfSample, factors: &MisFactors) {
-        let mut beside = self.subpath;
-        beside.scattered(surface, sample, &factors.beside_light());
-        self.subpath.scattered(surface, sample, factors);
-        self.d_vc_beside_light = beside.d_vc;
+        self.d_vc_beside_light = self.subpath.scattered(surface, sample, factors);
     }
 }
 
@@ -287,7 +288,9 @@ impl<T: Real> SubpathMis<T> {
 
     /// Updates the quantities for a scattering at the current vertex (eqs. 34–36, 53–55):
     /// `cos_out` is the cosine of the sampled direction, `pdf_fwd` / `pdf_rev` the BSDF's pdfs
-    /// of the sampled direction and of the reverse one.
+    /// of the sampled direction and of the reverse one. Returns the new d_VC as it is without
+    /// the merge at this vertex (the factors [`MisFactors::beside_light`] give), which differs
+    /// only in the merge's term.
     pub fn scatter(
         &mut self,
         cos_out: T,
@@ -295,23 +298,24 @@ impl<T: Real> SubpathMis<T> {
         pdf_rev: T,
         specular: bool,
         factors: &MisFactors<T>,
-    ) {
+    ) -> T {
         let ratio = cos_out.abs() / pdf_fwd;
         if specular {
             self.d_vcm = T::splat(0.0);
             self.d_vc = self.d_vc * (ratio * pdf_rev);
             self.d_vm = self.d_vm * (ratio * pdf_rev);
-        } else {
-            let d_vc =
-                ratio * (self.d_vc * pdf_rev + self.d_vcm * factors.connections + factors.merge);
-            let d_vm =
-                ratio * (self.d_vm * pdf_rev + self.d_vcm * factors.connect + factors.merges);
-            *self = SubpathMis {
-                d_vcm: T::splat(1.0) / pdf_fwd,
-                d_vc,
-                d_vm,
-            };
+            return self.d_vc;
         }
+        // d_VC's terms but the merge's: the connections' along the subpath and this vertex's.
+        let connected = self.d_vc * pdf_rev + self.d_vcm * factors.connections;
+        let d_vc = ratio * (connected + factors.merge);
+        let d_vm = ratio * (self.d_vm * pdf_rev + self.d_vcm * factors.connect + factors.merges);
+        *self = SubpathMis {
+            d_vcm: T::splat(1.0) / pdf_fwd,
+            d_vc,
+            d_vm,
+        };
+        ratio * (connected + factors.beside_light().merge)
     }
 }
 

@@ -48,19 +48,20 @@ impl Continuations {
         }
     }
 
-    /// VCM's quantities `mis` updated for the scatterings at `vertex`
-    /// ([`SubpathMis::scatter`]; the Lambert lobe is never specular).
+    /// VCM's quantities `mis` updated for the scatterings at `vertex`, and d_VC as it is
+    /// without the merges there ([`SubpathMis::scatter`]; the Lambert lobe is never
+    /// specular).
     #[inline(always)]
     pub fn scattered_mis(
         &self,
         vertex: &Vertex,
         mis: &SubpathMis<F32s>,
         factors: &MisFactors<F32s>,
-    ) -> SubpathMis<F32s> {
+    ) -> (SubpathMis<F32s>, F32s) {
         let (eval, mut next_mis) = (&self.next.eval, *mis);
         let cos_out = vertex.cos_geometric(self.next.wi);
-        next_mis.scatter(cos_out, eval.pdf, eval.pdf_rev, false, factors);
-        next_mis
+        let d_vc_beside_light = next_mis.scatter(cos_out, eval.pdf, eval.pdf_rev, false, factors);
+        (next_mis, d_vc_beside_light)
     }
 
     /// Continues lane `lane`'s walk: moves its numbers to roulette's pair (past those its

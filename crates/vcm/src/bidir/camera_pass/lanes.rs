@@ -189,9 +189,8 @@ fn shade<'f>(
         &numbers,
         (TransportMode::Radiance, true),
     );
-    let next_mis = continuations.scattered_mis(&vertex, &mis, &factors);
-    // d_VC without the merge here, for the emission the next segment may find.
-    let next_beside = continuations.scattered_mis(&vertex, &mis, &factors.beside_light());
+    // With d_VC without the merge here, for the emission the next segment may find.
+    let (next_mis, next_beside) = continuations.scattered_mis(&vertex, &mis, &factors);
     for (lane, &(i, _)) in group.iter().enumerate() {
         let path = &mut paths[i];
         path.picks = None;
@@ -209,7 +208,7 @@ fn shade<'f>(
         }
         let next = CameraMis {
             subpath: next_mis.lane(lane),
-            d_vc_beside_light: next_beside.d_vc.0[lane],
+            d_vc_beside_light: next_beside.0[lane],
         };
         path.alive = continuations.go_on(lane, &mut path.walk, next);
     }

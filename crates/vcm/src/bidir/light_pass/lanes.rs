@@ -80,7 +80,7 @@ fn shade(
         &numbers,
         (TransportMode::Importance, true),
     );
-    let next_mis = continuations.scattered_mis(&vertex, &mis, &factors);
+    let (next_mis, _) = continuations.scattered_mis(&vertex, &mis, &factors);
     for (lane, &(i, hit)) in group.iter().enumerate() {
         let path = &mut paths[i];
         let max_segments = ctx(lane).max_segments();
