@@ -461,9 +461,7 @@ fn light_sample(
         },
         bsdf_rev_pdf_w: eval.pdf_rev,
     };
-    // A delta light at a camera path's first vertex: the only technique of its path.
-    let only =
-        sample.light.is_delta() && path.walk.segments == 1 && !ctx.factors.splats_first_of_delta();
+    let only = sample.light.is_delta() && ctx.factors.only_delta_light_sample(path.walk.segments);
     let weight = if only {
         1.0
     } else {

@@ -121,6 +121,13 @@ impl MisFactors {
         self.connections == 0.0
     }
 
+    /// Whether a delta light's sample at a camera path's vertex `segments` segments from the
+    /// camera is its path's only technique (weight 1): at the first vertex, where the light
+    /// path's first vertex is not splatted ([`MisFactors::splats_first_of_delta`]).
+    pub fn only_delta_light_sample(&self, segments: u32) -> bool {
+        segments == 1 && !self.splats_first_of_delta()
+    }
+
     /// The fewest segments a light vertex that merges lies from its light: 2 where merging
     /// beside a light is no technique ([`MisFactors::beside_light`]), else 1.
     pub fn shortest_merged(&self) -> u32 {

@@ -133,7 +133,8 @@ fn shade<'f>(
     mis.arrive(Some(t * t), vertex.cos_geometric_out());
     // Lanes where a delta light's sample is its path's only technique (as `light_sample`).
     let only_for_delta = Mask::from_bools(std::array::from_fn(|lane| {
-        paths[at(lane).0].walk.segments == 1 && !ctx(lane).factors.splats_first_of_delta()
+        let segments = paths[at(lane).0].walk.segments;
+        ctx(lane).factors.only_delta_light_sample(segments)
     }));
     let sample = light_samples(
         (scene, &vertex, &light),
