@@ -89,6 +89,7 @@ fn merges_at(beside_light: bool) -> f32 {
 
 // Scattering from a vertex at cosine `cos_out` with the sample's pdfs (`SubpathMis::scatter`);
 // `beside_light` where the vertex lies next to the light (`MisFactors::beside_light`).
+// Returns the new d_VC as it is without the merge at the vertex.
 fn mis_scatter(
     mis: ptr<function, SubpathMis>,
     cos_out: f32,
@@ -96,19 +97,22 @@ fn mis_scatter(
     pdf_rev: f32,
     specular: bool,
     beside_light: bool,
-) {
+) -> f32 {
     let ratio = abs(cos_out) / pdf_fwd;
     let m = *mis;
     if specular {
         (*mis).d_vcm = 0.0;
         (*mis).d_vc = m.d_vc * (ratio * pdf_rev);
         (*mis).d_vm = m.d_vm * (ratio * pdf_rev);
-    } else {
-        let merges = merges_at(beside_light);
-        let d_vc = ratio * (m.d_vc * pdf_rev + m.d_vcm * factors.connections + factors.merge * merges);
-        let d_vm = ratio * (m.d_vm * pdf_rev + m.d_vcm * factors.connect + merges);
-        *mis = SubpathMis(1.0 / pdf_fwd, d_vc, d_vm);
+        return (*mis).d_vc;
     }
+    let merges = merges_at(beside_light);
+    // d_VC's terms but the merge's: the connections' along the subpath and this vertex's.
+    let connected = m.d_vc * pdf_rev + m.d_vcm * factors.connections;
+    let d_vc = ratio * (connected + factors.merge * merges);
+    let d_vm = ratio * (m.d_vm * pdf_rev + m.d_vcm * factors.connect + merges);
+    *mis = SubpathMis(1.0 / pdf_fwd, d_vc, d_vm);
+    return ratio * (connected + factors.merge * merges_at(true));
 }
 
 // Weight of emission a camera path found by itself (`emission_hit_weight`).

@@ -94,7 +94,7 @@ fn weighted_light_sample(
         sample.eval.pdf_rev,
     );
     // A delta light at a camera path's first vertex: the only technique of its path
-    // (`MisFactors::splats_first_of_delta`).
+    // (`MisFactors::only_delta_light_sample`).
     if delta && walk.segments == 1u && factors.connections > 0.0 {
         weight = 1.0;
     }
@@ -200,7 +200,6 @@ fn grid_cells(it: Iteration, query: vec3<f32>) -> array<u32, 8> {
 // radiance there, per unit throughput.
 fn merge(s: Surface, b: Bsdf, out: Outgoing, mis: SubpathMis, it: Iteration, segments: u32) -> vec3<f32> {
     var sum = vec3(0.0);
-    let shortest = select(2u, 1u, merges_at(true) > 0.0);
     let buckets = grid_cells(it, s.position);
     for (var slot = 0u; slot < 8u; slot++) {
         let bucket = buckets[slot];
@@ -215,9 +214,9 @@ fn merge(s: Surface, b: Bsdf, out: Outgoing, mis: SubpathMis, it: Iteration, seg
             if !(dot3(d, d) <= it.radius_sq) {
                 continue;
             }
+            // The grid holds only the vertices that merge (grid.wgsl).
             let vertex = cache[it.cache_start + entry.index];
-            // A light path's first vertex only where merging beside lights is (`merge`).
-            if vertex.path_length < shortest || segments + vertex.path_length > params.max_segments {
+            if segments + vertex.path_length > params.max_segments {
                 continue;
             }
             let eval = bsdf_eval(b, out, vertex.wo, false, true);
@@ -330,9 +329,8 @@ fn connect_camera_paths(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         let cos_out = abs(dot3(s.n_g, sample.wi));
         let specular = sample.kind == KIND_SPECULAR;
-        beside = mis;
-        mis_scatter(&beside, cos_out, sample.pdf_fwd, sample.pdf_rev, specular, true);
-        mis_scatter(&mis, cos_out, sample.pdf_fwd, sample.pdf_rev, specular, false);
+        let d_vc_beside = mis_scatter(&mis, cos_out, sample.pdf_fwd, sample.pdf_rev, specular, false);
+        beside = SubpathMis(mis.d_vcm, d_vc_beside, mis.d_vm);
         if !walk_on(&walk, &rng, s, sample, false) {
             break;
         }

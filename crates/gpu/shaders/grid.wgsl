@@ -1,7 +1,9 @@
 // The iterations' hash grids built on the device (vcm's `HashGrid::build`), after cache.wgsl:
 // the same grid the CPU builds over each iteration's light vertices — bounds, cells 2r wide,
 // as many buckets as vertices (a power of two), a counting sort by bucket, each bucket's
-// entries in index order — so that merging finds the CPU's vertices in the CPU's order.
+// entries in index order — so that merging finds the CPU's vertices in the CPU's order. As on
+// the CPU, a grid holds only the vertices that merge (`MisFactors::shortest_merged`), and
+// the device counts them: the host sizes each grid for its whole cache.
 // Kernels, in order: grid_bounds (per vertex), grid_layout (per iteration), grid_count (per
 // vertex), grid_scan (a workgroup per iteration), [the host copies the starts to the
 // cursors], grid_scatter (per vertex), grid_sort (per bucket).
@@ -11,7 +13,8 @@ struct GridParams {
     vertices: u32,
     iterations: u32,
     starts: u32,
-    unused: u32,
+    // The fewest segments a vertex that merges lies from its light.
+    shortest: u32,
 }
 
 @group(0) @binding(0) var<storage, read> cache: array<LightVertex>;
@@ -24,12 +27,20 @@ struct GridParams {
 @group(0) @binding(4) var<storage, read_write> bucket_of: array<u32>;
 // Each bucket's next free entry.
 @group(0) @binding(5) var<storage, read_write> cursors: array<atomic<u32>>;
-// Per iteration the bounds of its vertices' positions, as order-preserving bits: the
-// smallest x, y, z, then the largest.
+// Per iteration the bounds of its merging vertices' positions, as order-preserving bits: the
+// smallest x, y, z, then the largest; then how many they are.
 @group(0) @binding(6) var<storage, read_write> bounds: array<atomic<u32>>;
 @group(0) @binding(7) var<uniform> grid: GridParams;
 
 const GRID_WORKGROUP: u32 = 64u;
+
+// Slots of `bounds` per iteration.
+const BOUNDS_SLOTS: u32 = 7u;
+
+// Whether invocation `v` names a vertex of the cache that merges.
+fn merging_vertex(v: u32) -> bool {
+    return v < grid.vertices && cache[v].path_length >= grid.shortest;
+}
 
 // The invocation's index over a dispatch of rows of `num_workgroups.x` workgroups.
 fn invocation(id: vec3<u32>, groups: vec3<u32>) -> u32 {
@@ -63,24 +74,32 @@ fn unordered(o: u32) -> f32 {
 @compute @workgroup_size(GRID_WORKGROUP)
 fn grid_bounds(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let v = invocation(id, groups);
-    if v >= grid.vertices {
+    if !merging_vertex(v) {
         return;
     }
     let p = cache[v].position;
-    let at = 6u * iteration_at(v, true);
+    let at = BOUNDS_SLOTS * iteration_at(v, true);
     for (var k = 0u; k < 3u; k++) {
         atomicMin(&bounds[at + k], ordered(p[k]));
         atomicMax(&bounds[at + 3u + k], ordered(p[k]));
     }
+    atomicAdd(&bounds[at + 6u], 1u);
 }
 
 @compute @workgroup_size(GRID_WORKGROUP)
 fn grid_layout(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let s = invocation(id, groups);
-    if s >= grid.iterations || iterations[s].entry_count == 0u {
+    if s >= grid.iterations {
         return;
     }
-    let at = 6u * s;
+    let at = BOUNDS_SLOTS * s;
+    // As many buckets as vertices, a power of two.
+    let count = atomicLoad(&bounds[at + 6u]);
+    iterations[s].entry_count = count;
+    iterations[s].bucket_mask = select((1u << (32u - countLeadingZeros(count - 1u))) - 1u, 0u, count <= 1u);
+    if count == 0u {
+        return;
+    }
     for (var k = 0u; k < 3u; k++) {
         iterations[s].grid_min[k] = unordered(atomicLoad(&bounds[at + k]));
         iterations[s].grid_max[k] = unordered(atomicLoad(&bounds[at + 3u + k]));
@@ -95,7 +114,7 @@ fn cell_of(it: Iteration, p: vec3<f32>) -> vec3<i32> {
 @compute @workgroup_size(GRID_WORKGROUP)
 fn grid_count(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let v = invocation(id, groups);
-    if v >= grid.vertices {
+    if !merging_vertex(v) {
         return;
     }
     let it = iterations[iteration_at(v, true)];
@@ -132,7 +151,7 @@ fn grid_scan(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
 @compute @workgroup_size(GRID_WORKGROUP)
 fn grid_scatter(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let v = invocation(id, groups);
-    if v >= grid.vertices {
+    if !merging_vertex(v) {
         return;
     }
     let it = iterations[iteration_at(v, true)];

@@ -289,7 +289,9 @@ impl GpuFrames {
                         self.run_pass(0, pass(LightPass::FirstVertices { kept }), frame, true)?
                             && self.index_vertices(&mut iterations)?
                             && self.run_pass(0, pass(later), frame, false)?
-                            && (!bidir.plan.merges || self.build_grids(&mut iterations)?)
+                            && (!bidir.plan.merges
+                                || self
+                                    .build_grids(&mut iterations, bidir.plan.shortest_merged())?)
                             && self.run_pass(1, pass(LightPass::LightTracing), frame, false)?;
                     cached = iterations.iter().map(|it| u64::from(it.cache_count)).sum();
                     done
@@ -506,23 +508,26 @@ impl GpuFrames {
         Ok(true)
     }
 
-    /// Builds each iteration's hash grid over its light vertices within its radius on the
-    /// device (`grid.wgsl`: the CPU's `HashGrid::build`), recording each grid's layout in
-    /// `iterations` (always `true`, to chain with the passes).
-    fn build_grids(&mut self, iterations: &mut [IterationRecord]) -> Result<bool, String> {
+    /// Builds each iteration's hash grid over its light vertices that merge (`shortest` or
+    /// more segments from their light) within its radius on the device (`grid.wgsl`: the
+    /// CPU's `HashGrid::build_over`), recording each grid's layout in `iterations` (the
+    /// device counts its buckets and entries; always `true`, to chain with the passes).
+    fn build_grids(
+        &mut self,
+        iterations: &mut [IterationRecord],
+        shortest: u32,
+    ) -> Result<bool, String> {
         let gpu = Arc::clone(&self.kernels[0].gpu);
         let mut starts = 0u64;
         for it in iterations.iter_mut() {
-            // As many buckets as vertices, a power of two, and the total after them.
+            // Room for as many buckets as vertices, a power of two, and the total after them.
             let buckets = it.cache_count.max(1).next_power_of_two();
             it.grid_starts = starts as u32;
             starts += u64::from(buckets) + 1;
             it.grid_entries = it.cache_start;
-            it.bucket_mask = buckets - 1;
             // Cells 2r wide.
             it.inv_cell_size = 0.5 / it.radius;
             it.radius_sq = it.radius * it.radius;
-            it.entry_count = it.cache_count;
         }
         let vertices: u64 = iterations.iter().map(|it| u64::from(it.cache_count)).sum();
         let entry_bytes = vertices * size_of::<GridEntry>() as u64;
@@ -544,7 +549,7 @@ impl GpuFrames {
         };
         let grids = self.grids.get_or_insert_with(|| GridBuilder::new(&gpu));
         let counts = (vertices as u32, iterations.len() as u32, starts as u32);
-        grids.build(&gpu, &buffers, counts)?;
+        grids.build(&gpu, &buffers, counts, shortest)?;
         Ok(true)
     }
 

@@ -15,7 +15,7 @@ struct GridParams {
     vertices: u32,
     iterations: u32,
     starts: u32,
-    unused: u32,
+    shortest: u32,
 }
 
 /// The kernels in the order they run (`grid.wgsl`), and whether each runs per vertex, per
@@ -28,6 +28,9 @@ const KERNELS: [(&str, Over); 6] = [
     ("grid_scatter", Over::Vertices),
     ("grid_sort", Over::Starts),
 ];
+
+/// `BOUNDS_SLOTS` of `grid.wgsl`: an iteration's bounds (6) and its vertices that merge.
+const BOUNDS_SLOTS: usize = 7;
 
 /// What a kernel's invocations run over.
 #[derive(Clone, Copy)]
@@ -91,20 +94,23 @@ impl GridBuilder {
         }
     }
 
-    /// Builds the grids of `iterations` iterations over the frame's `vertices` light
-    /// vertices into `buffers`, whose bucket starts number `starts` in all; waits for the
-    /// device.
+    /// Builds the grids of `iterations` iterations over those of the frame's `vertices` light
+    /// vertices that lie `shortest` or more segments from their light (the ones that merge)
+    /// into `buffers`, whose bucket starts number `starts` in all (room for as many buckets
+    /// as each iteration's cache has vertices); writes each grid's bucket count and entry
+    /// count into the iterations; waits for the device.
     pub fn build(
         &mut self,
         gpu: &GpuDevice,
         buffers: &GridBuffers,
         (vertices, iterations, starts): (u32, u32, u32),
+        shortest: u32,
     ) -> Result<(), String> {
         let device = &gpu.device;
         let sizes = [
             4 * u64::from(vertices),
             4 * u64::from(starts),
-            24 * u64::from(iterations),
+            4 * BOUNDS_SLOTS as u64 * u64::from(iterations),
         ];
         for (buffer, bytes) in self.scratch.iter_mut().zip(sizes) {
             if bytes > buffer.size() {
@@ -121,14 +127,14 @@ impl GridBuilder {
             vertices,
             iterations,
             starts,
-            unused: 0,
+            shortest,
         };
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         // The bounds start empty: the largest order for the minima, the smallest for the
-        // maxima.
+        // maxima; and no vertex counted.
         let empty: Vec<u32> = (0..iterations)
-            .flat_map(|_| [u32::MAX, u32::MAX, u32::MAX, 0, 0, 0])
+            .flat_map(|_| [u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0])
             .collect();
         gpu.queue
             .write_buffer(&self.scratch[2], 0, bytemuck::cast_slice(&empty));
@@ -176,6 +182,15 @@ mod tests {
     use super::*;
     use crate::frames::{GridEntry, IterationRecord, LightVertex};
 
+    /// The fewest segments from its light of a vertex the test's grids hold.
+    const SHORTEST: u32 = 2;
+
+    /// The test's `i`-th vertex of an iteration lies this many segments from its light (1
+    /// for the first, which alone its iteration of one vertex holds).
+    fn path_length(i: usize) -> u32 {
+        1 + (i as u32 * 7) % 3
+    }
+
     #[test]
     fn the_grid_kernels_workgroups_are_the_ones_dispatch_shape_counts() {
         let size = vcm_traversal_wgpu::shader::WORKGROUP_SIZE;
@@ -183,7 +198,9 @@ mod tests {
     }
 
     /// The device builds the CPU's grids bit for bit: bounds, bucket starts and entries in
-    /// the same order, for iterations of several sizes (one empty) in one frame's cache.
+    /// the same order, for iterations of several sizes (one empty, one whose only vertex
+    /// does not merge) in one frame's cache, over the vertices two or more segments from
+    /// their light.
     #[test]
     fn device_grids_are_the_cpus() {
         let Some(gpu) = device_or_skip() else { return };
@@ -208,16 +225,15 @@ mod tests {
                 cache_count: points.len() as u32,
                 grid_starts: starts,
                 grid_entries: cache.len() as u32,
-                bucket_mask: buckets - 1,
                 inv_cell_size: 0.5 / radius,
                 radius,
                 radius_sq: radius * radius,
-                entry_count: points.len() as u32,
                 ..IterationRecord::zeroed()
             });
             starts += buckets + 1;
-            cache.extend(points.iter().map(|p| LightVertex {
+            cache.extend(points.iter().enumerate().map(|(i, p)| LightVertex {
                 position: p.to_array(),
+                path_length: path_length(i),
                 ..LightVertex::zeroed()
             }));
         }
@@ -242,7 +258,7 @@ mod tests {
         };
         let counts = (cache.len() as u32, iterations.len() as u32, starts);
         GridBuilder::new(&gpu)
-            .build(&gpu, &buffers, counts)
+            .build(&gpu, &buffers, counts, SHORTEST)
             .unwrap();
         let read = |buffer: &wgpu::Buffer| -> Vec<u8> {
             let readback = device.create_buffer(&wgpu::BufferDescriptor {
@@ -260,9 +276,13 @@ mod tests {
         let device_entries: Vec<GridEntry> = bytemuck::pod_collect_to_vec(&read(&entries_buffer));
         let records: Vec<IterationRecord> = bytemuck::pod_collect_to_vec(&read(&iterations_buffer));
         for (s, (points, &radius)) in points.iter().zip(&radii).enumerate() {
-            let grid = HashGrid::build(points, radius);
+            let (points, indices): (Vec<Vec3>, Vec<u32>) = (points.iter().zip(0u32..))
+                .filter(|&(_, i)| path_length(i as usize) >= SHORTEST)
+                .unzip();
+            let grid = HashGrid::build_over(&points, &indices, radius);
             let layout = grid.layout();
             let it = &records[s];
+            assert_eq!(it.entry_count as usize, points.len(), "{s}");
             let first = it.grid_starts as usize;
             let buckets = it.bucket_mask as usize + 1;
             assert_eq!(

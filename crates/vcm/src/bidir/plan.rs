@@ -55,6 +55,12 @@ impl BidirPlan {
         [f.merge, f.connect, f.hit, f.connections]
     }
 
+    /// The fewest segments a light vertex that merges lies from its light (a grid holds only
+    /// those: [`MisFactors::shortest_merged`]).
+    pub fn shortest_merged(&self) -> u32 {
+        MisFactors::new(self.connects, self.merges, 1.0, 1.0).shortest_merged()
+    }
+
     /// Each part and why it runs or is left out, for `algorithm` on a scene with `features`.
     pub fn decisions(&self, algorithm: Algorithm, features: &SceneFeatures) -> Vec<Decision> {
         let name = algorithm.name();
