@@ -107,6 +107,10 @@ pub struct IntegratorOptions {
     #[arg(long, default_value_t = 1,
           value_parser = clap::value_parser!(u32).range(1..=i64::from(vcm::MAX_CONNECTIONS)))]
     pub connections: u32,
+    /// Light paths each iteration traces per pixel (lt, bpt, ppm, bpm, vcm; 1/16 to 16):
+    /// default 1, or with `--algo auto` the number its pilots find the most efficient for VCM.
+    #[arg(long, value_parser = light_paths_per_pixel)]
+    pub light_paths: Option<f32>,
     /// Initial merge radius (ppm, bpm, vcm): pixel footprints at the surfaces the camera
     /// sees (2px), or a fraction of the scene's bounding-sphere radius (0.003).
     #[arg(long, default_value_t = MergeRadius::default(), allow_hyphen_values = true)]
@@ -118,6 +122,17 @@ pub struct IntegratorOptions {
     /// (`vcm render --explain` lists them); the image's expectation is the same.
     #[arg(long)]
     pub no_prune: bool,
+}
+
+/// `--light-paths`: a number of light paths per pixel within the range the integrator takes.
+fn light_paths_per_pixel(text: &str) -> Result<f32, String> {
+    let most = vcm::MAX_LIGHT_PATHS_PER_PIXEL;
+    match text.parse::<f32>() {
+        Ok(n) if (1.0 / most..=most).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "expected a number of light paths per pixel from 1/{most} to {most}"
+        )),
+    }
 }
 
 impl IntegratorOptions {
@@ -139,6 +154,7 @@ impl Default for IntegratorOptions {
             sampler: SamplerKind::Sobol,
             max_depth: None,
             connections: 1,
+            light_paths: None,
             radius: MergeRadius::default(),
             alpha: DEFAULT_ALPHA,
             no_prune: false,
@@ -188,6 +204,7 @@ fn vcm_settings(
         sequence: options.sampler.sequence(),
         max_depth: options.max_depth,
         connections: options.connections,
+        light_paths_per_pixel: options.light_paths.unwrap_or(1.0),
         radius: options.radius,
         alpha: options.alpha,
         prune: !options.no_prune,

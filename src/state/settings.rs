@@ -20,14 +20,15 @@ pub struct RenderSettings {
     pub height: u32,
     /// The file's camera rendered from (`vcm render --camera`), `None` for the default.
     pub camera: Option<String>,
-    /// Seed, sampler, path length, connections, merge radius and its reduction, pruning.
+    /// Seed, sampler, path length, connections, light paths, merge radius and its reduction,
+    /// pruning.
     pub options: IntegratorOptions,
 }
 
 /// Every setting of [`RenderSettings`]: its key in the state file's metadata and the option
 /// that gives it (`vcm render --max-depth` has the id `max_depth`, as the viewer's option and
 /// the Python keyword), in the order messages list them.
-pub const SETTINGS: [(&str, &str); 11] = [
+pub const SETTINGS: [(&str, &str); 12] = [
     ("algorithm", "algo"),
     ("width", "width"),
     ("height", "height"),
@@ -36,20 +37,21 @@ pub const SETTINGS: [(&str, &str); 11] = [
     ("sampler", "sampler"),
     ("max_depth", "max_depth"),
     ("connections", "connections"),
+    ("light_paths", "light_paths"),
     ("radius", "radius"),
     ("alpha", "alpha"),
     ("no_prune", "no_prune"),
 ];
 
 /// The metadata keys of [`SETTINGS`].
-pub const SETTING_KEYS: [&str; 11] = column(0);
+pub const SETTING_KEYS: [&str; 12] = column(0);
 
 /// The options of [`SETTINGS`] (for clap's `conflicts_with_all`, which takes an array).
-pub const SETTING_OPTIONS: [&str; 11] = column(1);
+pub const SETTING_OPTIONS: [&str; 12] = column(1);
 
 /// Column `index` (0: keys, 1: options) of [`SETTINGS`].
-const fn column(index: usize) -> [&'static str; 11] {
-    let mut names = [""; 11];
+const fn column(index: usize) -> [&'static str; 12] {
+    let mut names = [""; 12];
     let mut i = 0;
     while i < names.len() {
         names[i] = if index == 0 {
@@ -71,8 +73,8 @@ fn enum_name(value: &impl ValueEnum) -> String {
 
 impl RenderSettings {
     /// The settings as text, one entry per key of [`SETTING_KEYS`]: numbers as Rust prints
-    /// them (floats in their shortest form that reads back exactly), `max_depth` and `camera`
-    /// as `none` when not set.
+    /// them (floats in their shortest form that reads back exactly), `max_depth`,
+    /// `light_paths` and `camera` as `none` when not set.
     pub fn to_metadata(&self) -> BTreeMap<String, String> {
         let o = &self.options;
         let values = [
@@ -84,6 +86,8 @@ impl RenderSettings {
             enum_name(&o.sampler),
             o.max_depth.map_or_else(|| "none".into(), |d| d.to_string()),
             o.connections.to_string(),
+            o.light_paths
+                .map_or_else(|| "none".into(), |n| n.to_string()),
             o.radius.to_string(),
             o.alpha.to_string(),
             o.no_prune.to_string(),
@@ -120,6 +124,11 @@ impl RenderSettings {
             Some(depth) => Some(parse("max_depth", &depth)?),
             None => None,
         };
+        // States written before the setting existed rendered one light path per pixel.
+        let light_paths = match metadata.get("light_paths").map(String::as_str) {
+            None | Some("none") => None,
+            Some(n) => Some(parse("light_paths", n)?),
+        };
         Ok(RenderSettings {
             algorithm,
             width: parse("width", get("width")?)?,
@@ -130,6 +139,7 @@ impl RenderSettings {
                 sampler,
                 max_depth,
                 connections: parse("connections", get("connections")?)?,
+                light_paths,
                 radius: parse("radius", get("radius")?)?,
                 alpha: parse("alpha", get("alpha")?)?,
                 no_prune: parse("no_prune", get("no_prune")?)?,
@@ -165,6 +175,7 @@ mod tests {
                 sampler: SamplerKind::Independent,
                 max_depth: Some(7),
                 connections: 3,
+                light_paths: Some(2.5),
                 radius: MergeRadius::SceneFraction(0.003_141_592_7),
                 alpha: 0.75,
                 no_prune: true,
@@ -192,7 +203,12 @@ mod tests {
         let text = defaults.to_metadata();
         assert_eq!(text["camera"], "none");
         assert_eq!(text["max_depth"], "none");
-        assert_eq!(RenderSettings::from_metadata(&text), Ok(defaults));
+        assert_eq!(text["light_paths"], "none");
+        assert_eq!(RenderSettings::from_metadata(&text), Ok(defaults.clone()));
+        // A state written before light paths were a setting rendered one per pixel.
+        let mut older = text;
+        older.remove("light_paths");
+        assert_eq!(RenderSettings::from_metadata(&older), Ok(defaults));
     }
 
     #[test]
@@ -221,6 +237,10 @@ mod tests {
             error.contains("`connections`") && error.contains("many"),
             "{error}"
         );
+        let mut text = example().to_metadata();
+        text.insert("light_paths".into(), "lots".into());
+        let error = RenderSettings::from_metadata(&text).unwrap_err();
+        assert!(error.contains("`light_paths`"), "{error}");
         let mut text = example().to_metadata();
         text.insert("algorithm".into(), "mlt".into());
         assert!(RenderSettings::from_metadata(&text).is_err());

@@ -153,12 +153,20 @@ fn every_algorithm_renders_from_the_command_line() {
 fn bad_input_is_a_clear_error_with_non_zero_status() {
     let folder = std::env::temp_dir();
     let folder = folder.to_str().expect("a UTF-8 temporary folder");
-    let cases: [(&[&str], &str); 18] = [
+    let cases: [(&[&str], &str); 20] = [
         (&["render", "no/such/scene.gltf"], "scene.gltf"),
         (&["render", "--spp", "0"], "--spp"),
         (
             &["render", "--algo", "vcm", "--connections", "0"],
             "connections",
+        ),
+        (
+            &["render", "--algo", "vcm", "--light-paths", "17"],
+            "light paths per pixel from 1/16 to 16",
+        ),
+        (
+            &["render", "--algo", "bpt", "--light-paths", "none"],
+            "--light-paths",
         ),
         (&["render", "--algo", "ppm", "--radius", "0"], "radius"),
         (&["render", "--algo", "vcm", "--radius", "-2px"], "radius"),

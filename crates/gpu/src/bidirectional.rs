@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use glam::Vec2;
-use vcm::{Algorithm, BidirPlan, Film, FrameStats, Integrator, VcmSettings};
+use vcm::{Algorithm, BidirPlan, Film, FrameStats, Integrator, RenderError, VcmSettings};
 use vcm_scene::{Decision, Scene};
 use vcm_traversal_wgpu::GpuBvh;
 
@@ -50,6 +50,15 @@ impl GpuBidirectional {
         settings: VcmSettings,
     ) -> Result<GpuBidirectional, GpuRenderError> {
         settings.check()?;
+        // A kernel invocation follows pixel i's camera sample and light path i together.
+        if settings.light_path_grid() != (settings.width, settings.height) {
+            return Err(RenderError::InvalidSetting(format!(
+                "shading on the GPU traces one light path per pixel (asked for {} per pixel): \
+                 shade on the CPU for another number",
+                settings.light_paths_per_pixel
+            ))
+            .into());
+        }
         let algorithm = settings.algorithm;
         let (width, height) = (settings.width, settings.height);
         vcm::check_image_size(width, height)?;

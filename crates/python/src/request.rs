@@ -84,6 +84,7 @@ impl Request {
                 "sampler" => options.sampler = choice::<SamplerKind>(key, value)?,
                 "max_depth" => options.max_depth = optional(value, |v| positive(key, v))?,
                 "connections" => options.connections = value_as(key, value)?,
+                "light_paths" => options.light_paths = optional(value, |v| light_paths(key, v))?,
                 "radius" => options.radius = merge_radius(key, value)?,
                 "alpha" => options.alpha = value_as(key, value)?,
                 "no_prune" => options.no_prune = value_as(key, value)?,
@@ -132,16 +133,16 @@ impl Request {
         })
     }
 
-    /// What the estimator computes, rendered with `algorithm` (the request's, or the one
-    /// `algo="auto"` chose): the image a seed gives depends on these only.
-    pub fn settings(&self, algorithm: Algorithm) -> RenderSettings {
+    /// What the estimator computes, rendered with `algorithm` and `options` (the request's,
+    /// or those `algo="auto"` chose): the image a seed gives depends on these only.
+    pub fn settings(&self, (algorithm, options): (Algorithm, IntegratorOptions)) -> RenderSettings {
         let (width, height) = self.size;
         RenderSettings {
             algorithm,
             width,
             height,
             camera: self.camera.clone(),
-            options: self.options.clone(),
+            options,
         }
     }
 
@@ -178,6 +179,19 @@ fn positive(key: &str, value: &Bound<'_, PyAny>) -> PyResult<u32> {
     u32::try_from(n).ok().filter(|&n| n >= 1).ok_or_else(|| {
         PyValueError::new_err(format!("{key}: must be from 1 to 4294967295, not {n}"))
     })
+}
+
+/// `value` as a number of light paths per pixel, within the range the integrator takes.
+fn light_paths(key: &str, value: &Bound<'_, PyAny>) -> PyResult<f32> {
+    let n: f32 = value_as(key, value)?;
+    let most = vcm_rs::vcm::MAX_LIGHT_PATHS_PER_PIXEL;
+    if (1.0 / most..=most).contains(&n) {
+        Ok(n)
+    } else {
+        Err(PyValueError::new_err(format!(
+            "{key}: must be from 1/{most} to {most}, not {n}"
+        )))
+    }
 }
 
 /// `value` as a merge radius: a number (a fraction of the scene's radius) or a text as

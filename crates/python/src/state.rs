@@ -56,8 +56,8 @@ impl RenderState {
     }
 
     /// The settings that make the estimator, as text (the state file's metadata):
-    /// algorithm, width, height, camera, seed, sampler, max_depth, connections, radius,
-    /// alpha, no_prune.
+    /// algorithm, width, height, camera, seed, sampler, max_depth, connections, light_paths,
+    /// radius, alpha, no_prune.
     fn settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let settings = PyDict::new(py);
         for (key, value) in self.0.settings.to_metadata() {

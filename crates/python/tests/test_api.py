@@ -73,10 +73,14 @@ def test_auto_chooses_as_the_command_line_and_the_state_records_the_choice(
         text=True,
     )
     chosen = next(line for line in cli.stderr.splitlines() if line.startswith("algorithm: "))
-    chosen = chosen.split()[1]
+    words = chosen.split()
+    chosen = words[1]
+    # `vcm ×3`: VCM with the 3 light paths per pixel its pilots chose.
+    light_paths = words[2][1:] if words[2].startswith("×") else "none"
     assert np.array_equal(vcm_rs.render(water, spp=2, width=64, seed=2), vcm_rs.read_exr(exr))
     state = vcm_rs.render_state(water, samples=range(0, 2), width=64, seed=2)
     assert state.settings()["algorithm"] == chosen
+    assert state.settings()["light_paths"] == light_paths
     assert np.array_equal(state.image(), vcm_rs.read_exr(exr))
 
 
@@ -91,6 +95,21 @@ def test_a_radius_in_pixels_is_the_command_lines(water, vcm_cli, tmp_path):
     image = vcm_rs.render(water, algo="vcm", spp=2, width=32, radius="3px")
     assert np.array_equal(image, vcm_rs.read_exr(exr))
     assert not np.array_equal(image, vcm_rs.render(water, algo="vcm", spp=2, width=32))
+
+
+def test_light_paths_per_pixel_are_the_command_lines(water, vcm_cli, tmp_path):
+    exr = tmp_path / "cli.exr"
+    subprocess.run(
+        [vcm_cli, "render", water.path, "--algo", "vcm", "--spp", "2", "--width", "32",
+         "--light-paths", "2.5", "-o", exr],
+        check=True,
+        capture_output=True,
+    )
+    image = vcm_rs.render(water, algo="vcm", spp=2, width=32, light_paths=2.5)
+    assert np.array_equal(image, vcm_rs.read_exr(exr))
+    assert not np.array_equal(image, vcm_rs.render(water, algo="vcm", spp=2, width=32))
+    state = vcm_rs.render_state(water, samples=range(0, 2), algo="vcm", width=32, light_paths=2.5)
+    assert state.settings()["light_paths"] == "2.5"
 
 
 def test_shards_merge_into_the_whole_render_bit_for_bit(water):
@@ -149,6 +168,8 @@ def test_merging_refuses_shared_samples_and_other_settings(water):
         (dict(progress=3), TypeError, "progress"),
         (dict(colour="red"), TypeError, "unexpected keyword argument 'colour'"),
         (dict(connections=0, algo="bpt"), ValueError, "connections"),
+        (dict(light_paths=17, algo="vcm"), ValueError, "light_paths: must be from 1/16 to 16"),
+        (dict(light_paths="many", algo="vcm"), TypeError, "light_paths"),
         (dict(radius=0.0, algo="ppm"), ValueError, "radius"),
         (dict(radius="2 pixels", algo="ppm"), ValueError, "radius: '2 pixels'"),
         (dict(radius=[2], algo="ppm"), TypeError, "radius"),

@@ -196,8 +196,11 @@ struct Worker {
     reference: Option<RgbImage>,
     traversal: Option<CachedTraversal>,
     /// The latest `auto` choices, newest last (at most [`KEPT_CHOICES`]).
-    choices: Vec<(ChoiceKey, Algorithm, String)>,
+    choices: Vec<(ChoiceKey, Settled, String)>,
 }
+
+/// The algorithm a job renders with and its options (with `auto`, as its pilots chose them).
+type Settled = (Algorithm, IntegratorOptions);
 
 /// `auto` choices kept: those of the full-size render and its preview while the camera
 /// moves, and a few settings before.
@@ -223,8 +226,11 @@ fn describe(choice: &Choice) -> String {
             "auto: only merging finds all of the light".into()
         }
         None => format!(
-            "auto: pilots at {width}×{height}, {:.2} s",
-            choice.time().as_secs_f64()
+            "auto: pilots at {width}×{height}, {:.2} s{}",
+            choice.time().as_secs_f64(),
+            choice
+                .light_paths
+                .map_or(String::new(), |n| format!("; {n} light paths per pixel"))
         ),
     }
 }
@@ -275,11 +281,11 @@ impl Worker {
                 ..Scene::clone(&job.scene)
             })
         };
-        let (algorithm, chosen) = match settings.algorithm {
-            AlgorithmOption::Fixed(algorithm) => (algorithm, None),
+        let ((algorithm, options), chosen) = match settings.algorithm {
+            AlgorithmOption::Fixed(algorithm) => ((algorithm, settings.integrator.clone()), None),
             AlgorithmOption::Auto => {
-                let (algorithm, how) = self.choose(job, &scene, &built)?;
-                (algorithm, Some(how))
+                let (settled, how) = self.choose(job, &scene, &built)?;
+                (settled, Some(how))
             }
         };
         let name = algorithm.name();
@@ -289,7 +295,7 @@ impl Worker {
                 &scene,
                 &built,
                 job.view.size,
-                &settings.integrator,
+                &options,
                 None,
             )
             .map_err(|e| format!("cannot start {name}: {e}"))?;
@@ -300,7 +306,7 @@ impl Worker {
         })
     }
 
-    /// The algorithm `auto` renders `job` with, and how it was chosen: kept from an earlier
+    /// The algorithm `auto` renders `job` with and its options, and how it was chosen: kept from an earlier
     /// job of the same scene, backend, options and size (a moved camera does not choose
     /// again), else chosen by pilots on `scene` (the job's camera). The pilots run to their
     /// end: a job that replaces this one waits for them (a few seconds at most).
@@ -309,7 +315,7 @@ impl Worker {
         job: &Job,
         scene: &Arc<Scene>,
         built: &BuiltTraversal,
-    ) -> Result<(Algorithm, String), String> {
+    ) -> Result<(Settled, String), String> {
         let settings = &job.view.settings;
         let key = ChoiceKey {
             scene: job.view.scene,
@@ -318,8 +324,8 @@ impl Worker {
             options: settings.integrator.clone(),
             size: job.view.size,
         };
-        if let Some((_, algorithm, how)) = self.choices.iter().find(|(kept, ..)| *kept == key) {
-            return Ok((*algorithm, format!("{how} (kept)")));
+        if let Some((_, settled, how)) = self.choices.iter().find(|(kept, ..)| *kept == key) {
+            return Ok((settled.clone(), format!("{how} (kept)")));
         }
         let pilots = Pilots::of(built, settings.shading)
             .map_err(|e| format!("cannot choose the algorithm: {e}"))?;
@@ -335,8 +341,9 @@ impl Worker {
         if self.choices.len() == KEPT_CHOICES {
             self.choices.remove(0);
         }
-        self.choices.push((key, choice.algorithm, how.clone()));
-        Ok((choice.algorithm, how))
+        let settled = (choice.algorithm, choice.options(&settings.integrator));
+        self.choices.push((key, settled.clone(), how.clone()));
+        Ok((settled, how))
     }
 
     /// The scene's BVH on `backend` (with the GPU backend's hierarchy), built or kept.

@@ -91,11 +91,10 @@ pub(crate) fn run(
     buffers: &ResultBuffers,
     stats: &mut FrameStats,
 ) -> Vec<LightResults> {
-    let VcmSettings { width, height, .. } = *iterations[0].settings;
     trace(
         iterations,
         scheduler,
-        (width, height),
+        iterations[0].settings.light_path_grid(),
         LIGHT_STREAM,
         splat,
         buffers,

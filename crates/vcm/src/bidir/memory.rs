@@ -17,9 +17,9 @@ impl Vcm {
         let (width, height) = (self.settings.width, self.settings.height);
         let pixels = u64::from(width) * u64::from(height);
         let samples = u64::from(schedule.samples_per_frame);
-        let paths = schedule
-            .scheduler
-            .most_paths_in_flight((width, height), schedule.samples_per_frame);
+        let in_flight =
+            |grid| (schedule.scheduler).most_paths_in_flight(grid, schedule.samples_per_frame);
+        let paths = in_flight((width, height)).max(in_flight(self.settings.light_path_grid()));
         let per_path = camera_pass::bytes_per_path(connections).max(light_pass::BYTES_PER_PATH);
         let vertices = if self.plan.cache {
             samples.saturating_mul(self.cache_capacity as u64)
@@ -29,7 +29,7 @@ impl Vcm {
         // A splat per light vertex at most; light tracing keeps no vertices but splats one
         // per path at least.
         let splats = if self.plan.splats {
-            vertices.max(pixels * samples)
+            vertices.max(self.settings.light_paths() * samples)
         } else {
             0
         };

@@ -64,6 +64,10 @@ const PREPROCESS_LIGHT_PATHS: u32 = 10_000;
 /// within about a second.
 pub const MAX_CONNECTIONS: u32 = 1024;
 
+/// Most light paths per pixel an iteration traces ([`VcmSettings::light_paths_per_pixel`]);
+/// the fewest is its inverse.
+pub const MAX_LIGHT_PATHS_PER_PIXEL: f32 = 16.0;
+
 /// Default radius reduction exponent α of progressive photon mapping.
 pub const DEFAULT_ALPHA: f32 = 0.75;
 
@@ -85,6 +89,11 @@ pub struct VcmSettings {
     pub algorithm: Algorithm,
     /// N_c, light vertices each camera vertex connects to (1 to [`MAX_CONNECTIONS`]).
     pub connections: u32,
+    /// Light paths each iteration traces per pixel of the image (1 / [`MAX_LIGHT_PATHS_PER_PIXEL`]
+    /// to [`MAX_LIGHT_PATHS_PER_PIXEL`]; default 1): N_p = width · round(height · this),
+    /// at least one row ([`VcmSettings::light_paths`]). More light paths per camera path
+    /// pay where merging carries the image (caustics seen through water: docs/algorithms.md).
+    pub light_paths_per_pixel: f32,
     /// How the first iteration's merge radius is chosen.
     pub radius: MergeRadius,
     /// Radius reduction: frame i (from 1) merges within r₀ · i^((α − 1) / 2).
@@ -110,6 +119,7 @@ impl VcmSettings {
             max_depth: None,
             algorithm,
             connections: 1,
+            light_paths_per_pixel: 1.0,
             radius: MergeRadius::default(),
             alpha: DEFAULT_ALPHA,
             prune: true,
@@ -117,8 +127,22 @@ impl VcmSettings {
         }
     }
 
+    /// The grid whose cells name an iteration's light paths (path index = y · width + x):
+    /// the image's width by round(height · [`VcmSettings::light_paths_per_pixel`]) rows, at
+    /// least one.
+    pub fn light_path_grid(&self) -> (u32, u32) {
+        let rows = (self.height as f32 * self.light_paths_per_pixel).round();
+        (self.width, (rows as u32).max(1))
+    }
+
+    /// N_p, the light paths each iteration traces.
+    pub fn light_paths(&self) -> u64 {
+        let (width, rows) = self.light_path_grid();
+        u64::from(width) * u64::from(rows)
+    }
+
     /// Fails, saying why, where the settings name no bidirectional algorithm or an invalid
-    /// number of connections, merge radius or α.
+    /// number of connections or of light paths, merge radius or α.
     pub fn check(&self) -> Result<(), RenderError> {
         if !self.algorithm.is_bidirectional() {
             return Err(RenderError::InvalidSetting(
@@ -129,6 +153,20 @@ impl VcmSettings {
             return Err(RenderError::InvalidSetting(format!(
                 "connections per camera vertex must be 1 to {MAX_CONNECTIONS} (asked for {})",
                 self.connections
+            )));
+        }
+        let most = MAX_LIGHT_PATHS_PER_PIXEL;
+        if !(1.0 / most..=most).contains(&self.light_paths_per_pixel) {
+            return Err(RenderError::InvalidSetting(format!(
+                "light paths per pixel must be 1/{most} to {most} (asked for {})",
+                self.light_paths_per_pixel
+            )));
+        }
+        if self.light_paths() > u64::from(u32::MAX) {
+            return Err(RenderError::InvalidSetting(format!(
+                "{} light paths per iteration are more than 2³² − 1: fewer per pixel, or a \
+                 smaller image",
+                self.light_paths()
             )));
         }
         self.radius
@@ -345,7 +383,7 @@ impl Vcm {
     }
 
     fn light_paths(&self) -> u32 {
-        self.settings.width * self.settings.height
+        self.settings.light_paths() as u32
     }
 }
 

@@ -56,7 +56,7 @@ impl BidirPlan {
     }
 
     /// The fewest segments a light vertex that merges lies from its light (a grid holds only
-    /// those: [`MisFactors::shortest_merged`]).
+    /// those, as `MisFactors::shortest_merged` says).
     pub fn shortest_merged(&self) -> u32 {
         MisFactors::new(self.connects, self.merges, 1.0, 1.0).shortest_merged()
     }

@@ -2,8 +2,9 @@
 //! technique can sample, light tracing, BPT and VCM converge to the path tracer's image, region
 //! by region and as a whole, within the standard errors measured from the spread of per-frame
 //! values; PPM and BPM, whose merging is biased by the radius, agree once the radius is small.
-//! All of them agree too where every shading normal leans off the geometric one, and on
-//! textured third-party models (`../shared/scenes/khronos-samples/`).
+//! All of them agree too where every shading normal leans off the geometric one, on textured
+//! third-party models (`../shared/scenes/khronos-samples/`), and with more or fewer light
+//! paths than pixels.
 
 use std::path::Path;
 
@@ -56,6 +57,35 @@ fn light_tracing_bpt_and_vcm_agree_with_path_tracing() {
                 assert!(
                     z.abs() < Z_LIMIT,
                     "{name}, {algorithm:?}, region {r}: z = {z:.2}"
+                );
+            }
+        }
+    }
+}
+
+/// The light paths per pixel change how the techniques share the work (N_p in every weight,
+/// in the splats' and the merges' normalisation, in the cache connections draw from), not
+/// what they converge to: light tracing, BPT and VCM with merging (unpruned) at a quarter and
+/// at three light paths per pixel agree with path tracing.
+#[test]
+fn any_number_of_light_paths_per_pixel_converges_to_the_same_image() {
+    let name = "cornell-indirect.gltf";
+    let reference = reference(name);
+    for light_paths_per_pixel in [0.25, 3.0] {
+        for algorithm in [Algorithm::LightTracing, Algorithm::Bpt, Algorithm::Vcm] {
+            let settings = VcmSettings {
+                seed: 300,
+                light_paths_per_pixel,
+                prune: false,
+                radius: MergeRadius::SceneFraction(vcm::DEFAULT_RADIUS_FRACTION),
+                ..common::vcm_settings(algorithm, SIZE, SIZE)
+            };
+            let mut integrator = common::vcm(common::scene_file(name), settings);
+            let z = z_scores(&reference, &mut integrator, FRAMES);
+            for (r, z) in z.iter().enumerate() {
+                assert!(
+                    z.abs() < Z_LIMIT,
+                    "{light_paths_per_pixel} per pixel, {algorithm:?}, region {r}: z = {z:.2}"
                 );
             }
         }
