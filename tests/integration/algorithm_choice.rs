@@ -15,25 +15,26 @@ use vcm_rs::vcm::StopFlag;
 
 use crate::command::{arg, render_shards, stderr, vcm_ok};
 
+/// The choice for scene `name` of `scenes/` at 512 pixels wide with seed `seed`.
 fn choose(name: &str, seed: u64) -> Choice {
+    let options = IntegratorOptions {
+        seed,
+        ..IntegratorOptions::default()
+    };
+    choose_with(name, (512, 0), &options)
+}
+
+/// The choice for scene `name` of `scenes/` at `width` × `height` (0: from the camera) with
+/// `options`, piloted on the CPU.
+fn choose_with(name: &str, (width, height): (u32, u32), options: &IntegratorOptions) -> Choice {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("scenes")
         .join(name);
     let scene = Arc::new(Scene::load(&path).unwrap_or_else(|e| panic!("{e}")));
     let traversal: Arc<dyn Traversal> = Arc::new(vcm_rs::cpu_traversal(&scene).unwrap());
-    let options = IntegratorOptions {
-        seed,
-        ..IntegratorOptions::default()
-    };
-    let size = image_size(&scene, 512, None);
-    choice::choose(
-        &scene,
-        Pilots::Cpu(&traversal),
-        size,
-        &options,
-        &StopFlag::new(),
-    )
-    .unwrap()
+    let size = image_size(&scene, width, (height > 0).then_some(height));
+    let pilots = Pilots::Cpu(&traversal);
+    choice::choose(&scene, pilots, size, options, &StopFlag::new()).unwrap()
 }
 
 fn algorithms(choice: &Choice) -> Vec<Algorithm> {
@@ -87,16 +88,11 @@ fn a_plain_diffuse_room_is_left_to_path_tracing() {
 /// samples: its pilot stops after one frame, and the candidates piloted choose.
 #[test]
 fn a_candidate_too_costly_to_compare_is_left_out_after_one_frame() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.gltf");
-    let scene = Arc::new(Scene::load(&path).unwrap());
-    let traversal: Arc<dyn Traversal> = Arc::new(vcm_rs::cpu_traversal(&scene).unwrap());
     let options = IntegratorOptions {
         connections: 1024,
         ..IntegratorOptions::default()
     };
-    let stop = StopFlag::new();
-    let choice =
-        choice::choose(&scene, Pilots::Cpu(&traversal), (64, 64), &options, &stop).unwrap();
+    let choice = choose_with("cornell-box.gltf", (64, 64), &options);
     assert_eq!(algorithms(&choice), [Algorithm::Pt]);
     assert_eq!(choice.algorithm, Algorithm::Pt);
     let [left_out] = &choice.too_costly[..] else {
@@ -106,14 +102,7 @@ fn a_candidate_too_costly_to_compare_is_left_out_after_one_frame() {
     assert!(left_out.cost > choice::COMPARED_AT_SPP * choice.candidates[0].cost);
     assert!(choice.time() >= left_out.time);
     // With the default connection, BPT is compared as usual.
-    let usual = choice::choose(
-        &scene,
-        Pilots::Cpu(&traversal),
-        (64, 64),
-        &IntegratorOptions::default(),
-        &stop,
-    );
-    let usual = usual.unwrap();
+    let usual = choose_with("cornell-box.gltf", (64, 64), &IntegratorOptions::default());
     assert!(usual.too_costly.is_empty());
     assert_eq!(algorithms(&usual), [Algorithm::Pt, Algorithm::Bpt]);
 }
@@ -153,16 +142,11 @@ fn caustics_through_water_are_not_left_to_path_tracing() {
 /// Light paths the options give are the render's: VCM is piloted with them alone.
 #[test]
 fn light_paths_the_options_give_are_not_piloted_again() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-specular.gltf");
-    let scene = Arc::new(Scene::load(&path).unwrap());
-    let traversal: Arc<dyn Traversal> = Arc::new(vcm_rs::cpu_traversal(&scene).unwrap());
     let options = IntegratorOptions {
         light_paths: Some(2.0),
         ..IntegratorOptions::default()
     };
-    let stop = StopFlag::new();
-    let choice =
-        choice::choose(&scene, Pilots::Cpu(&traversal), (64, 64), &options, &stop).unwrap();
+    let choice = choose_with("cornell-specular.gltf", (64, 64), &options);
     assert_eq!(
         algorithms(&choice),
         [Algorithm::Pt, Algorithm::Bpt, Algorithm::Vcm]

@@ -84,32 +84,23 @@ def test_auto_chooses_as_the_command_line_and_the_state_records_the_choice(
     assert np.array_equal(state.image(), vcm_rs.read_exr(exr))
 
 
-def test_a_radius_in_pixels_is_the_command_lines(water, vcm_cli, tmp_path):
+@pytest.mark.parametrize(
+    "flag, value, keyword",
+    [("--radius", "3px", dict(radius="3px")), ("--light-paths", "2.5", dict(light_paths=2.5))],
+)
+def test_integrator_options_are_the_command_lines(water, vcm_cli, tmp_path, flag, value, keyword):
     exr = tmp_path / "cli.exr"
     subprocess.run(
         [vcm_cli, "render", water.path, "--algo", "vcm", "--spp", "2", "--width", "32",
-         "--radius", "3px", "-o", exr],
+         flag, value, "-o", exr],
         check=True,
         capture_output=True,
     )
-    image = vcm_rs.render(water, algo="vcm", spp=2, width=32, radius="3px")
+    image = vcm_rs.render(water, algo="vcm", spp=2, width=32, **keyword)
     assert np.array_equal(image, vcm_rs.read_exr(exr))
     assert not np.array_equal(image, vcm_rs.render(water, algo="vcm", spp=2, width=32))
-
-
-def test_light_paths_per_pixel_are_the_command_lines(water, vcm_cli, tmp_path):
-    exr = tmp_path / "cli.exr"
-    subprocess.run(
-        [vcm_cli, "render", water.path, "--algo", "vcm", "--spp", "2", "--width", "32",
-         "--light-paths", "2.5", "-o", exr],
-        check=True,
-        capture_output=True,
-    )
-    image = vcm_rs.render(water, algo="vcm", spp=2, width=32, light_paths=2.5)
-    assert np.array_equal(image, vcm_rs.read_exr(exr))
-    assert not np.array_equal(image, vcm_rs.render(water, algo="vcm", spp=2, width=32))
-    state = vcm_rs.render_state(water, samples=range(0, 2), algo="vcm", width=32, light_paths=2.5)
-    assert state.settings()["light_paths"] == "2.5"
+    state = vcm_rs.render_state(water, samples=range(0, 2), algo="vcm", width=32, **keyword)
+    assert state.settings()[flag[2:].replace("-", "_")] == value
 
 
 def test_shards_merge_into_the_whole_render_bit_for_bit(water):
