@@ -5,13 +5,13 @@
 // run stores path p's vertices from `vertex_index[p]` + its iteration's `cache_start` on.
 
 struct IndexParams {
-    // Light paths per iteration (one per pixel), and iterations in the frame.
-    pixels: u32,
+    // Light paths per iteration, and iterations in the frame.
+    paths: u32,
     samples: u32,
     unused: vec2<u32>,
 }
 
-// Per light path (p = pixel · samples + sample) its count, then its start in its iteration.
+// Per light path (p = i · samples + sample for the iteration's light path i) its count, then its start in its iteration.
 @group(0) @binding(0) var<storage, read_write> vertex_index: array<u32>;
 @group(0) @binding(1) var<storage, read_write> iterations: array<Iteration>;
 @group(0) @binding(2) var<uniform> index: IndexParams;
@@ -21,19 +21,19 @@ struct IndexParams {
 @compute @workgroup_size(SCAN_WORKGROUP)
 fn index_scan(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let s = wg.x;
-    let chunk = (index.pixels + SCAN_WORKGROUP - 1u) / SCAN_WORKGROUP;
-    let first = min(lane * chunk, index.pixels);
-    let end = min(first + chunk, index.pixels);
+    let chunk = (index.paths + SCAN_WORKGROUP - 1u) / SCAN_WORKGROUP;
+    let first = min(lane * chunk, index.paths);
+    let end = min(first + chunk, index.paths);
     var total = 0u;
-    for (var pixel = first; pixel < end; pixel++) {
-        total += vertex_index[pixel * index.samples + s];
+    for (var i = first; i < end; i++) {
+        total += vertex_index[i * index.samples + s];
     }
     var running = scan_chunks(lane, total);
     if lane == 0u {
         iterations[s].cache_count = chunks_sum;
     }
-    for (var pixel = first; pixel < end; pixel++) {
-        let path = pixel * index.samples + s;
+    for (var i = first; i < end; i++) {
+        let path = i * index.samples + s;
         let count = vertex_index[path];
         vertex_index[path] = running;
         running += count;

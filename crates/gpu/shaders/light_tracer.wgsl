@@ -3,9 +3,10 @@
 // finds the lights seen directly (camera_pass.rs); for the bidirectional algorithms run
 // twice, first counting each path's cacheable vertices (keeping the first few), then storing
 // them where the index says (bidir.wgsl). Invocation k of a frame's dispatches takes index
-// i = k / samples of iteration first_sample + k % samples: pixel i's camera sample and the
-// iteration's light path i, each drawing the CPU's numbers for it, so that both backends
-// follow the same paths. A light path's vertices that scatter toward the camera and see it
+// i = k / samples of iteration first_sample + k % samples: pixel i's camera sample (light
+// tracing alone) and the iteration's light path i, where there are such (the dispatches cover
+// the pixels or the light paths, whichever are more), each drawing the CPU's numbers for it,
+// so that both backends follow the same paths. A light path's vertices that scatter toward the camera and see it
 // make splats. Camera samples and splats go to the film (film.wgsl). Outputs (group 0): 1–4
 // the film, 5 the rays traced (camera, light, shadow).
 
@@ -113,7 +114,7 @@ fn seen_directly(pixel: u32, iteration: u32) -> vec3<f32> {
 fn indexed_count(path: u32, index: u32) -> u32 {
     let sample = path % params.samples;
     var end = iterations[sample].cache_count;
-    if index + 1u < params.width * params.height {
+    if index + 1u < params.light_path_count {
         end = vertex_index[path + params.samples];
     }
     return end - vertex_index[path];
@@ -261,11 +262,11 @@ fn trace_light_paths(@builtin(global_invocation_id) id: vec3<u32>) {
     let sample = path % params.samples;
     let iteration = params.first_sample + sample;
     factors = iterations[sample].factors;
-    if params.light_pass == LIGHT_TRACING {
+    if params.light_pass == LIGHT_TRACING && index < params.width * params.height {
         film_add(index, seen_directly(index, iteration));
         atomicAdd(&ray_counts[0], 1u);
     }
-    if !plan_has(SPLATS) && params.light_pass == LIGHT_TRACING {
+    if index >= params.light_path_count || (!plan_has(SPLATS) && params.light_pass == LIGHT_TRACING) {
         return;
     }
     let rays = trace_light_path(path, index, iteration);

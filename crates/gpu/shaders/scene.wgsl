@@ -53,6 +53,8 @@ struct Params {
     plan: u32,
     // Vertices of each light path the light pass's first run keeps in `scratch` (bidir.wgsl).
     kept_vertices: u32,
+    // Light paths per iteration (`light_paths`, as an integer).
+    light_path_count: u32,
 }
 
 // A triangle as shading sees it: corners (w: the material, the area light or NO_LIGHT, as

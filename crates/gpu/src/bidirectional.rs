@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use glam::Vec2;
-use vcm::{Algorithm, BidirPlan, Film, FrameStats, Integrator, RenderError, VcmSettings};
+use vcm::{Algorithm, BidirPlan, Film, FrameStats, Integrator, VcmSettings};
 use vcm_scene::{Decision, Scene};
 use vcm_traversal_wgpu::GpuBvh;
 
@@ -50,15 +50,6 @@ impl GpuBidirectional {
         settings: VcmSettings,
     ) -> Result<GpuBidirectional, GpuRenderError> {
         settings.check()?;
-        // A kernel invocation follows pixel i's camera sample and light path i together.
-        if settings.light_path_grid() != (settings.width, settings.height) {
-            return Err(RenderError::InvalidSetting(format!(
-                "shading on the GPU traces one light path per pixel (asked for {} per pixel): \
-                 shade on the CPU for another number",
-                settings.light_paths_per_pixel
-            ))
-            .into());
-        }
         let algorithm = settings.algorithm;
         let (width, height) = (settings.width, settings.height);
         vcm::check_image_size(width, height)?;
@@ -74,6 +65,8 @@ impl GpuBidirectional {
             plan,
             first_radius: first_radius.as_ref().map_or(0.0, |(r0, _)| *r0),
             alpha: settings.alpha,
+            // Checked to fit 32 bits (`VcmSettings::check`).
+            light_paths: settings.light_paths() as u32,
         };
         let frames = GpuFrames::new(FramePlan::Bidirectional(bidir), scene, bvh, (width, height))?;
         Ok(GpuBidirectional {

@@ -74,6 +74,8 @@ pub(crate) struct BidirFrames {
     /// r₀, the first iteration's merge radius (0 where nothing merges), and α, how it shrinks.
     pub first_radius: f32,
     pub alpha: f32,
+    /// N_p, the light paths each iteration traces.
+    pub light_paths: u32,
 }
 
 /// A GPU integrator's kernels, its frames' film on the device, and the state of its frames.
@@ -281,13 +283,14 @@ impl GpuFrames {
                     self.write_iterations(&iterations);
                     self.run_pass(0, pass(LightPass::LightTracing), frame, true)?
                 } else {
-                    self.prepare_index(invocations, samples)?;
-                    let kept = self.prepare_kept_vertices(invocations);
+                    let light_paths = u64::from(bidir.light_paths) * u64::from(samples);
+                    self.prepare_index(light_paths, samples)?;
+                    let kept = self.prepare_kept_vertices(light_paths);
                     self.write_iterations(&iterations);
                     let later = LightPass::LaterVertices { kept };
                     let done =
                         self.run_pass(0, pass(LightPass::FirstVertices { kept }), frame, true)?
-                            && self.index_vertices(&mut iterations)?
+                            && self.index_vertices(&mut iterations, bidir.light_paths)?
                             && self.run_pass(0, pass(later), frame, false)?
                             && (!bidir.plan.merges
                                 || self
@@ -311,8 +314,9 @@ impl GpuFrames {
     }
 
     /// Runs kernel `kernel` with `sampling` and `light_pass` over every invocation of
-    /// `frame`, clearing the film and the ray counts first where `clear`; `false` where a
-    /// stop request cut it short.
+    /// `frame` (kernel 0, the light pass's or the path tracer's, one per pixel or light path,
+    /// whichever are more; the camera pass's one per pixel), clearing the film and the ray
+    /// counts first where `clear`; `false` where a stop request cut it short.
     fn run_pass(
         &self,
         kernel: usize,
@@ -321,8 +325,11 @@ impl GpuFrames {
         clear: bool,
     ) -> Result<bool, String> {
         let b = &self.buffers;
-        let (width, height) = self.size;
-        let invocations = u64::from(width) * u64::from(height) * u64::from(frame.1);
+        let per_sample = match kernel {
+            0 => self.first_kernel_invocations(),
+            _ => self.pixels(),
+        };
+        let invocations = per_sample * u64::from(frame.1);
         let mut cleared: Vec<&wgpu::Buffer> = if clear {
             b.bindings[FILM].iter().collect()
         } else {
@@ -418,8 +425,7 @@ impl GpuFrames {
         bidir: &BidirFrames,
         (first, samples): (u32, u32),
     ) -> Vec<IterationRecord> {
-        let (width, height) = self.size;
-        let light_paths = (width * height) as f32;
+        let light_paths = bidir.light_paths as f32;
         (0..samples)
             .map(|sample| {
                 let iteration = u64::from(first) + u64::from(sample);
@@ -468,19 +474,23 @@ impl GpuFrames {
         kept as u32
     }
 
-    /// Turns the light vertices each light path counted into where they go in the cache, on
-    /// the device (`index.wgsl`): iteration by iteration, each iteration's in the order of
-    /// its paths, as the CPU's cache keeps them. Reads back each iteration's part into
-    /// `iterations` and makes room for them (always `true`, to chain with the passes).
-    fn index_vertices(&mut self, iterations: &mut [IterationRecord]) -> Result<bool, String> {
+    /// Turns the light vertices each of `light_paths` light paths per iteration counted into
+    /// where they go in the cache, on the device (`index.wgsl`): iteration by iteration, each
+    /// iteration's in the order of its paths, as the CPU's cache keeps them. Reads back each
+    /// iteration's part into `iterations` and makes room for them (always `true`, to chain
+    /// with the passes).
+    fn index_vertices(
+        &mut self,
+        iterations: &mut [IterationRecord],
+        light_paths: u32,
+    ) -> Result<bool, String> {
         let gpu = Arc::clone(&self.kernels[0].gpu);
-        let (width, height) = self.size;
         let samples = iterations.len() as u32;
         let index = self.index.get_or_insert_with(|| IndexBuilder::new(&gpu));
         let b = &self.buffers;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let buffers = (&b.bindings[INDEX], &b.bindings[ITERATIONS]);
-        index.record(&gpu, &mut encoder, buffers, (width * height, samples));
+        index.record(&gpu, &mut encoder, buffers, (light_paths, samples));
         let bytes = size_of_val(iterations) as u64;
         let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("iterations read-back"),
@@ -584,12 +594,25 @@ impl GpuFrames {
         gpu.read_back(encoder, (&b.readback, at), read)
     }
 
+    /// The pixels of the image.
+    fn pixels(&self) -> u64 {
+        u64::from(self.size.0) * u64::from(self.size.1)
+    }
+
+    /// The invocations of the first kernel (the path tracer's, or the light pass's) per
+    /// sample per pixel: one per pixel, or per light path where there are more.
+    fn first_kernel_invocations(&self) -> u64 {
+        match &self.plan {
+            FramePlan::PathTracing => self.pixels(),
+            FramePlan::Bidirectional(bidir) => self.pixels().max(u64::from(bidir.light_paths)),
+        }
+    }
+
     /// Takes the samples per pixel per frame of `schedule` (its scheduler, a CPU matter,
     /// does not apply), which must number a frame's invocations (`what`) in 32 bits.
     pub fn set_schedule(&mut self, schedule: Schedule, what: &str) -> Result<(), RenderError> {
         let schedule = schedule.validated()?;
-        let (width, height) = self.size;
-        let count = u64::from(width) * u64::from(height) * u64::from(schedule.samples_per_frame);
+        let count = self.first_kernel_invocations() * u64::from(schedule.samples_per_frame);
         if count > u64::from(u32::MAX) {
             return Err(RenderError::InvalidSetting(format!(
                 "{} samples per pixel per frame make {count} {what}, more than a GPU kernel \
@@ -959,6 +982,7 @@ mod tests {
                     plan,
                     first_radius: 0.01,
                     alpha: settings.alpha,
+                    light_paths: settings.light_paths() as u32,
                 };
                 let sampling = Sampling::of_bidir(&settings, &plan);
                 (FramePlan::Bidirectional(bidir), sampling)

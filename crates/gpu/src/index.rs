@@ -12,7 +12,7 @@ use crate::shader::{CACHE_WGSL, INDEX_WGSL};
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
 struct IndexParams {
-    pixels: u32,
+    paths: u32,
     samples: u32,
     unused: [u32; 2],
 }
@@ -38,7 +38,7 @@ impl IndexBuilder {
         IndexBuilder { kernels, params }
     }
 
-    /// Records, on `encoder`, the index of a frame of `pixels` light paths per iteration and
+    /// Records, on `encoder`, the index of a frame of `paths` light paths per iteration and
     /// `samples` iterations over the counts in `index`, with each iteration's part in
     /// `iterations`.
     pub fn record(
@@ -46,10 +46,10 @@ impl IndexBuilder {
         gpu: &GpuDevice,
         encoder: &mut wgpu::CommandEncoder,
         (index, iterations): (&wgpu::Buffer, &wgpu::Buffer),
-        (pixels, samples): (u32, u32),
+        (paths, samples): (u32, u32),
     ) {
         let params = IndexParams {
-            pixels,
+            paths,
             samples,
             unused: [0; 2],
         };

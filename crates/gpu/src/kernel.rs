@@ -46,7 +46,8 @@ pub(crate) struct Params {
     light_pass: u32,
     plan: u32,
     kept_vertices: u32,
-    padding: [u32; 3],
+    light_path_count: u32,
+    padding: [u32; 2],
 }
 
 const _: () = assert!(
@@ -92,6 +93,8 @@ pub(crate) struct Sampling {
     pub max_depth: Option<u32>,
     /// N_c: light vertices each camera vertex connects to.
     pub connections: u32,
+    /// N_p: light paths per iteration (the pixels', but for a bidirectional algorithm's own).
+    pub light_paths: u32,
     /// The parts of a bidirectional algorithm that run (`plan` of bidir.wgsl).
     pub plan: u32,
 }
@@ -111,6 +114,7 @@ impl Sampling {
             sequence,
             max_depth,
             connections: 0,
+            light_paths: width * height,
             plan: 0,
         }
     }
@@ -138,6 +142,8 @@ impl Sampling {
         }
         Sampling {
             connections: s.connections,
+            // Checked to fit 32 bits (`VcmSettings::check`).
+            light_paths: s.light_paths() as u32,
             plan: parts,
             ..Sampling::of_image((s.width, s.height), (s.seed, s.sequence), s.max_depth)
         }
@@ -265,6 +271,7 @@ impl SceneKernel {
             sequence,
             max_depth,
             connections,
+            light_paths,
             plan,
         } = *sampling;
         let camera = &self.scene.camera;
@@ -297,13 +304,13 @@ impl SceneKernel {
             environment_rows: self.environment_offsets[0],
             environment_columns: self.environment_offsets[1],
             pixel_area: projection.pixel_area(),
-            // As the CPU's bidirectional algorithms count them: one per pixel.
-            light_paths: (width * height) as f32,
+            light_paths: light_paths as f32,
             connections,
             light_pass: light_pass.parameters().0,
             plan,
             kept_vertices: light_pass.parameters().1,
-            padding: [0; 3],
+            light_path_count: light_paths,
+            padding: [0; 2],
         };
         (params, (x, y))
     }

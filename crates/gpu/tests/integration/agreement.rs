@@ -83,6 +83,29 @@ fn gpu_paths_are_the_cpu_paths() {
     }
 }
 
+/// With fewer or more light paths than pixels the light pass's dispatches cover whichever
+/// are more, each invocation following a pixel's camera sample, a light path, or both; the
+/// paths are still the CPU's (light tracing, BPT and VCM, 98% of the pixels as above).
+#[test]
+fn other_numbers_of_light_paths_follow_the_cpu_paths() {
+    let Some(gpu) = gpu() else { return };
+    let scene = scene("cornell-water");
+    let (width, height, samples) = (48, 36, 2);
+    for light_paths_per_pixel in [0.5, 2.5] {
+        for algorithm in [Algorithm::LightTracing, Algorithm::Bpt, Algorithm::Vcm] {
+            let settings = VcmSettings {
+                seed: 11,
+                light_paths_per_pixel,
+                ..VcmSettings::new(algorithm, width, height)
+            };
+            let cpu = cpu_bidir_image(&scene, settings, 2, samples);
+            let on_gpu = gpu_bidir_image(&gpu, &scene, settings, 2, samples);
+            let what = format!("{light_paths_per_pixel} per pixel, {}", algorithm.name());
+            assert_alike(&what, &cpu, &on_gpu, 0.98);
+        }
+    }
+}
+
 /// How the images of BPT, BPM and VCM — whose camera vertices read many light paths' cached
 /// vertices — are compared with the CPU's.
 #[derive(Clone, Copy, PartialEq)]
