@@ -107,10 +107,10 @@ pub struct IntegratorOptions {
     #[arg(long, default_value_t = 1,
           value_parser = clap::value_parser!(u32).range(1..=i64::from(vcm::MAX_CONNECTIONS)))]
     pub connections: u32,
-    /// Light paths each iteration traces per pixel (lt, bpt, ppm, bpm, vcm; 1/16 to 16):
-    /// default 1, or with `--algo auto` the number its pilots find the most efficient for VCM.
-    #[arg(long, value_parser = light_paths_per_pixel)]
-    pub light_paths: Option<f32>,
+    /// Light paths each iteration traces per pixel (lt, bpt, ppm, bpm, vcm; 1/16 to 16;
+    /// default 1).
+    #[arg(long, default_value_t = 1.0, value_parser = light_paths_per_pixel)]
+    pub light_paths: f32,
     /// Initial merge radius (ppm, bpm, vcm): pixel footprints at the surfaces the camera
     /// sees (2px), or a fraction of the scene's bounding-sphere radius (0.003).
     #[arg(long, default_value_t = MergeRadius::default(), allow_hyphen_values = true)]
@@ -154,7 +154,7 @@ impl Default for IntegratorOptions {
             sampler: SamplerKind::Sobol,
             max_depth: None,
             connections: 1,
-            light_paths: None,
+            light_paths: 1.0,
             radius: MergeRadius::default(),
             alpha: DEFAULT_ALPHA,
             no_prune: false,
@@ -204,7 +204,7 @@ fn vcm_settings(
         sequence: options.sampler.sequence(),
         max_depth: options.max_depth,
         connections: options.connections,
-        light_paths_per_pixel: options.light_paths.unwrap_or(1.0),
+        light_paths_per_pixel: options.light_paths,
         radius: options.radius,
         alpha: options.alpha,
         prune: !options.no_prune,

@@ -36,12 +36,6 @@
 //! than [`MIN_PILOTED_PIXELS`] is not piloted: at 16 samples per pixel its render would be
 //! smaller than its pilots, and path tracing, the cheapest per sample, renders it.
 //!
-//! VCM is piloted twice where the options leave the light paths per pixel open: with one
-//! light path per pixel and with [`MORE_LIGHT_PATHS`]. More light paths per camera path make
-//! a sample dearer and its merges richer: where merging carries the image (caustics seen
-//! through water) they pay, elsewhere not; the two compete as candidates of their own, and
-//! the render takes the chosen one's number ([`Choice::options`]).
-//!
 //! Where only merging finds all of the scene's light ([`only_merging_finds_all_light`]),
 //! path tracing and BPT converge to an image without some of it, which no variance shows.
 //! There VCM's pilot also measures what they miss: over blocks of 8 × 8 pixels, the squared
@@ -84,10 +78,6 @@ pub const PILOT_PIXELS: u32 = 128 * 128;
 /// Fewest pixels of an image that is piloted (64²).
 pub const MIN_PILOTED_PIXELS: u32 = 64 * 64;
 
-/// Light paths per pixel of VCM's second pilot: on cornell-water 3 per pixel rendered
-/// 0.85× the variance of 1 at equal time, 2 and 4 about 0.9× (docs/algorithms.md).
-pub const MORE_LIGHT_PATHS: f32 = 3.0;
-
 /// What each unit of work a frame counts costs, relative to a closest-hit ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CostWeights {
@@ -117,9 +107,6 @@ pub const COST_WEIGHTS: CostWeights = CostWeights {
 pub struct Candidate {
     /// The algorithm piloted.
     pub algorithm: Algorithm,
-    /// Its light paths per pixel where the pilot chose them ([`MORE_LIGHT_PATHS`]), `None`
-    /// where the options' (one per pixel unless they say).
-    pub light_paths: Option<f32>,
     /// Relative variance per sample measured on single frames, v₁, and on the means of the
     /// pilot's two halves, v₄ (see the [module](self)).
     pub measured: [Estimate; 2],
@@ -140,11 +127,6 @@ pub struct Candidate {
 }
 
 impl Candidate {
-    /// The algorithm's name, with the light paths per pixel where the pilot chose them.
-    pub fn name(&self) -> String {
-        named(self.algorithm, self.light_paths)
-    }
-
     /// (v(N) + N · b²) · cost, with v two standard errors above its estimate: a render's
     /// relMSE after a given time, up to a factor common to every candidate, as high as the
     /// pilot leaves likely. The smaller, the better: a candidate whose low variance rests on
@@ -155,14 +137,6 @@ impl Candidate {
     pub fn inefficiency(&self) -> f64 {
         let missed = self.missed_light.map_or(0.0, |b2| b2.value.max(0.0));
         (self.relative_variance.upper() + self.samples * missed) * self.cost
-    }
-}
-
-/// `algorithm`'s name, and ×n where the pilots chose n light paths per pixel.
-fn named(algorithm: Algorithm, light_paths: Option<f32>) -> String {
-    match light_paths {
-        Some(n) => format!("{} ×{n}", algorithm.name()),
-        None => algorithm.name().to_string(),
     }
 }
 
@@ -207,9 +181,6 @@ pub struct Choice {
     /// The candidate with the least [`Candidate::inefficiency`], or the algorithm chosen
     /// without pilots ([`Choice::unpiloted`]).
     pub algorithm: Algorithm,
-    /// The light paths per pixel of the chosen candidate, where the pilots chose them
-    /// ([`Candidate::light_paths`]).
-    pub light_paths: Option<f32>,
     /// Every candidate piloted, in the order they ran (none where nothing was piloted).
     pub candidates: Vec<Candidate>,
     /// Candidates whose pilot stopped after its first frame, as a sample of theirs cost more
@@ -248,21 +219,6 @@ pub enum Unpiloted {
 }
 
 impl Choice {
-    /// The options to render the chosen algorithm with: `options`, with the light paths per
-    /// pixel the pilots chose where they chose them.
-    pub fn options(&self, options: &IntegratorOptions) -> IntegratorOptions {
-        IntegratorOptions {
-            light_paths: self.light_paths.or(options.light_paths),
-            ..options.clone()
-        }
-    }
-
-    /// The chosen algorithm's name, with the light paths per pixel where the pilots chose
-    /// them.
-    pub fn name(&self) -> String {
-        named(self.algorithm, self.light_paths)
-    }
-
     /// Wall-clock time of all pilots, those left out included.
     pub fn time(&self) -> Duration {
         let left_out = self.too_costly.iter().map(|c| c.time);
@@ -345,7 +301,6 @@ pub fn choose(
             Some(Unpiloted::OnlyMergingFindsAllLight) => Algorithm::Vcm,
             _ => Algorithm::Pt,
         },
-        light_paths: None,
         candidates: Vec::new(),
         too_costly: Vec::new(),
         pilot_size,
@@ -359,25 +314,16 @@ pub fn choose(
         })));
     }
     let options = pilot_options(options, size.0, pilot_size.0);
-    let mut algorithms = vec![(Algorithm::Pt, None), (Algorithm::Bpt, None)];
+    let mut algorithms = vec![Algorithm::Pt, Algorithm::Bpt];
     if options.no_prune || scene.features.materials.specular_or_near() {
-        // VCM with one light path per pixel last: the most robust candidate. The GPU's
-        // kernels trace one light path per pixel.
-        if options.light_paths.is_none() && matches!(shading, Pilots::Cpu(_)) {
-            algorithms.push((Algorithm::Vcm, Some(MORE_LIGHT_PATHS)));
-        }
-        algorithms.push((Algorithm::Vcm, None));
+        algorithms.push(Algorithm::Vcm);
     }
     let mut pilots: Vec<Pilot> = Vec::new();
     let mut too_costly = Vec::new();
     let mut cheapest = f64::INFINITY;
-    for &(algorithm, light_paths) in &algorithms {
+    for &algorithm in &algorithms {
         // A sample may cost at most COMPARED_AT_SPP samples of the cheapest so far.
-        let options = IntegratorOptions {
-            light_paths: light_paths.or(options.light_paths),
-            ..options.clone()
-        };
-        let run = ((algorithm, light_paths), pilot_size, &options);
+        let run = (algorithm, pilot_size, &options);
         match pilot(run, (scene, shading), cheapest * COMPARED_AT_SPP, stop)? {
             Outcome::Done(pilot) => {
                 cheapest = cheapest.min(pilot.cost);
@@ -413,7 +359,6 @@ pub fn choose(
                 .then(|| missed_light(pilot, robust, &mean, pilot_size));
             Candidate {
                 algorithm: pilot.algorithm,
-                light_paths: pilot.light_paths,
                 measured,
                 stratification: gamma,
                 samples,
@@ -430,7 +375,6 @@ pub fn choose(
         .expect("at least one pilot finished");
     Ok(Choice {
         algorithm: best.algorithm,
-        light_paths: best.light_paths,
         pilot_size,
         candidates,
         too_costly,
@@ -483,8 +427,6 @@ enum Outcome {
 struct Pilot {
     /// The algorithm piloted.
     algorithm: Algorithm,
-    /// Its light paths per pixel, where the pilot chose them.
-    light_paths: Option<f32>,
     /// Each frame's image.
     frames: Vec<Vec<Vec3>>,
     /// The mean of the frames.
@@ -498,16 +440,11 @@ struct Pilot {
     time: Duration,
 }
 
-/// Renders `PILOT_FRAMES` frames of `algorithm` at `(width, height)` with `options` (whose
-/// light paths per pixel the pilot chose where `light_paths` says), each into a film of its
+/// Renders `PILOT_FRAMES` frames of `algorithm` at `(width, height)`, each into a film of its
 /// own; stops as soon as its samples so far cost more than `limit` each ([`cost`]), or when
 /// `stop` cuts a frame short; an error if the device it traces or shades on failed.
 fn pilot(
-    ((algorithm, light_paths), (width, height), options): (
-        (Algorithm, Option<f32>),
-        (u32, u32),
-        &IntegratorOptions,
-    ),
+    (algorithm, (width, height), options): (Algorithm, (u32, u32), &IntegratorOptions),
     (scene, pilots): (&Arc<Scene>, Pilots),
     limit: f64,
     stop: &StopFlag,
@@ -555,7 +492,6 @@ fn pilot(
     }
     Ok(Outcome::Done(Pilot {
         algorithm,
-        light_paths,
         frames,
         mean,
         variance,
@@ -737,7 +673,6 @@ mod tests {
     fn pilot_of(algorithm: Algorithm, frames: Vec<Vec<Vec3>>) -> Pilot {
         Pilot {
             algorithm,
-            light_paths: None,
             frames,
             mean: Vec::new(),
             variance: [Vec::new(), Vec::new()],

@@ -73,8 +73,8 @@ fn enum_name(value: &impl ValueEnum) -> String {
 
 impl RenderSettings {
     /// The settings as text, one entry per key of [`SETTING_KEYS`]: numbers as Rust prints
-    /// them (floats in their shortest form that reads back exactly), `max_depth`,
-    /// `light_paths` and `camera` as `none` when not set.
+    /// them (floats in their shortest form that reads back exactly), `max_depth` and `camera`
+    /// as `none` when not set.
     pub fn to_metadata(&self) -> BTreeMap<String, String> {
         let o = &self.options;
         let values = [
@@ -86,8 +86,7 @@ impl RenderSettings {
             enum_name(&o.sampler),
             o.max_depth.map_or_else(|| "none".into(), |d| d.to_string()),
             o.connections.to_string(),
-            o.light_paths
-                .map_or_else(|| "none".into(), |n| n.to_string()),
+            o.light_paths.to_string(),
             o.radius.to_string(),
             o.alpha.to_string(),
             o.no_prune.to_string(),
@@ -125,9 +124,9 @@ impl RenderSettings {
             None => None,
         };
         // States written before the setting existed rendered one light path per pixel.
-        let light_paths = match metadata.get("light_paths").map(String::as_str) {
-            None | Some("none") => None,
-            Some(n) => Some(parse("light_paths", n)?),
+        let light_paths = match metadata.get("light_paths") {
+            None => 1.0,
+            Some(n) => parse("light_paths", n)?,
         };
         Ok(RenderSettings {
             algorithm,
@@ -175,7 +174,7 @@ mod tests {
                 sampler: SamplerKind::Independent,
                 max_depth: Some(7),
                 connections: 3,
-                light_paths: Some(2.5),
+                light_paths: 2.5,
                 radius: MergeRadius::SceneFraction(0.003_141_592_7),
                 alpha: 0.75,
                 no_prune: true,
@@ -203,7 +202,7 @@ mod tests {
         let text = defaults.to_metadata();
         assert_eq!(text["camera"], "none");
         assert_eq!(text["max_depth"], "none");
-        assert_eq!(text["light_paths"], "none");
+        assert_eq!(text["light_paths"], "1");
         assert_eq!(RenderSettings::from_metadata(&text), Ok(defaults.clone()));
         // A state written before light paths were a setting rendered one per pixel.
         let mut older = text;

@@ -109,51 +109,20 @@ fn a_candidate_too_costly_to_compare_is_left_out_after_one_frame() {
 
 /// Through water, path tracing meets the caustics only by chance: its fireflies make its
 /// variance × cost tens of times VCM's (measured 84 against 2.6 at seed 0), across seeds.
-/// VCM is piloted with one light path per pixel and with more, which cost more per sample
-/// and vary less; the render takes the chosen one's number.
 #[test]
 fn caustics_through_water_are_not_left_to_path_tracing() {
     for seed in [0, 1] {
         let choice = choose("cornell-water.gltf", seed);
         assert_eq!(
             algorithms(&choice),
-            [
-                Algorithm::Pt,
-                Algorithm::Bpt,
-                Algorithm::Vcm,
-                Algorithm::Vcm
-            ]
+            [Algorithm::Pt, Algorithm::Bpt, Algorithm::Vcm]
         );
-        let [pt, _, more, vcm] = &choice.candidates[..] else {
+        let [pt, _, vcm] = &choice.candidates[..] else {
             unreachable!()
         };
-        assert_eq!(more.light_paths, Some(choice::MORE_LIGHT_PATHS));
-        assert_eq!(vcm.light_paths, None);
         assert!(pt.inefficiency() > 5.0 * vcm.inefficiency(), "{choice:?}");
-        assert!(more.cost > 1.5 * vcm.cost, "{choice:?}");
-        let [v_more, v] = [more, vcm].map(|c| c.measured[0]);
-        assert!(v_more.upper() < v.value, "{choice:?}");
         assert_ne!(choice.algorithm, Algorithm::Pt);
-        let options = choice.options(&IntegratorOptions::default());
-        assert_eq!(options.light_paths, choice.light_paths);
     }
-}
-
-/// Light paths the options give are the render's: VCM is piloted with them alone.
-#[test]
-fn light_paths_the_options_give_are_not_piloted_again() {
-    let options = IntegratorOptions {
-        light_paths: Some(2.0),
-        ..IntegratorOptions::default()
-    };
-    let choice = choose_with("cornell-specular.gltf", (64, 64), &options);
-    assert_eq!(
-        algorithms(&choice),
-        [Algorithm::Pt, Algorithm::Bpt, Algorithm::Vcm]
-    );
-    assert!(choice.candidates.iter().all(|c| c.light_paths.is_none()));
-    assert_eq!(choice.light_paths, None);
-    assert_eq!(choice.options(&options), options);
 }
 
 /// The Khronos avocado under a point light and a dim sky: a point light and smooth
@@ -177,7 +146,7 @@ fn light_that_only_merging_finds_is_measured_before_it_decides() {
     let size = image_size(&scene, 256, None);
     let choice = choice::choose(&scene, pilots, size, &options, &StopFlag::new()).unwrap();
     assert_eq!(choice.algorithm, Algorithm::Pt, "{choice:?}");
-    let [pt, _, .., vcm] = &choice.candidates[..] else {
+    let [pt, _, vcm] = &choice.candidates[..] else {
         panic!("{choice:?}")
     };
     // What path tracing misses is within noise of nothing, and far below its variance.
@@ -252,7 +221,7 @@ fn light_from_a_point_through_glass_is_left_to_merging() {
     let choice = choose("cornell-point.gltf", 0);
     assert_eq!(choice.algorithm, Algorithm::Vcm);
     assert_eq!(choice.unpiloted, None);
-    let [pt, bpt, .., vcm] = &choice.candidates[..] else {
+    let [pt, bpt, vcm] = &choice.candidates[..] else {
         panic!("{choice:?}")
     };
     // Both miss light, beyond any doubt the pilots leave (measured 10 and 5 standard errors).
@@ -340,16 +309,11 @@ fn the_command_line_chooses_says_why_and_shards_agree() {
         .lines()
         .find(|l| l.starts_with("algorithm: "))
         .unwrap_or_else(|| panic!("no choice told in\n{told}"));
-    let mut words = line["algorithm: ".len()..].split(' ');
-    let name = words.next().unwrap();
-    // `vcm ×3`: VCM with 3 light paths per pixel.
-    let light_paths = words.next().and_then(|w| w.strip_prefix('×'));
+    let name = line["algorithm: ".len()..].split(' ').next().unwrap();
     assert!(line.contains("variance × cost: pt "), "{line}");
     let fixed = dir.path().join("fixed.exr");
     let args = ["--algo", name, "-o", arg(&fixed)];
-    let more = light_paths.map(|n| ["--light-paths", n]);
-    let more = more.as_ref().map_or(&[][..], |m| &m[..]);
-    vcm_ok(&[&["render"], &common[..], &spp, &args[..], more].concat());
+    vcm_ok(&[&["render"], &common[..], &spp, &args[..]].concat());
     assert_eq!(
         std::fs::read(&auto).unwrap(),
         std::fs::read(&fixed).unwrap()
@@ -358,15 +322,13 @@ fn the_command_line_chooses_says_why_and_shards_agree() {
     let args = ["--explain", "-o", arg(&auto)];
     let explained = vcm_ok(&[&["render"], &common[..], &spp, &args[..]].concat());
     let report = String::from_utf8_lossy(&explained.stdout);
-    let chosen = line["algorithm: ".len()..].split(" (").next().unwrap();
     assert!(
-        report.contains(&format!("algorithm: {chosen}, the least")),
+        report.contains(&format!("algorithm: {name}, the least")),
         "{report}"
     );
-    let more = format!("vcm ×{}", choice::MORE_LIGHT_PATHS);
-    for candidate in ["pt", "bpt", &more, "vcm"] {
+    for candidate in ["pt", "bpt", "vcm"] {
         assert!(
-            report.contains(&format!("\n  {candidate:<6} variance")),
+            report.contains(&format!("\n  {candidate:<4} variance")),
             "{report}"
         );
     }

@@ -10,8 +10,8 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use vcm_rs::gpu::GpuRenderError;
+use vcm_rs::integrators::Algorithm;
 use vcm_rs::integrators::choice::{self, Pilots};
-use vcm_rs::integrators::{Algorithm, IntegratorOptions};
 use vcm_rs::render_loop::{self, Budget, Frames};
 use vcm_rs::state::RenderState as State;
 use vcm_rs::vcm::{Film, StopFlag};
@@ -40,7 +40,7 @@ use crate::vcm_error;
 ///     max_depth: most path segments (default: unlimited, with Russian roulette).
 ///     connections: light vertices each camera vertex connects to (bpt, vcm; default 1).
 ///     light_paths: light paths each iteration traces per pixel (lt, bpt, ppm, bpm, vcm;
-///         1/16 to 16; default 1, or with algo "auto" the number its pilots choose).
+///         1/16 to 16; default 1).
 ///     radius: initial merge radius (ppm, bpm, vcm): pixel footprints as a text ending in
 ///         `px` ("2px", the default) or a fraction of the scene's radius (0.003).
 ///     alpha: the merge radius's reduction exponent (ppm, bpm, vcm).
@@ -105,9 +105,9 @@ pub fn render_state<'py>(
         }
         None => (0, request.budget()),
     };
-    let (film, spp, settled) = run(py, scene, &request, first, budget)?;
+    let (film, spp, algorithm) = run(py, scene, &request, first, budget)?;
     let path = scene.data.path.clone();
-    let mut state = State::new(request.settings(settled), scene.hash(), path);
+    let mut state = State::new(request.settings(algorithm), scene.hash(), path);
     state.film = film;
     state.samples.insert(first..first + spp);
     if let (None, Budget::Samples(spp)) = (samples, budget) {
@@ -137,14 +137,14 @@ fn sample_range(range: &Bound<'_, PyAny>) -> PyResult<Range<u32>> {
 
 /// Renders `request` on `scene` from global sample `first` until `budget` is spent, on a
 /// thread of its own (see [`run_released`]); the film, the samples per pixel rendered and
-/// the algorithm and options it rendered with (those chosen, for `algo="auto"`).
+/// the algorithm (the one chosen, for `algo="auto"`).
 fn run(
     py: Python<'_>,
     scene: &Scene,
     request: &Request,
     first: u32,
     budget: Budget,
-) -> PyResult<(Film, u32, (Algorithm, IntegratorOptions))> {
+) -> PyResult<(Film, u32, Algorithm)> {
     let size = request.size;
     let samples_left = budget.remaining(0, Duration::ZERO).samples;
     let built = py
@@ -152,15 +152,16 @@ fn run(
         .map_err(vcm_error)?;
     let started = Instant::now();
     let stop = StopFlag::new();
-    let (algorithm, options) = match request.algorithm.fixed() {
-        Some(algorithm) => (algorithm, request.options.clone()),
+    let algorithm = match request.algorithm.fixed() {
+        Some(algorithm) => algorithm,
         // Pilots, stopped by Ctrl-C as a render is.
         None => {
             let options = &request.options;
             let pilots = Pilots::of(&built, request.shading).map_err(vcm_error)?;
             let choose = || choice::choose(&scene.data, pilots, size, options, &stop);
-            let choice = run_released(py, &stop, |_| Ok(()), choose)?.map_err(vcm_error)?;
-            (choice.algorithm, choice.options(options))
+            run_released(py, &stop, |_| Ok(()), choose)?
+                .map_err(vcm_error)?
+                .algorithm
         }
     };
     let mut frames = Frames::new(request.schedule, request.backend).starting_at(first);
@@ -169,7 +170,7 @@ fn run(
         &scene.data,
         &built,
         size,
-        &options,
+        &request.options,
         samples_left,
     );
     let mut integrator = integrator.map_err(|error| match error {
@@ -211,7 +212,7 @@ fn run(
         );
         rendered.and_then(|r| match r.failure {
             Some(failure) => Err(anyhow::anyhow!(failure)),
-            None => Ok((film, r.spp, (algorithm, options.clone()))),
+            None => Ok((film, r.spp, algorithm)),
         })
     })?;
     rendered.map_err(vcm_error)

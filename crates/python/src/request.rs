@@ -84,7 +84,7 @@ impl Request {
                 "sampler" => options.sampler = choice::<SamplerKind>(key, value)?,
                 "max_depth" => options.max_depth = optional(value, |v| positive(key, v))?,
                 "connections" => options.connections = value_as(key, value)?,
-                "light_paths" => options.light_paths = optional(value, |v| light_paths(key, v))?,
+                "light_paths" => options.light_paths = light_paths(key, value)?,
                 "radius" => options.radius = merge_radius(key, value)?,
                 "alpha" => options.alpha = value_as(key, value)?,
                 "no_prune" => options.no_prune = value_as(key, value)?,
@@ -133,16 +133,16 @@ impl Request {
         })
     }
 
-    /// What the estimator computes, rendered with `algorithm` and `options` (the request's,
-    /// or those `algo="auto"` chose): the image a seed gives depends on these only.
-    pub fn settings(&self, (algorithm, options): (Algorithm, IntegratorOptions)) -> RenderSettings {
+    /// What the estimator computes, rendered with `algorithm` (the request's, or the one
+    /// `algo="auto"` chose): the image a seed gives depends on these only.
+    pub fn settings(&self, algorithm: Algorithm) -> RenderSettings {
         let (width, height) = self.size;
         RenderSettings {
             algorithm,
             width,
             height,
             camera: self.camera.clone(),
-            options,
+            options: self.options.clone(),
         }
     }
 

@@ -196,11 +196,8 @@ struct Worker {
     reference: Option<RgbImage>,
     traversal: Option<CachedTraversal>,
     /// The latest `auto` choices, newest last (at most [`KEPT_CHOICES`]).
-    choices: Vec<(ChoiceKey, Settled, String)>,
+    choices: Vec<(ChoiceKey, Algorithm, String)>,
 }
-
-/// The algorithm a job renders with and its options (with `auto`, as its pilots chose them).
-type Settled = (Algorithm, IntegratorOptions);
 
 /// `auto` choices kept: those of the full-size render and its preview while the camera
 /// moves, and a few settings before.
@@ -226,11 +223,8 @@ fn describe(choice: &Choice) -> String {
             "auto: only merging finds all of the light".into()
         }
         None => format!(
-            "auto: pilots at {width}×{height}, {:.2} s{}",
-            choice.time().as_secs_f64(),
-            choice
-                .light_paths
-                .map_or(String::new(), |n| format!("; {n} light paths per pixel"))
+            "auto: pilots at {width}×{height}, {:.2} s",
+            choice.time().as_secs_f64()
         ),
     }
 }
@@ -281,11 +275,11 @@ impl Worker {
                 ..Scene::clone(&job.scene)
             })
         };
-        let ((algorithm, options), chosen) = match settings.algorithm {
-            AlgorithmOption::Fixed(algorithm) => ((algorithm, settings.integrator.clone()), None),
+        let (algorithm, chosen) = match settings.algorithm {
+            AlgorithmOption::Fixed(algorithm) => (algorithm, None),
             AlgorithmOption::Auto => {
-                let (settled, how) = self.choose(job, &scene, &built)?;
-                (settled, Some(how))
+                let (algorithm, how) = self.choose(job, &scene, &built)?;
+                (algorithm, Some(how))
             }
         };
         let name = algorithm.name();
@@ -295,7 +289,7 @@ impl Worker {
                 &scene,
                 &built,
                 job.view.size,
-                &options,
+                &settings.integrator,
                 None,
             )
             .map_err(|e| format!("cannot start {name}: {e}"))?;
@@ -306,7 +300,7 @@ impl Worker {
         })
     }
 
-    /// The algorithm `auto` renders `job` with and its options, and how it was chosen: kept from an earlier
+    /// The algorithm `auto` renders `job` with, and how it was chosen: kept from an earlier
     /// job of the same scene, backend, options and size (a moved camera does not choose
     /// again), else chosen by pilots on `scene` (the job's camera). The pilots run to their
     /// end: a job that replaces this one waits for them (a few seconds at most).
@@ -315,7 +309,7 @@ impl Worker {
         job: &Job,
         scene: &Arc<Scene>,
         built: &BuiltTraversal,
-    ) -> Result<(Settled, String), String> {
+    ) -> Result<(Algorithm, String), String> {
         let settings = &job.view.settings;
         let key = ChoiceKey {
             scene: job.view.scene,
@@ -324,8 +318,8 @@ impl Worker {
             options: settings.integrator.clone(),
             size: job.view.size,
         };
-        if let Some((_, settled, how)) = self.choices.iter().find(|(kept, ..)| *kept == key) {
-            return Ok((settled.clone(), format!("{how} (kept)")));
+        if let Some((_, algorithm, how)) = self.choices.iter().find(|(kept, ..)| *kept == key) {
+            return Ok((*algorithm, format!("{how} (kept)")));
         }
         let pilots = Pilots::of(built, settings.shading)
             .map_err(|e| format!("cannot choose the algorithm: {e}"))?;
@@ -341,9 +335,8 @@ impl Worker {
         if self.choices.len() == KEPT_CHOICES {
             self.choices.remove(0);
         }
-        let settled = (choice.algorithm, choice.options(&settings.integrator));
-        self.choices.push((key, settled.clone(), how.clone()));
-        Ok((settled, how))
+        self.choices.push((key, choice.algorithm, how.clone()));
+        Ok((choice.algorithm, how))
     }
 
     /// The scene's BVH on `backend` (with the GPU backend's hierarchy), built or kept.

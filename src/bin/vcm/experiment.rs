@@ -488,7 +488,7 @@ fn render(
         .built(options.backend, tell_traversal)
         .context("building the ray traversal backend")?;
     let started = std::time::Instant::now();
-    let (algorithm, integrator_options) = crate::render::settle_algorithm(
+    let algorithm = crate::render::settle_algorithm(
         options.algo,
         (scene, Pilots::of(built, options.shading)?),
         size,
@@ -502,7 +502,7 @@ fn render(
         scene,
         built,
         size,
-        &integrator_options,
+        &options.integrator,
         samples_left,
     )?;
     let mut film = Film::new(size.0, size.1);

@@ -380,8 +380,7 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     let options = &plan.settings.options;
     let how = (&stop, args.explain);
     let pilots = Pilots::of(&built, args.shading)?;
-    // The state records what auto chose, as a resumed render renders it.
-    (plan.settings.algorithm, plan.settings.options) =
+    plan.settings.algorithm =
         settle_algorithm(algorithm, (&scene, pilots), (width, height), options, how)?;
     let mut state = prepare_state(&mut plan, &scene, args)?;
     let samples_left = plan.budget.remaining(0, Duration::ZERO).samples;
@@ -533,36 +532,34 @@ fn prepare_state(
     Ok(Some(state))
 }
 
-/// The algorithm `algorithm` names and `options`, or for `auto` the algorithm that renders
-/// `scene` at `size` with `options` ([`choice::choose`], its pilots shaded where `pilots`
-/// says) and the options with its choice of light paths ([`choice::Choice::options`]), told
-/// in one line, or with `explain` in a table of the candidates.
+/// The algorithm `algorithm` names, or for `auto` the one that renders `scene` at `size`
+/// with `options` ([`choice::choose`], its pilots shaded where `pilots` says), told in one
+/// line, or with `explain` in a table of the candidates.
 pub fn settle_algorithm(
     algorithm: AlgorithmOption,
     (scene, pilots): (&Arc<Scene>, Pilots),
     size: (u32, u32),
     options: &IntegratorOptions,
     (stop, explain): (&StopFlag, bool),
-) -> anyhow::Result<(Algorithm, IntegratorOptions)> {
+) -> anyhow::Result<Algorithm> {
     if let Some(algorithm) = algorithm.fixed() {
-        return Ok((algorithm, options.clone()));
+        return Ok(algorithm);
     }
     let choice =
         choice::choose(scene, pilots, size, options, stop).context("choosing the algorithm")?;
-    let settled = (choice.algorithm, choice.options(options));
     let (width, height) = choice.pilot_size;
     match choice.unpiloted {
         Some(Unpiloted::SmallImage) => tell!(
             "algorithm: {} (an image of fewer than {} pixels is not piloted: its pilots would \
              take longer than its render)",
-            choice.name(),
+            choice.algorithm.name(),
             choice::MIN_PILOTED_PIXELS
         ),
         Some(Unpiloted::OnlyMergingFindsAllLight) => tell!(
             "algorithm: {} (not piloted: a point, spot or directional light shines through \
              mirrors or smooth glass, light that path tracing misses and BPT misses where it \
              is seen through them again; only merging finds all of it, and {})",
-            choice.name(),
+            choice.algorithm.name(),
             match choice.candidates.is_empty() {
                 true => "the image is too small for pilots to measure how much",
                 false => "VCM's pilot did not finish to measure how much",
@@ -581,7 +578,7 @@ pub fn settle_algorithm(
         );
     }
     if choice.candidates.is_empty() {
-        return Ok(settled);
+        return Ok(choice.algorithm);
     }
     let pilots = format!(
         "pilots of {} samples per pixel at {width}×{height}, {:.2} s",
@@ -592,11 +589,11 @@ pub fn settle_algorithm(
         let each = choice
             .candidates
             .iter()
-            .map(|c| format!("{} {:.3}", c.name(), c.inefficiency()));
+            .map(|c| format!("{} {:.3}", c.algorithm.name(), c.inefficiency()));
         let missed = choice
             .candidates
             .iter()
-            .filter_map(|c| Some((c.name(), c.missed_light?)))
+            .filter_map(|c| Some((c.algorithm.name(), c.missed_light?)))
             .map(|(name, b2)| format!("{name} {:.2e}", b2.value));
         let missed = missed.collect::<Vec<_>>();
         let (measure, missed) = match missed.is_empty() {
@@ -611,21 +608,20 @@ pub fn settle_algorithm(
         };
         tell!(
             "algorithm: {} ({pilots}; {measure}: {}{missed})",
-            choice.name(),
+            choice.algorithm.name(),
             each.collect::<Vec<_>>().join(", "),
         );
-        return Ok(settled);
+        return Ok(choice.algorithm);
     }
     say!(
         "algorithm: {}, the least relative variance (+ 2 standard errors; where a candidate \
          misses light, + spp × its relMSE b² as estimated) × cost of its {pilots}:",
-        choice.name()
+        choice.algorithm.name()
     );
     for candidate in &choice.candidates {
         let [v1, v4] = candidate.measured;
         let v = candidate.relative_variance;
-        let chosen =
-            (candidate.algorithm, candidate.light_paths) == (choice.algorithm, choice.light_paths);
+        let chosen = candidate.algorithm == choice.algorithm;
         let missed = candidate.missed_light.map_or(String::new(), |b2| {
             format!(
                 " + {:.0} spp × missed light b² {:.2e} ± {:.2e}",
@@ -633,9 +629,9 @@ pub fn settle_algorithm(
             )
         });
         say!(
-            "  {:<6} variance per sample {:.4} (frames), {:.4} (halves): γ {:.2}; at {:.0} spp \
+            "  {:<4} variance per sample {:.4} (frames), {:.4} (halves): γ {:.2}; at {:.0} spp \
              ({:.4} ± {:.4}{missed}) × cost {:.2} rays = {:.4}{}",
-            candidate.name(),
+            candidate.algorithm.name(),
             v1.value,
             v4.value,
             candidate.stratification,
@@ -647,7 +643,7 @@ pub fn settle_algorithm(
             if chosen { "  ← chosen" } else { "" }
         );
     }
-    Ok(settled)
+    Ok(choice.algorithm)
 }
 
 /// Prints the scene's features and every part of the render with whether it runs and why.
