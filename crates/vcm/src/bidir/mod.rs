@@ -92,7 +92,8 @@ pub struct VcmSettings {
     /// Light paths each iteration traces per pixel of the image (1 / [`MAX_LIGHT_PATHS_PER_PIXEL`]
     /// to [`MAX_LIGHT_PATHS_PER_PIXEL`]; default 1): N_p = width · round(height · this),
     /// at least one row ([`VcmSettings::light_paths`]). More light paths per camera path
-    /// pay where merging carries the image (caustics seen through water: docs/algorithms.md).
+    /// lower relMSE where merging carries dim parts of the image, at a cost in the bright
+    /// ones (docs/algorithms.md, "Light paths per iteration").
     pub light_paths_per_pixel: f32,
     /// How the first iteration's merge radius is chosen.
     pub radius: MergeRadius,
