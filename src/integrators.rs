@@ -109,7 +109,7 @@ pub struct IntegratorOptions {
     pub connections: u32,
     /// Light paths each iteration traces per pixel (lt, bpt, ppm, bpm, vcm; 1/16 to 16;
     /// default 1).
-    #[arg(long, default_value_t = 1.0, value_parser = light_paths_per_pixel)]
+    #[arg(long, default_value_t = 1.0, value_parser = parse_light_paths)]
     pub light_paths: f32,
     /// Initial merge radius (ppm, bpm, vcm): pixel footprints at the surfaces the camera
     /// sees (2px), or a fraction of the scene's bounding-sphere radius (0.003).
@@ -124,15 +124,11 @@ pub struct IntegratorOptions {
     pub no_prune: bool,
 }
 
-/// `--light-paths`: a number of light paths per pixel within the range the integrator takes.
-fn light_paths_per_pixel(text: &str) -> Result<f32, String> {
-    let most = vcm::MAX_LIGHT_PATHS_PER_PIXEL;
-    match text.parse::<f32>() {
-        Ok(n) if (1.0 / most..=most).contains(&n) => Ok(n),
-        _ => Err(format!(
-            "expected a number of light paths per pixel from 1/{most} to {most}"
-        )),
-    }
+/// `--light-paths`: a number of light paths per pixel within the range the integrator takes
+/// ([`vcm::light_paths_per_pixel`]).
+fn parse_light_paths(text: &str) -> Result<f32, String> {
+    let n = text.parse::<f32>().map_err(|e| e.to_string())?;
+    vcm::light_paths_per_pixel(n)
 }
 
 impl IntegratorOptions {

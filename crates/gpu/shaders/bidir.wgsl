@@ -87,6 +87,18 @@ fn merges_at(beside_light: bool) -> f32 {
     return select(1.0, 1.0 - factors.connections, beside_light);
 }
 
+// Whether light tracing splats the first vertex of a delta light's path: not where
+// connections run (`MisFactors::splats_first_of_delta`).
+fn splats_first_of_delta() -> bool {
+    return factors.connections == 0.0;
+}
+
+// Whether a delta light's sample at a camera vertex `segments` segments from the camera is
+// its path's only technique (`MisFactors::only_delta_light_sample`).
+fn only_delta_light_sample(segments: u32) -> bool {
+    return segments == 1u && !splats_first_of_delta();
+}
+
 // Scattering from a vertex at cosine `cos_out` with the sample's pdfs (`SubpathMis::scatter`);
 // `beside_light` where the vertex lies next to the light (`MisFactors::beside_light`).
 // Returns the new d_VC as it is without the merge at the vertex.

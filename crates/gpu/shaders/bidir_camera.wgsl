@@ -93,9 +93,7 @@ fn weighted_light_sample(
         bsdf_fwd_pdf_w,
         sample.eval.pdf_rev,
     );
-    // A delta light at a camera path's first vertex: the only technique of its path
-    // (`MisFactors::only_delta_light_sample`).
-    if delta && walk.segments == 1u && factors.connections > 0.0 {
+    if delta && only_delta_light_sample(walk.segments) {
         weight = 1.0;
     }
     let toward_light = transmittance(medium_toward(walk.medium, s, seen.direction), seen.distance);

@@ -11,7 +11,8 @@ struct IndexParams {
     unused: vec2<u32>,
 }
 
-// Per light path (p = i · samples + sample for the iteration's light path i) its count, then its start in its iteration.
+// Per light path (p = i · samples + sample for the iteration's light path i) its count, then
+// its start in its iteration.
 @group(0) @binding(0) var<storage, read_write> vertex_index: array<u32>;
 @group(0) @binding(1) var<storage, read_write> iterations: array<Iteration>;
 @group(0) @binding(2) var<uniform> index: IndexParams;

@@ -217,7 +217,7 @@ fn trace_light_path(path: u32, index: u32, iteration: u32) -> vec2<u32> {
                 // Not a delta light's first vertex where light samples find it
                 // (`splats_here` of light_pass.rs).
                 let left_to_light_samples = segments == 1u && is_delta_light(kind)
-                    && factors.connections > 0.0;
+                    && !splats_first_of_delta();
                 if splats && segments < params.max_segments && out.valid && !left_to_light_samples {
                     splat = connect_to_camera(s, b, out, vertex, walk.medium);
                 }

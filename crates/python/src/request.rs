@@ -181,17 +181,11 @@ fn positive(key: &str, value: &Bound<'_, PyAny>) -> PyResult<u32> {
     })
 }
 
-/// `value` as a number of light paths per pixel, within the range the integrator takes.
+/// `value` as a number of light paths per pixel, within the range the integrator takes
+/// (`vcm::light_paths_per_pixel`).
 fn light_paths(key: &str, value: &Bound<'_, PyAny>) -> PyResult<f32> {
     let n: f32 = value_as(key, value)?;
-    let most = vcm_rs::vcm::MAX_LIGHT_PATHS_PER_PIXEL;
-    if (1.0 / most..=most).contains(&n) {
-        Ok(n)
-    } else {
-        Err(PyValueError::new_err(format!(
-            "{key}: must be from 1/{most} to {most}, not {n}"
-        )))
-    }
+    vcm_rs::vcm::light_paths_per_pixel(n).map_err(|e| PyValueError::new_err(format!("{key}: {e}")))
 }
 
 /// `value` as a merge radius: a number (a fraction of the scene's radius) or a text as

@@ -155,7 +155,11 @@ def test_merging_refuses_shared_samples_and_other_settings(water):
         (dict(progress=3), TypeError, "progress"),
         (dict(colour="red"), TypeError, "unexpected keyword argument 'colour'"),
         (dict(connections=0, algo="bpt"), ValueError, "connections"),
-        (dict(light_paths=17, algo="vcm"), ValueError, "light_paths: must be from 1/16 to 16"),
+        (
+            dict(light_paths=17, algo="vcm"),
+            ValueError,
+            "light_paths: expected a number of light paths per pixel from 1/16 to 16, not 17",
+        ),
         (dict(light_paths="many", algo="vcm"), TypeError, "light_paths"),
         (dict(radius=0.0, algo="ppm"), ValueError, "radius"),
         (dict(radius="2 pixels", algo="ppm"), ValueError, "radius: '2 pixels'"),

@@ -74,7 +74,7 @@ pub use algorithm::Algorithm;
 pub use bidir::mis_paths;
 pub use bidir::{
     BidirPlan, DEFAULT_ALPHA, DEFAULT_RADIUS_FRACTION, DEFAULT_RADIUS_PIXELS, MAX_CONNECTIONS,
-    MAX_LIGHT_PATHS_PER_PIXEL, MergeRadius, Vcm, VcmSettings, merge_radius,
+    MAX_LIGHT_PATHS_PER_PIXEL, MergeRadius, Vcm, VcmSettings, light_paths_per_pixel, merge_radius,
 };
 pub use error::RenderError;
 pub use film::{Film, FilmBand, PixelSum, rounded_sum};

@@ -28,10 +28,11 @@
 //! * Where connections run (VCM), merging is no technique at a vertex next to a light: light
 //!   samples and emission hits find that light, and merging its direct light only added a
 //!   density estimate's noise (on a point light's highlights on the glossy WaterBottle merges
-//!   took 7–22% of the weight, each from one light vertex in the disk or none). A light path's first vertex is not
-//!   merged and its terms leave the weights ([`MisFactors::beside_light`]); a camera path keeps
-//!   d_VC as it is without its latest vertex's merge for the emission its next segment finds
-//!   ([`CameraMis`]). In BPM merging is the only way such a vertex meets a point light and stays.
+//!   took 7–22% of the weight, each from one light vertex in the disk or none). A light
+//!   path's first vertex is not merged and its terms leave the weights
+//!   ([`MisFactors::beside_light`]); a camera path keeps d_VC as it is without its latest
+//!   vertex's merge for the emission its next segment finds ([`CameraMis`]). In BPM merging
+//!   is the only way such a vertex meets a point light and stays.
 
 use vcm_scene::bsdf::{BsdfSample, LobeKind};
 

@@ -68,6 +68,19 @@ pub const MAX_CONNECTIONS: u32 = 1024;
 /// the fewest is its inverse.
 pub const MAX_LIGHT_PATHS_PER_PIXEL: f32 = 16.0;
 
+/// `n`, where it is a number of light paths per pixel an iteration can trace (1 /
+/// [`MAX_LIGHT_PATHS_PER_PIXEL`] to [`MAX_LIGHT_PATHS_PER_PIXEL`]); else why not.
+pub fn light_paths_per_pixel(n: f32) -> Result<f32, String> {
+    let most = MAX_LIGHT_PATHS_PER_PIXEL;
+    if (1.0 / most..=most).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!(
+            "expected a number of light paths per pixel from 1/{most} to {most}, not {n}"
+        ))
+    }
+}
+
 /// Default radius reduction exponent α of progressive photon mapping.
 pub const DEFAULT_ALPHA: f32 = 0.75;
 
@@ -156,13 +169,7 @@ impl VcmSettings {
                 self.connections
             )));
         }
-        let most = MAX_LIGHT_PATHS_PER_PIXEL;
-        if !(1.0 / most..=most).contains(&self.light_paths_per_pixel) {
-            return Err(RenderError::InvalidSetting(format!(
-                "light paths per pixel must be 1/{most} to {most} (asked for {})",
-                self.light_paths_per_pixel
-            )));
-        }
+        light_paths_per_pixel(self.light_paths_per_pixel).map_err(RenderError::InvalidSetting)?;
         if self.light_paths() > u64::from(u32::MAX) {
             return Err(RenderError::InvalidSetting(format!(
                 "{} light paths per iteration are more than 2³² − 1: fewer per pixel, or a \
