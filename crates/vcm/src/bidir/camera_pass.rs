@@ -280,7 +280,7 @@ fn pick_and_prefetch(ctx: &CameraContext, path: &mut CameraPathState) {
     path.picks = Some(picks);
 }
 
-/// The light vertices within the merge radius of a camera vertex, in the grid's order.
+/// The light vertices within the merge radius of a camera vertex, in the cache's order.
 type Neighbours = SmallVec<[u32; 16]>;
 
 /// A merging camera vertex prepared ahead: its surface point, the grid cells around it and
@@ -319,6 +319,9 @@ impl MergingHit {
                         prefetch(&vertices[i]);
                         found.push(i as u32);
                     });
+                // In the cache's order, so that the merges' sum does not depend on how the
+                // grid lays its cells out.
+                found.sort_unstable();
             }
         }
     }
