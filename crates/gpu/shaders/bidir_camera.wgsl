@@ -166,7 +166,9 @@ fn grid_cells(it: Iteration, query: vec3<f32>) -> array<u32, 8> {
     let scaled = (query - it.grid_min) * it.inv_cell_size;
     let cell = floor(scaled);
     let side = (scaled - cell) > vec3(0.5);
-    let to_face = select(scaled - cell, cell + 1.0 - scaled, side);
+    // Shortened by a bound of its rounding error, as `HashGrid::cells`.
+    let rounding = (abs(scaled) + 1.0) * GRID_SCALED_ERROR;
+    let to_face = max(select(scaled - cell, cell + 1.0 - scaled, side) - rounding, vec3(0.0));
     let to_face_sq = to_face * to_face;
     let base = vec3<i32>(cell);
     let step = select(vec3(-1), vec3(1), side);

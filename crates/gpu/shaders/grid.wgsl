@@ -1,9 +1,10 @@
 // The iterations' hash grids built on the device (vcm's `HashGrid::build`), after cache.wgsl:
-// the same grid the CPU builds over each iteration's light vertices — bounds, cells 2r wide,
-// as many buckets as vertices (a power of two), a counting sort by bucket, each bucket's
-// entries in index order — so that merging finds the CPU's vertices in the CPU's order. As on
-// the CPU, a grid holds only the vertices that merge (`MisFactors::shortest_merged`), and
-// the device counts them: the host sizes each grid for its whole cache.
+// the same grid the CPU builds over each iteration's light vertices — bounds, cells as wide
+// as the CPU's (`HashGrid::CELL_RADII` radii), as many buckets as vertices (a power of two),
+// a counting sort by bucket, each bucket's entries in index order — so that merging finds
+// the CPU's vertices. As on the CPU, a grid holds only the vertices that merge
+// (`MisFactors::shortest_merged`), and the device counts them: the host sizes each grid for
+// its whole cache.
 // Kernels, in order: grid_bounds (per vertex), grid_layout (per iteration), grid_count (per
 // vertex), grid_scan (a workgroup per iteration), [the host copies the starts to the
 // cursors], grid_scatter (per vertex), grid_sort (per bucket).

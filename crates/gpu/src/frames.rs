@@ -9,6 +9,7 @@ use std::time::Duration;
 
 use bytemuck::{Pod, Zeroable};
 use vcm::exact_sum::{ExactSum, WORDS};
+use vcm::hash_grid::HashGrid;
 use vcm::{
     Algorithm, BidirPlan, Film, FrameStats, PixelSum, RenderError, Schedule, StopFlag, merge_radius,
 };
@@ -535,8 +536,7 @@ impl GpuFrames {
             it.grid_starts = starts as u32;
             starts += u64::from(buckets) + 1;
             it.grid_entries = it.cache_start;
-            // Cells 2r wide.
-            it.inv_cell_size = 0.5 / it.radius;
+            it.inv_cell_size = HashGrid::inv_cell_size(it.radius);
             it.radius_sq = it.radius * it.radius;
         }
         let vertices: u64 = iterations.iter().map(|it| u64::from(it.cache_count)).sum();

@@ -225,7 +225,7 @@ mod tests {
                 cache_count: points.len() as u32,
                 grid_starts: starts,
                 grid_entries: cache.len() as u32,
-                inv_cell_size: 0.5 / radius,
+                inv_cell_size: HashGrid::inv_cell_size(radius),
                 radius,
                 radius_sq: radius * radius,
                 ..IterationRecord::zeroed()

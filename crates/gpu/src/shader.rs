@@ -138,12 +138,14 @@ pub fn host_constants() -> String {
          const MIN_ALPHA: f32 = {:?}f;\nconst R_MIN: f32 = {:?}f;\n\
          const ALBEDO_COLUMNS: u32 = {columns}u;\nconst ALBEDO_ROWS: u32 = {rows}u;\n\
          const TABLE_A_AVG: u32 = {a_average}u;\nconst TABLE_B_AVG: u32 = {b_average}u;\n\
-         const TABLE_SRGB: u32 = {srgb}u;\nconst GRID_REACH_SQ: f32 = {:?}f;\n",
+         const TABLE_SRGB: u32 = {srgb}u;\nconst GRID_REACH_SQ: f32 = {:?}f;\n\
+         const GRID_SCALED_ERROR: f32 = {:?}f;\n",
         gamma(7),
         gamma(16),
         MIN_ALPHA,
         MIN_ALPHA.sqrt(),
         HashGrid::REACH_SQ,
+        HashGrid::SCALED_ERROR,
     )
 }
 
@@ -182,6 +184,7 @@ mod tests {
             MIN_ALPHA,
             MIN_ALPHA.sqrt(),
             HashGrid::REACH_SQ,
+            HashGrid::SCALED_ERROR,
         ] {
             let written = format!("{x:?}");
             assert_eq!(written.parse::<f32>().unwrap().to_bits(), x.to_bits());

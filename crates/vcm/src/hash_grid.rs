@@ -1,10 +1,17 @@
 //! A hashed uniform grid over points for fixed-radius queries (the photon map of vertex
 //! merging).
 //!
-//! Cells are 2r wide, so a sphere of radius r around a query point overlaps at most the
-//! 2 × 2 × 2 cells nearest to it: the query's own cell and, per axis, the neighbour on the
-//! side of the cell the point lies in. Cells are hashed into as many buckets as there are
-//! points (rounded up to a power of two).
+//! Cells are [`HashGrid::CELL_RADII`] = 3 radii wide, so a sphere of radius r around a
+//! query point overlaps at most the 2 × 2 × 2 cells nearest to it: the query's own cell and,
+//! per axis, the neighbour on the side of the cell the point lies in, where the point is
+//! within r of that face. Cells are hashed into as many buckets as there are points (rounded
+//! up to a power of two).
+//!
+//! The width trades buckets against entries: a query reads each bucket it visits from an
+//! unrelated place in memory, then the bucket's entries one after another. With the default
+//! radius a query finds about one point; at 2r a query visited 7.2 buckets and 10.4 entries
+//! on average, at 3r 4.2 buckets and 12–13 entries (4r: 3.7 and 15–16), which made VCM
+//! 1.03–1.06× as fast on the scenes that merge (docs/performance.md, "The hash grid").
 //!
 //! The build is a parallel counting sort: bucket ids in parallel, counts by atomic
 //! increments, an exclusive prefix sum, a scatter by atomic cursors, then each bucket's
@@ -45,7 +52,7 @@ pub struct HashGrid {
 pub struct GridLayout<'a> {
     /// The query radius, squared.
     pub radius_sq: f32,
-    /// 1 / the cell size (cells are 2r wide).
+    /// 1 / the cell size ([`HashGrid::CELL_RADII`] radii).
     pub inv_cell_size: f32,
     /// The points' bounds.
     pub min: Vec3,
@@ -131,7 +138,7 @@ impl HashGrid {
         let buckets = points.len().max(1).next_power_of_two();
         let mut grid = HashGrid {
             radius_sq: radius * radius,
-            inv_cell_size: 0.5 / radius,
+            inv_cell_size: HashGrid::inv_cell_size(radius),
             min,
             max,
             bucket_mask: buckets as u64 - 1,
@@ -232,8 +239,12 @@ impl HashGrid {
         let cell = scaled.floor();
         let side = (scaled - cell).cmpgt(Vec3::splat(0.5));
         // Squared distance (in cells) from the query to the face shared with the neighbour on
-        // its side, per axis; a neighbour across several faces is at least the sum away.
+        // its side, per axis; a neighbour across several faces is at least the sum away. The
+        // distance is shortened by a bound of its rounding error (a few ulps of `scaled`), so
+        // that a reachable cell is never skipped.
         let to_face = Vec3::select(side, cell + 1.0 - scaled, scaled - cell);
+        let rounding = (scaled.abs() + 1.0) * HashGrid::SCALED_ERROR;
+        let to_face = (to_face - rounding).max(Vec3::ZERO);
         let to_face_sq = to_face * to_face;
         let reach_sq = HashGrid::REACH_SQ;
         let cell = cell.as_i64vec3();
@@ -257,9 +268,22 @@ impl HashGrid {
         GridCells(buckets)
     }
 
-    /// The squared distance (in cells) within which a neighbouring cell is visited: r is half
-    /// a cell; the margin keeps cells whose distance rounding might overstate.
-    pub const REACH_SQ: f32 = 0.25 * (1.0 + 1e-4);
+    /// The width of a cell in radii.
+    pub const CELL_RADII: f32 = 3.0;
+
+    /// 1 / the width of a cell for merge radius `radius`.
+    pub fn inv_cell_size(radius: f32) -> f32 {
+        1.0 / (HashGrid::CELL_RADII * radius)
+    }
+
+    /// The squared distance (in cells) within which a neighbouring cell is visited,
+    /// (r / cell width)², with a margin for its own rounding.
+    pub const REACH_SQ: f32 = (1.0 + 1e-4) / (HashGrid::CELL_RADII * HashGrid::CELL_RADII);
+
+    /// Relative error bound of a query's position in cells, `(q − min) / width` (three
+    /// roundings, with room to spare): the distance to a face is shortened by this much of
+    /// the position's magnitude (plus one cell's worth) before it is compared with the reach.
+    pub const SCALED_ERROR: f32 = 8.0 * f32::EPSILON;
 
     /// What another implementation of [`HashGrid::cells`] and [`HashGrid::query_cells`] (the
     /// GPU's) needs: the radius squared, the inverse cell size, the points' bounds, the
@@ -355,48 +379,58 @@ mod tests {
         }
     }
 
-    /// Queries on and beside cell faces, edges and corners find points just inside the
-    /// radius across every face, edge and corner: skipping cells the sphere cannot reach must
-    /// never skip a point it does reach.
+    /// Queries on and beside cell faces, edges, corners and the planes where the sphere
+    /// starts to reach a neighbour find points just inside the radius across every face, edge
+    /// and corner: skipping cells the sphere cannot reach must never skip a point it does
+    /// reach. Also far from the grid's corner (30,000 cells away), where the query's
+    /// position in cells is rounded by thousandths of a cell.
     #[test]
     fn queries_near_cell_boundaries_miss_nothing() {
         let radius = 0.05;
-        let cell = 2.0 * radius;
-        let mut queries = Vec::new();
-        for f in [
-            0.0,
-            1e-6,
-            0.25,
-            0.5 - 1e-6,
-            0.5,
-            0.5 + 1e-6,
-            0.75,
-            1.0 - 1e-6,
-        ] {
-            for g in [0.0, 0.3, 0.5, 0.9] {
-                queries.push(Vec3::new(3.0 + f, 4.0 + g, 5.0 + f * g) * cell);
-                queries.push(Vec3::new(3.0 + g, 4.0 + f, 5.0 + f) * cell);
+        let cell = HashGrid::CELL_RADII * radius;
+        let reach = 1.0 / HashGrid::CELL_RADII;
+        for base in [Vec3::new(3.0, 4.0, 5.0), Vec3::new(30_000.0, 4.0, 29_000.0)] {
+            let mut queries = Vec::new();
+            for f in [
+                0.0,
+                1e-6,
+                0.25,
+                reach - 1e-6,
+                reach,
+                reach + 1e-6,
+                0.5 - 1e-6,
+                0.5,
+                0.5 + 1e-6,
+                1.0 - reach - 1e-6,
+                1.0 - reach,
+                1.0 - reach + 1e-6,
+                1.0 - 1e-6,
+            ] {
+                for g in [0.0, 0.3, reach, 0.5, 0.9] {
+                    queries.push((base + Vec3::new(f, g, f * g)) * cell);
+                    queries.push((base + Vec3::new(g, f, f)) * cell);
+                }
             }
-        }
-        // Around every query: points at 0.999 r along all 26 lattice directions, and just
-        // outside the radius.
-        let mut points = vec![Vec3::ZERO, Vec3::splat(10.0 * cell)];
-        for q in &queries {
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let d = Vec3::new(dx as f32, dy as f32, dz as f32);
-                        if d != Vec3::ZERO {
-                            points.push(*q + d.normalize() * radius * 0.999);
-                            points.push(*q + d.normalize() * radius * 1.001);
+            // Around every query: points at 0.999 r along all 26 lattice directions, and just
+            // outside the radius.
+            let mut points = vec![Vec3::ZERO, (base + 10.0) * cell];
+            for q in &queries {
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        for dz in -1..=1 {
+                            let d = Vec3::new(dx as f32, dy as f32, dz as f32);
+                            if d != Vec3::ZERO {
+                                points.push(*q + d.normalize() * radius * 0.999);
+                                points.push(*q + d.normalize() * radius * 1.001);
+                            }
                         }
                     }
                 }
             }
-        }
-        let grid = HashGrid::build(&points, radius);
-        for query in queries {
-            assert_finds_exactly(&grid, &points, radius, query);
+            let grid = HashGrid::build(&points, radius);
+            for query in queries {
+                assert_finds_exactly(&grid, &points, radius, query);
+            }
         }
     }
 
