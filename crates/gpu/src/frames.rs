@@ -325,6 +325,7 @@ impl GpuFrames {
         frame: (u32, u32),
         clear: bool,
     ) -> Result<bool, String> {
+        let light_paths = self.light_paths();
         let b = &self.buffers;
         let per_sample = match kernel {
             0 => self.first_kernel_invocations(),
@@ -344,7 +345,7 @@ impl GpuFrames {
             let range = (first, self.paths_per_dispatch.min(invocations - first));
             let timer = self.timer.as_ref();
             let dispatch = (&b.bindings[PARAMS], &b.groups[kernel], timer);
-            let pass = (sampling, light_pass);
+            let pass = (sampling, light_pass, light_paths);
             let encoder = scene_kernel.encode(dispatch, pass, frame, range, &cleared);
             // The first dispatch clears the outputs; the others add to them.
             cleared.clear();
@@ -599,13 +600,20 @@ impl GpuFrames {
         u64::from(self.size.0) * u64::from(self.size.1)
     }
 
+    /// N_p, the light paths per iteration: a bidirectional algorithm's own, else one per
+    /// pixel.
+    fn light_paths(&self) -> u32 {
+        match &self.plan {
+            // Fits 32 bits (`vcm::check_image_size`).
+            FramePlan::PathTracing => self.pixels() as u32,
+            FramePlan::Bidirectional(bidir) => bidir.light_paths,
+        }
+    }
+
     /// The invocations of the first kernel (the path tracer's, or the light pass's) per
     /// sample per pixel: one per pixel, or per light path where there are more.
     fn first_kernel_invocations(&self) -> u64 {
-        match &self.plan {
-            FramePlan::PathTracing => self.pixels(),
-            FramePlan::Bidirectional(bidir) => self.pixels().max(u64::from(bidir.light_paths)),
-        }
+        self.pixels().max(u64::from(self.light_paths()))
     }
 
     /// Takes the samples per pixel per frame of `schedule` (its scheduler, a CPU matter,

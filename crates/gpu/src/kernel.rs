@@ -93,8 +93,6 @@ pub(crate) struct Sampling {
     pub max_depth: Option<u32>,
     /// N_c: light vertices each camera vertex connects to.
     pub connections: u32,
-    /// N_p: light paths per iteration (the pixels', but for a bidirectional algorithm's own).
-    pub light_paths: u32,
     /// The parts of a bidirectional algorithm that run (`plan` of bidir.wgsl).
     pub plan: u32,
 }
@@ -114,11 +112,14 @@ impl Sampling {
             sequence,
             max_depth,
             connections: 0,
-            light_paths: width * height,
             plan: 0,
         }
     }
 }
+
+/// What a pass's dispatches are given: the settings' part, which pass of the light kernel
+/// runs, and N_p, the light paths per iteration (the frame plan's).
+pub(crate) type Pass<'a> = (&'a Sampling, LightPass, u32);
 
 impl From<&vcm::PtSettings> for Sampling {
     fn from(s: &vcm::PtSettings) -> Sampling {
@@ -142,8 +143,6 @@ impl Sampling {
         }
         Sampling {
             connections: s.connections,
-            // Checked to fit 32 bits (`VcmSettings::check`).
-            light_paths: s.light_paths() as u32,
             plan: parts,
             ..Sampling::of_image((s.width, s.height), (s.seed, s.sequence), s.max_depth)
         }
@@ -255,14 +254,13 @@ impl SceneKernel {
     }
 
     /// The parameters of invocations `first_path …` (`count` of them) of a frame of
-    /// `samples` samples per pixel starting at sample `first_sample`, and the workgroups to
-    /// dispatch for them in x and y.
+    /// `samples` samples per pixel starting at sample `first_sample`, with `light_paths`
+    /// light paths per iteration (N_p), and the workgroups to dispatch for them in x and y.
     fn params(
         &self,
-        sampling: &Sampling,
+        (sampling, light_pass, light_paths): Pass<'_>,
         (first_sample, samples): (u32, u32),
         (first_path, count): (u64, u64),
-        light_pass: LightPass,
     ) -> (Params, (u32, u32)) {
         let Sampling {
             width,
@@ -271,7 +269,6 @@ impl SceneKernel {
             sequence,
             max_depth,
             connections,
-            light_paths,
             plan,
         } = *sampling;
         let camera = &self.scene.camera;
@@ -322,12 +319,12 @@ impl SceneKernel {
     pub fn encode(
         &self,
         (params, dispatch, timer): (&wgpu::Buffer, &wgpu::BindGroup, Option<&PassTimer>),
-        (sampling, light_pass): (&Sampling, LightPass),
+        pass: Pass<'_>,
         frame: (u32, u32),
         range: (u64, u64),
         outputs: &[&wgpu::Buffer],
     ) -> wgpu::CommandEncoder {
-        let (values, (x, y)) = self.params(sampling, frame, range, light_pass);
+        let (values, (x, y)) = self.params(pass, frame, range);
         self.gpu
             .queue
             .write_buffer(params, 0, bytemuck::bytes_of(&values));
