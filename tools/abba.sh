@@ -20,10 +20,13 @@ cd "$(dirname "$0")/.."
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
-# M samples/s of one render, from the summary line `vcm render` prints.
+# M samples/s of one render, from the summary line `vcm render` prints ("rendered S spp at
+# W×H in T s: …"): samples over its render time, which has more digits than the rate it
+# prints (two decimals: 1.3% steps at VCM's rates below 1 M samples/s).
 speed() {
     "$1" render "scenes/$2.gltf" --algo "$3" --spp "$4" --width "$width" -o "$out/image.exr" 2>&1 |
-        grep -o 'in [0-9.]* s: [0-9.]* M samples/s' | awk '{print $4}'
+        grep -o 'rendered [0-9]* spp at [0-9]*×[0-9]* in [0-9.]* s' |
+        awk '{split($5, size, "×"); printf "%.4f\n", $2 * size[1] * size[2] / $7 / 1e6}'
 }
 
 echo "A: $a"
@@ -47,7 +50,7 @@ import statistics, sys
 scene, algo, spp, a, b = sys.argv[1:]
 a, b = [float(x) for x in a.split()], [float(x) for x in b.split()]
 ma, mb = statistics.median(a), statistics.median(b)
-print(f"| {scene} | {algo} | {spp} | {ma:.3g} ({min(a):.3g}–{max(a):.3g}) "
-      f"| {mb:.3g} ({min(b):.3g}–{max(b):.3g}) | {mb / ma:.3f} |")
+print(f"| {scene} | {algo} | {spp} | {ma:.4g} ({min(a):.4g}–{max(a):.4g}) "
+      f"| {mb:.4g} ({min(b):.4g}–{max(b):.4g}) | {mb / ma:.3f} |")
 EOF
 done
