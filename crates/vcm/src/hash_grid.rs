@@ -10,8 +10,9 @@
 //! The width trades buckets against entries: a query reads each bucket it visits from an
 //! unrelated place in memory, then the bucket's entries one after another. With the default
 //! radius a query finds about one point; at 2r a query visited 7.2 buckets and 10.4 entries
-//! on average, at 3r 4.2 buckets and 12–13 entries (4r: 3.7 and 15–16), which made VCM
-//! 1.03–1.06× as fast on the scenes that merge (docs/performance.md, "The hash grid").
+//! on average, at 3r 4.2 buckets and 12–13 entries (4r: 3.7 and 15–16): VCM ran 1.02× as
+//! fast on one thread on cornell-water and cornell-specular, within noise on two threads
+//! and with denser points (docs/performance.md, "VCM's light and camera passes").
 //!
 //! The build is a parallel counting sort: bucket ids in parallel, counts by atomic
 //! increments, an exclusive prefix sum, a scatter by atomic cursors, then each bucket's
