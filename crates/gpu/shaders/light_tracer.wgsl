@@ -7,8 +7,8 @@
 // tracing alone) and the iteration's light path i, where there are such (the dispatches cover
 // the pixels or the light paths, whichever are more), each drawing the CPU's numbers for it,
 // so that both backends follow the same paths. A light path's vertices that scatter toward
-// the camera and see it make splats. Camera samples and splats go to the film (film.wgsl). Outputs (group 0): 1–4
-// the film, 5 the rays traced (camera, light, shadow).
+// the camera and see it make splats. Camera samples and splats go to the film (film.wgsl).
+// Outputs (group 0): 1–4 the film, 5 the rays traced (camera, light, shadow).
 
 // The light paths' random stream (`LIGHT_STREAM` of light_pass.rs).
 const LIGHT_STREAM: u32 = 1u;

@@ -43,7 +43,8 @@ struct Params {
     environment_columns: u32,
     // The area of a pixel on the image plane at unit distance (`Projection::pixel_area`).
     pixel_area: f32,
-    // Light paths per iteration of a bidirectional algorithm, as a float.
+    // Light paths per iteration of a bidirectional algorithm (N_p), as the host rounds it to
+    // a float, as the CPU's MIS weights and normalisations read it.
     light_paths: f32,
     // Light vertices each camera vertex connects to (N_c).
     connections: u32,
@@ -53,7 +54,7 @@ struct Params {
     plan: u32,
     // Vertices of each light path the light pass's first run keeps in `scratch` (bidir.wgsl).
     kept_vertices: u32,
-    // Light paths per iteration (`light_paths`, as an integer).
+    // N_p exactly, for indexing the light paths (`light_paths` is rounded above 2²⁴).
     light_path_count: u32,
 }
 
